@@ -1,0 +1,142 @@
+"""Cases: one folder per scene with case.toml, scene.xml (MJCF) and scene.urdf."""
+
+import importlib
+import math
+import tomllib
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
+SOURCES = ("reference", "book", "mujoco", "pinocchio")
+# Scene values are parsed from decimal text by each loader; they must equal case.toml's to
+# within a few ulps (binding scales are exact: +-1).
+BINDING_RTOL = 4 * np.finfo(float).eps
+
+
+def case_names():
+    return sorted(p.parent.name for p in CASES_DIR.glob("*/case.toml"))
+
+
+def load_case(name, **overrides):
+    """The case `name` with parameters overridden by name; ValueError names what is wrong."""
+    if name not in case_names():
+        raise ValueError(f"unknown case '{name}'; known cases: {', '.join(case_names())}")
+    return Case(CASES_DIR / name, overrides)
+
+
+class Case:
+    def __init__(self, folder, overrides=None):
+        self.folder = Path(folder)
+        self.file = self.folder / "case.toml"
+        try:
+            with open(self.file, "rb") as f:
+                self.spec = tomllib.load(f)
+        except tomllib.TOMLDecodeError as error:
+            raise ValueError(f"{self.file}: not valid TOML: {error}") from error
+        self.name = self.spec["name"]
+        self.section = self.spec["section"]
+        self.title = self.spec["title"]
+        self.coords = tuple(self.spec["coords"])
+        self.reaction_names = tuple(self.spec["reactions"])
+        self.units = {k: p["unit"] for k, p in self.spec["params"].items()}
+        self.defaults = {k: float(p["value"]) for k, p in self.spec["params"].items()}
+        self.overrides = {}
+        for key, value in (overrides or {}).items():
+            if key not in self.defaults:
+                raise ValueError(f"{self.file}: case '{self.name}' has no parameter '{key}'; "
+                                 f"its parameters are {', '.join(self.defaults)}")
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"parameter {key} of case '{self.name}': '{value}' is not a number") from None
+            if not math.isfinite(value):
+                raise ValueError(f"parameter {key} of case '{self.name}': {value} is not finite")
+            self.overrides[key] = value
+        self.params = {**self.defaults, **self.overrides}
+        self.findings = self.spec.get("findings", [])
+        self._models = {}
+
+    # -- numbers that may be expressions of the parameters --------------------
+    def value(self, x):
+        """A number from case.toml: a float, or an expression of the parameters and pi."""
+        if isinstance(x, str):
+            return float(eval(x, {"__builtins__": {}}, {**self.params, "pi": math.pi}))
+        return float(x)
+
+    @cached_property
+    def initial(self):
+        ic = self.spec["initial"]
+        return (np.array([self.value(x) for x in ic["q"]]), np.array([self.value(x) for x in ic["v"]]),
+                float(ic["t_end"]))
+
+    def sample_states(self):
+        """The pointwise check's seeded random states: a list of (t, q, v)."""
+        s = self.spec["sample"]
+        rng = np.random.default_rng(s["seed"])
+        bounds = lambda ranges: np.array([[self.value(lo), self.value(hi)] for lo, hi in ranges])
+        q_bounds, v_bounds = bounds(s["q"]), bounds(s["v"])
+        t_lo, t_hi = self.value(s["t"][0]), self.value(s["t"][1])
+        return [(rng.uniform(t_lo, t_hi), rng.uniform(*q_bounds.T), rng.uniform(*v_bounds.T))
+                for _ in range(s["count"])]
+
+    @property
+    def integration(self):
+        return {k: self.value(v) for k, v in self.spec["integration"].items()}
+
+    @property
+    def tolerance(self):
+        return self.spec["tolerance"]
+
+    # -- the scene as the engines see it ---------------------------------------
+    @cached_property
+    def scene(self):
+        s = self.spec["scene"]
+        driven = {joint: (self.params[m["angle"]], self.params[m["rate"]],
+                          self.params[m["acc"]] if "acc" in m else 0.0)
+                  for joint, m in s["driven"].items()}
+        return {"coords": dict(s["coords"]), "driven": driven, "reactions": s["reactions"],
+                "paths": s.get("paths", [])}
+
+    def model(self, source):
+        """The model of this case by `source`: "book" | "reference" | "mujoco" | "pinocchio"."""
+        if source not in SOURCES:
+            raise ValueError(f"unknown source '{source}'; sources are {', '.join(SOURCES)}")
+        if source not in self._models:
+            self._models[source] = self._build(source)
+        return self._models[source]
+
+    def _build(self, source):
+        if source in ("book", "reference"):
+            module = importlib.import_module(f"reference.{self.name}")
+            return getattr(module, source.capitalize())(self.params)
+        if source == "mujoco":
+            from engines.mujoco_adapter import MujocoModel as Model
+            path = self.folder / "scene.xml"
+        else:
+            from engines.pinocchio_adapter import PinocchioModel as Model
+            path = self.folder / "scene.urdf"
+        bindings = self.spec["scene"].get("bindings", {})
+        # The scene file must already hold the defaults; write what it cannot hold, and overrides.
+        writes = [(loc, self.params[p] * loc.get("scale", 1.0))
+                  for p, locations in bindings.items() for loc in locations
+                  if p in self.overrides or loc["element"] not in Model.file_elements]
+        model = Model(path, self.scene, writes)
+        self._verify(model, path, bindings)
+        return model
+
+    def _verify(self, model, path, bindings):
+        """Refuse an engine model whose masses, lengths, stiffness or gravity differ from the case."""
+        for param, locations in bindings.items():
+            for loc in locations:
+                expected = self.params[param] * loc.get("scale", 1.0)
+                found = model.read(loc)
+                if abs(found - expected) > BINDING_RTOL * max(abs(expected), abs(found)):
+                    where = f"{loc['element']} '{loc['name']}' {loc.get('attribute', '')}[{loc.get('index', 0)}]"
+                    raise ValueError(f"{path.name} of case '{self.name}': {where} is {found!r}, but "
+                                     f"{self.file.name} gives {param} = {self.params[param]!r}"
+                                     + (f" (x {loc['scale']})" if loc.get("scale", 1.0) != 1.0 else ""))
+
+    def __repr__(self):
+        return f"Case({self.name!r}, overrides={self.overrides})"

@@ -1,0 +1,327 @@
+"""Markdown reports with figures: reports/<case>.md per case and reports/index.md.
+
+Everything is written to a temporary folder first and moved into place only when
+complete, so a failed or interrupted run leaves the previous report intact.
+"""
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from dyncheck.checks import energy_residual, state_columns  # noqa: E402
+from dyncheck.cli import OK_STATUSES, findings_of, format_rows  # noqa: E402
+
+STYLE = {  # source -> line style, so that coinciding curves stay visible
+    "tight reference": dict(color="black", lw=2.6, alpha=0.35),
+    "book": dict(color="tab:red", lw=1.0, ls="--"),
+    "pinocchio": dict(color="tab:blue", lw=1.0, ls=":"),
+    "mujoco": dict(color="tab:green", lw=1.0, ls="-."),
+    "reference": dict(color="tab:orange", lw=1.0, ls=(0, (1, 3))),
+}
+ENGINES = ("reference", "mujoco", "pinocchio")
+
+
+def write_reports(results, out):
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=out, prefix=".tmp-") as tmp:
+        tmp = Path(tmp)
+        (tmp / "figures").mkdir()
+        written = []
+        for res in results:
+            written += write_case_page(res, tmp)
+        written.append(write_index(results, tmp))
+        (out / "figures").mkdir(exist_ok=True)
+        for rel in written:
+            os.replace(tmp / rel, out / rel)
+    return written
+
+
+# -- figures ------------------------------------------------------------------------
+
+def trajectories(res):
+    """{label: DataFrame} of the book's run for every source, the tight reference first."""
+    runs = res["runs"]
+    out = {"tight reference": runs["reference"][1]}
+    out.update({s: runs[s][0] for s in ("book", "pinocchio", "mujoco") if isinstance(runs[s], tuple)})
+    return out
+
+
+def figure_scene(res, path):
+    case = res["case"]
+    model = case.model("mujoco")
+    tight = trajectories(res)["tight reference"]
+    q = tight[list(case.coords)].to_numpy()
+    paths = np.array([model.points(t, qi)[0] for t, qi in zip(tight.index, q)])  # (time, body, xyz)
+    _, origins, parents = model.points(0.0, q[0])
+    planar = np.ptp(paths[..., 2]) < 1e-12 and np.ptp(origins[:, 2]) < 1e-12
+    fig = plt.figure(figsize=(6.4, 5.2))
+    ax = fig.add_subplot(projection=None if planar else "3d")
+    dims = 2 if planar else 3
+    chain = np.vstack([np.zeros(3), origins])  # body 0 is the world origin
+    for i, parent in enumerate(parents):
+        seg = chain[[parent, i + 1], :dims].T
+        ax.plot(*seg, color="0.3", lw=2)
+    ax.scatter(*chain[:, :dims].T, color="0.3", s=12)
+    for b, name in enumerate(case.scene["paths"]):
+        ax.plot(*paths[:, b, :dims].T, lw=0.6, label=f"{name} (tight reference, 0-{tight.index[-1]:g} s)")
+        ax.scatter(*paths[0, b, :dims], s=40, marker="o", zorder=5)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    if planar:
+        ax.set_aspect("equal")
+    else:
+        ax.set_zlabel("z [m]")
+    ax.set_title(f"{case.section} {case.title}\nthe scene at t = 0 (grey) and the path in space", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def figure_series(res, columns, ylabel, title, path, log_error=False):
+    """Columns over time from every source, overlaid; with log_error, |source - tight reference|."""
+    runs = trajectories(res)
+    tight = runs["tight reference"]
+    fig, axes = plt.subplots(len(columns), 1, figsize=(7.5, 2.3 * len(columns)), sharex=True, squeeze=False)
+    for ax, column in zip(axes[:, 0], columns):
+        for label, run in runs.items():
+            if log_error:
+                if label == "tight reference":
+                    continue
+                ax.semilogy(run.index, (run[column] - tight[column]).abs() + 1e-300, label=label,
+                            **{**STYLE[label], "ls": "-", "lw": 0.8, "alpha": 0.8})
+            else:
+                ax.plot(run.index, run[column], label=label, **STYLE[label])
+        ax.set_ylabel(ylabel(column), fontsize=8)
+        ax.grid(alpha=0.3)
+        if log_error:
+            ax.set_ylim(bottom=1e-16)
+    axes[0, 0].legend(fontsize=7, ncol=4)
+    axes[0, 0].set_title(title, fontsize=9)
+    axes[-1, 0].set_xlabel("t [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def figure_energy(res, path):
+    case = res["case"]
+    runs = trajectories(res)
+    driven = bool(case.scene["driven"])
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True)
+    tight = runs["tight reference"]
+    top.plot(tight.index, tight["energy"] - tight["energy"].iloc[0], label="E(t) - E(0)", **STYLE["tight reference"])
+    if driven:
+        top.plot(tight.index, tight["work"], label="W(t), work of the prescribed motions", color="tab:purple", lw=1)
+    top.set_ylabel("[J]")
+    top.set_title("energy balance" + (": E(t) - E(0) = W(t)" if driven else ": E(t) = E(0)")
+                  + " (tight reference)", fontsize=9)
+    top.legend(fontsize=7)
+    top.grid(alpha=0.3)
+    for label, run in runs.items():
+        bottom.semilogy(run.index, energy_residual(run).abs() + 1e-300, label=label,
+                        **{**STYLE[label], "ls": "-", "lw": 0.8})
+    bottom.set_ylim(bottom=1e-16)
+    bottom.set_ylabel("|E(t) - E(0) - W(t)| [J]", fontsize=8)
+    bottom.set_xlabel("t [s]")
+    bottom.legend(fontsize=7, ncol=4)
+    bottom.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def figure_pointwise(res, path):
+    """Per random state, each source's deviation from `reference`, relative to the quantity's scale."""
+    values = res["sample"]["values"]
+    quantities = list(values["reference"])
+    fig, axes = plt.subplots(1, len(quantities), figsize=(2.3 * len(quantities), 3.2), sharey=True)
+    for ax, quantity in zip(np.atleast_1d(axes), quantities):
+        ref = values["reference"][quantity]
+        scale = np.max(np.abs(ref)) or 1.0
+        for i, source in enumerate(("book", "mujoco", "pinocchio")):
+            dev = np.abs(values[source][quantity] - ref) / scale
+            ax.semilogy(np.full(len(dev), i) + np.linspace(-0.25, 0.25, len(dev)), dev + 1e-18, ".",
+                        ms=3, color=STYLE[source]["color"])
+        ax.axhline(1e-9, color="k", lw=0.8, ls="--")
+        ax.set_xticks(range(3), ["book", "mujoco", "pinocchio"], rotation=45, fontsize=7)
+        ax.set_title(quantity, fontsize=8)
+        ax.set_ylim(1e-18, 10)
+    np.atleast_1d(axes)[0].set_ylabel("|source - reference| / max |reference|", fontsize=8)
+    fig.suptitle(f"pointwise, {len(res['sample']['states'])} random states (dashed: tolerance)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# -- pages --------------------------------------------------------------------------
+
+def status_of(rows):
+    return "PASS" if all(r["status"] in OK_STATUSES for r in rows) else "FAIL"
+
+
+def worst_engine_error(rows):
+    """Largest pointwise error among reference, MuJoCo and Pinocchio."""
+    errors = [r["error"] for r in rows if r["check"] == "pointwise"
+              and all(s in ENGINES for s in r["sources"].split(" vs "))]
+    return max(errors, default=float("nan"))
+
+
+def markdown_table(frame):
+    return frame.to_markdown(index=False)
+
+
+def scene_table(case, source):
+    """The joints of an engine model: what is free, what is prescribed."""
+    scene = case.scene
+    free = {joint: coord for coord, joint in scene["coords"].items()}
+    rows = []
+    for joint, (angle, rate, acc) in scene["driven"].items():
+        rows.append({"joint": joint, "role": f"prescribed: {angle:g} + {rate:.6g} t"
+                     + (f" + {acc / 2:g} t^2" if acc else "")})
+    for joint, coord in free.items():
+        rows.append({"joint": joint, "role": f"free: the book's {coord}"})
+    return markdown_table(pd.DataFrame(rows))
+
+
+def write_case_page(res, tmp):
+    case, rows = res["case"], res["rows"]
+    name = case.name
+    figures = {
+        "scene": f"figures/{name}_scene.png",
+        "coordinates": f"figures/{name}_coordinates.png",
+        "errors": f"figures/{name}_errors.png",
+        "energy": f"figures/{name}_energy.png",
+        "reactions": f"figures/{name}_reactions.png",
+        "pointwise": f"figures/{name}_pointwise.png",
+    }
+    units = case.units
+    coord_unit = dict(zip(case.coords, case.spec["coord_units"]))
+    figure_scene(res, tmp / figures["scene"])
+    figure_series(res, state_columns(case)[::2], lambda c: f"{c} [{coord_unit[c]}]",
+                  "coordinates over time, every source overlaid", tmp / figures["coordinates"])
+    figure_series(res, state_columns(case), lambda c: f"|{c} error|",
+                  "error against the tight reference solution", tmp / figures["errors"], log_error=True)
+    figure_energy(res, tmp / figures["energy"])
+    figure_series(res, list(case.reaction_names), lambda c: f"{c} [N]",
+                  "reactions along the trajectory, every source", tmp / figures["reactions"])
+    figure_pointwise(res, tmp / figures["pointwise"])
+
+    params = pd.DataFrame([{"parameter": k, "value": f"{v:.10g}", "unit": units[k],
+                            "meaning": case.spec["params"][k]["about"]
+                            + (" (overridden)" if k in case.overrides else "")}
+                           for k, v in case.params.items()])
+    q0, v0, t_end = case.initial
+    counts = pd.Series([r["status"] for r in rows]).value_counts()
+    table = format_rows(rows)
+    table["finding"] = [r["finding"] or "" for r in rows]
+    findings = findings_of(res)
+    runs = res["runs"]
+    cost = pd.DataFrame([{"source": s, "method": run.attrs["method"],
+                          "setting": f"dt = {run.attrs['dt']:g} s" if run.attrs["dt"] else f"rtol = {run.attrs['rtol']:g}",
+                          "wall time [s]": f"{run.attrs['wall']:.3f}", "evaluations": run.attrs["evaluations"]}
+                         for s in ("reference", "book", "pinocchio", "mujoco") if isinstance(runs[s], tuple)
+                         for run in runs[s]])
+    lines = [
+        f"# {case.section} {case.title}",
+        "",
+        f"**{status_of(rows)}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
+        + f"; worst pointwise error among reference, MuJoCo and Pinocchio: {worst_engine_error(rows):.1e}"
+        + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md)"
+        + (f"  \nParameters overridden: {case.overrides}" if case.overrides else ""),
+        "",
+        "## The scene",
+        "",
+        " ".join(case.spec["summary"].split()),
+        "",
+        f"![scene]({figures['scene']})",
+        "",
+        "## Parameters",
+        "",
+        markdown_table(params),
+        "",
+        f"Initial conditions (the book's): {_state(case.coords, q0, v0)}; horizon {t_end:g} s.",
+        "",
+        "## How each source models it",
+        "",
+        "\n\n".join(" ".join(p.split()) for p in case.spec["report"]["modelling"].strip().split("\n\n")),
+        "",
+        "Joints of `scene.xml` (MuJoCo) and `scene.urdf` (Pinocchio), the same in both:",
+        "",
+        scene_table(case, "mujoco"),
+        "",
+        "## Checks",
+        "",
+        "Errors are relative: pointwise to the largest magnitude of the quantity over the random states,"
+        " trajectories to the largest magnitude of the coordinate over the run, energy to the largest"
+        " |E| or |W|.  `finding` marks a disagreement explained by a registered error of the book.",
+        "",
+        markdown_table(table),
+        "",
+    ]
+    if findings:
+        lines += ["## Findings: where the book is wrong", ""]
+        for f in findings:
+            spec = next(x for x in case.findings if x["id"] == f["id"])
+            lines += [f"### {f['id']}: {f['title']}", "",
+                      f"*Where:* {spec['where']}.  *Largest relative error it causes here:* {f['error']:.3g}"
+                      f" (quantities {', '.join(f['quantity'])}; sources {', '.join(f['sources'])}"
+                      " against reference, MuJoCo and Pinocchio, which agree to the tolerance).", "",
+                      f["explanation"], ""]
+    lines += [
+        "## Figures",
+        "",
+        f"![coordinates]({figures['coordinates']})",
+        "",
+        f"![errors]({figures['errors']})",
+        "",
+        f"![energy]({figures['energy']})",
+        "",
+        f"![reactions]({figures['reactions']})",
+        "",
+        f"![pointwise]({figures['pointwise']})",
+        "",
+        "## Tolerances and why",
+        "",
+    ]
+    for kind, tol in case.tolerance.items():
+        value = f"{tol['value']:g}" if "value" in tol else f"safety factor {tol['safety']:g}"
+        lines += [f"- **{kind}** ({value}): " + " ".join(tol["why"].split())]
+    lines += ["", "## Cost of the runs", "", markdown_table(cost), "",
+              f"All checks of this case took {res['wall']:.1f} s.", ""]
+    page = f"{name}.md"
+    (tmp / page).write_text("\n".join(lines))
+    return [page] + list(figures.values())
+
+
+def _state(coords, q, v):
+    return ", ".join(f"{c} = {x:.6g}" for c, x in zip(coords, q)) + ", " + \
+        ", ".join(f"{c}' = {x:.6g}" for c, x in zip(coords, v))
+
+
+def write_index(results, tmp):
+    rows = []
+    for res in sorted(results, key=lambda res: res["case"].name):
+        case, case_rows = res["case"], res["rows"]
+        counts = pd.Series([r["status"] for r in case_rows]).value_counts()
+        rows.append({
+            "case": f"[{case.name}]({case.name}.md)", "section": case.section, "title": case.title,
+            "status": status_of(case_rows), "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
+            "worst engine error": f"{worst_engine_error(case_rows):.1e}",
+            "findings": len(case.findings)})
+    lines = ["# dyncheck reports", "",
+             "The worked examples of I. F. Santos, *Dynamics of Machines*, ch. 1, checked against MuJoCo"
+             " and Pinocchio.  *Worst engine error* is the largest pointwise relative error among"
+             " `reference`, MuJoCo and Pinocchio (accelerations, reactions, energy, drive power).", "",
+             markdown_table(pd.DataFrame(rows)), ""]
+    (tmp / "index.md").write_text("\n".join(lines))
+    return "index.md"

@@ -1,0 +1,1 @@
+"""Engine adapters: MuJoCo (MJCF) and Pinocchio (URDF) behind the model interface of DESIGN.md."""

@@ -1,0 +1,185 @@
+"""MuJoCo adapter: a case's MJCF scene behind the model interface, in the book's coordinates.
+
+Prescribed joints ("driven") are handled exactly in the pointwise evaluations:
+their accelerations are imposed and only the free block of the mass matrix is
+solved, so the evaluation model carries no armature at all.  For time stepping
+with MuJoCo's own integrators the scene's armature is put back: a very large
+armature on the driven joints, so that the reaction torques of the free motion
+change their rates by about torque * time / armature (< 1e-11 rad/s).  Its
+kinetic energy (~1e14 J) is never part of `energy`: subtracting it would
+cancel every digit of the scene's ~1 J.
+"""
+
+import copy
+import time
+
+import mujoco
+import mujoco.rollout
+import numpy as np
+
+INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
+               "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+               "RK4": mujoco.mjtIntegrator.mjINT_RK4}
+
+
+class MujocoModel:
+    file_elements = {"body", "joint", "option"}  # what scene.xml holds of a case's bindings
+    """scene: dict with `coords` (book coordinate -> joint), `driven` (joint -> (q0, rate, acc)),
+    `reactions` (name -> {sensor, axis, frame}), `paths` (bodies whose centre of mass to trace)."""
+
+    def __init__(self, path, scene, writes=()):
+        self.path = str(path)
+        try:
+            spec = mujoco.MjSpec.from_file(self.path)
+            for location, value in writes:
+                _write(spec, location, value)
+            self.m = spec.compile()
+        except (ValueError, KeyError) as error:
+            raise ValueError(f"{self.path}: {error}") from error
+        self.armature = self.m.dof_armature.copy()
+        self.m.dof_armature[:] = 0.0
+        self.d = mujoco.MjData(self.m)
+        self.coords = tuple(scene["coords"])
+        self.reaction_names = tuple(scene["reactions"])
+        self.free = [self._dof(j) for j in scene["coords"].values()]
+        self.free_q = [self._qpos(j) for j in scene["coords"].values()]
+        self.driven = {self._dof(j): (self._qpos(j), motion) for j, motion in scene["driven"].items()}
+        self.reaction_specs = {name: (self._sensor(spec["sensor"]), spec["axis"], spec["frame"])
+                               for name, spec in scene["reactions"].items()}
+        self.paths = [self._id(mujoco.mjtObj.mjOBJ_BODY, b) for b in scene["paths"]]
+
+    # -- names -------------------------------------------------------------
+    def _id(self, kind, name):
+        i = mujoco.mj_name2id(self.m, kind, name)
+        if i < 0:
+            raise ValueError(f"{self.path}: no {kind.name[6:].lower()} named '{name}'")
+        return i
+
+    def _dof(self, joint):
+        return int(self.m.jnt_dofadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, joint)])
+
+    def _qpos(self, joint):
+        return int(self.m.jnt_qposadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, joint)])
+
+    def _sensor(self, name):
+        i = self._id(mujoco.mjtObj.mjOBJ_SENSOR, name)
+        return int(self.m.sensor_adr[i]), int(self.m.sensor_objid[i])
+
+    def read(self, location):
+        """The compiled model's value at a binding location (see `_write`)."""
+        element, name = location["element"], location.get("name")
+        index = location.get("index", 0)
+        if element == "option":
+            return float(getattr(self.m.opt, name)[index])
+        if element == "body":
+            array = getattr(self.m, "body_" + location["attribute"])[self._id(mujoco.mjtObj.mjOBJ_BODY, name)]
+        else:
+            array = getattr(self.m, "jnt_" + location["attribute"])[self._id(mujoco.mjtObj.mjOBJ_JOINT, name)]
+        return float(np.atleast_1d(array)[index])
+
+    # -- state -------------------------------------------------------------
+    def _set_state(self, t, q, v, d=None):
+        d = self.d if d is None else d
+        d.time = t
+        d.qpos[self.free_q] = q
+        d.qvel[self.free] = v
+        for dof, (qadr, (q0, rate, acc)) in self.driven.items():
+            d.qpos[qadr] = q0 + rate * t + 0.5 * acc * t**2
+            d.qvel[dof] = rate + acc * t
+
+    def _full_qacc(self, t, q, v):
+        """Accelerations of every dof: driven ones imposed, free ones solved from M_ff."""
+        self._set_state(t, q, v)
+        mujoco.mj_forward(self.m, self.d)
+        mass = np.zeros((self.m.nv, self.m.nv))
+        mujoco.mj_fullM(self.m, self.d, mass)
+        qacc = np.zeros(self.m.nv)
+        for dof, (_, (_, _, acc)) in self.driven.items():
+            qacc[dof] = acc
+        force = self.d.qfrc_smooth - mass @ qacc
+        qacc[self.free] = np.linalg.solve(mass[np.ix_(self.free, self.free)], force[self.free])
+        return qacc
+
+    def _inverse(self, t, q, v):
+        qacc = self._full_qacc(t, q, v)
+        self.d.qacc[:] = qacc
+        mujoco.mj_inverse(self.m, self.d)
+        return qacc
+
+    # -- model interface ---------------------------------------------------
+    def accelerations(self, t, q, v):
+        return self._full_qacc(t, q, v)[self.free]
+
+    def reactions(self, t, q, v):
+        self._inverse(t, q, v)
+        out = {}
+        for name, ((adr, site), axis, frame) in self.reaction_specs.items():
+            force = self.d.sensordata[adr:adr + 3].copy()
+            if frame == "world":
+                force = self.d.site_xmat[site].reshape(3, 3) @ force
+            out[name] = float(force[axis])
+        return out
+
+    def energy(self, t, q, v):
+        self._set_state(t, q, v)
+        mujoco.mj_forward(self.m, self.d)
+        mujoco.mj_energyPos(self.m, self.d)
+        mujoco.mj_energyVel(self.m, self.d)
+        return float(self.d.energy[0] + self.d.energy[1])
+
+    def drive_power(self, t, q, v):
+        self._inverse(t, q, v)
+        return float(sum(self.d.qfrc_inverse[dof] * self.d.qvel[dof] for dof in self.driven))
+
+    def points(self, t, q):
+        """World positions of the traced bodies' centres of mass, and the chain of body origins."""
+        self._set_state(t, q, np.zeros(len(q)))
+        mujoco.mj_kinematics(self.m, self.d)
+        return self.d.xipos[self.paths].copy(), self.d.xpos[1:].copy(), self.m.body_parentid[1:].copy()
+
+    # -- time stepping with MuJoCo's own integrators -------------------------
+    def step(self, q0, v0, t_end, dt, integrator):
+        """Step mj_step with `integrator` from (q0, v0); returns times, q, v of every step and the cost."""
+        m = copy.copy(self.m)
+        m.dof_armature[:] = self.armature
+        m.opt.timestep = dt
+        m.opt.integrator = INTEGRATORS[integrator]
+        d = mujoco.MjData(m)
+        self._set_state(0.0, q0, v0, d)
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        state0 = np.empty(mujoco.mj_stateSize(m, spec))
+        mujoco.mj_getState(m, d, state0, spec)
+        nstep = int(round(t_end / dt))
+        start = time.perf_counter()
+        states, _ = mujoco.rollout.rollout(m, d, state0[None], nstep=nstep)
+        wall = time.perf_counter() - start
+        states = np.concatenate([state0[None], states[0]])
+        times = states[:, 0]
+        qpos = states[:, 1:1 + m.nq]
+        qvel = states[:, 1 + m.nq:1 + m.nq + m.nv]
+        driven_error = max((float(np.max(np.abs(qvel[:, dof] - (rate + acc * times))))
+                            for dof, (_, (_, rate, acc)) in self.driven.items()), default=0.0)
+        return {"t": times, "q": qpos[:, self.free_q], "v": qvel[:, self.free],
+                "wall": wall, "steps": nstep, "evaluations": nstep * (4 if integrator == "RK4" else 1),
+                "driven_rate_error": driven_error}
+
+
+def _write(spec, location, value):
+    """Set a scene value in an MjSpec: body pos/ipos/mass, joint stiffness, option gravity."""
+    element, name, attribute = location["element"], location.get("name"), location.get("attribute")
+    index = location.get("index", 0)
+    if element == "option":
+        target, attribute = spec.option, name
+    elif element == "body":
+        target = spec.body(name)
+    else:
+        target = spec.joint(name)
+    if target is None:
+        raise KeyError(f"no {element} named '{name}'")
+    current = getattr(target, attribute)
+    if np.ndim(current) == 0:
+        setattr(target, attribute, value)
+    else:
+        array = np.array(current, dtype=float)
+        array[index] = value
+        setattr(target, attribute, array)

@@ -1,0 +1,140 @@
+"""Pinocchio adapter: a case's URDF scene behind the model interface, in the book's coordinates.
+
+Prescribed joints are handled by partitioning: RNEA with the driven joints'
+imposed accelerations gives the free joints' bias, CRBA's free block is solved.
+URDF has no springs and no gravity, so joint stiffness and gravity come from
+the case's bindings (`write`), and `read` reports them back from this adapter.
+"""
+
+import numpy as np
+import pinocchio as pin
+
+
+class PinocchioModel:
+    file_elements = {"body"}  # URDF holds masses and lengths; stiffness and gravity come from the case
+    """scene: as for MujocoModel (coords, driven, reactions); reactions use the body, not the sensor."""
+
+    def __init__(self, path, scene, writes=()):
+        self.path = str(path)
+        try:
+            self.m = pin.buildModelFromUrdf(self.path)
+        except (ValueError, RuntimeError) as error:
+            raise ValueError(f"{self.path}: {error}") from error
+        self.stiffness = {}
+        self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
+        for location, value in writes:
+            self._write(location, value)
+        self.d = self.m.createData()
+        self.coords = tuple(scene["coords"])
+        self.reaction_names = tuple(scene["reactions"])
+        self.free = [self._joint(j).idx_v for j in scene["coords"].values()]
+        self.free_joints = [self._joint(j) for j in scene["coords"].values()]
+        self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
+        self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"])
+                               for name, spec in scene["reactions"].items()}
+        self.springs = [(self._joint(j).idx_q, self._joint(j).idx_v, k) for j, k in self.stiffness.items()]
+
+    # -- names -------------------------------------------------------------
+    def _joint(self, name):
+        if not self.m.existJointName(name):
+            raise ValueError(f"{self.path}: no joint named '{name}'")
+        return self.m.joints[self.m.getJointId(name)]
+
+    def _body_joint(self, body):
+        """Id of the joint that moves link `body` (URDF link frames are those joints' frames here)."""
+        if not self.m.existBodyName(body):
+            raise ValueError(f"{self.path}: no link named '{body}'")
+        return self.m.frames[self.m.getBodyId(body)].parentJoint
+
+    def _slot(self, location):
+        """(object, attribute) holding a binding location's value in the Pinocchio model."""
+        element, name, attribute = location["element"], location.get("name"), location.get("attribute")
+        if element == "option":
+            return self.m.gravity, "linear"
+        if element == "joint":
+            return self.stiffness, name
+        joint = self._body_joint(name)
+        if attribute == "pos":
+            return self.m.jointPlacements[joint], "translation"
+        return self.m.inertias[joint], {"mass": "mass", "ipos": "lever"}[attribute]
+
+    def _write(self, location, value):
+        holder, key = self._slot(location)
+        if holder is self.stiffness:
+            self.stiffness[key] = value
+        elif np.ndim(getattr(holder, key)) == 0:
+            setattr(holder, key, value)
+        else:  # Pinocchio's bindings return these arrays by reference
+            getattr(holder, key)[location.get("index", 0)] = value
+
+    def read(self, location):
+        holder, key = self._slot(location)
+        if holder is self.stiffness:
+            return float(self.stiffness.get(key, 0.0))
+        return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
+
+    # -- state -------------------------------------------------------------
+    def _configuration(self, t, q):
+        config = pin.neutral(self.m)
+        angles = [(j, value) for j, value in zip(self.free_joints, q)]
+        angles += [(j, q0 + rate * t + 0.5 * acc * t**2) for j, (q0, rate, acc) in self.driven]
+        for joint, value in angles:
+            if joint.nq == 2:  # continuous joint: (cos, sin)
+                config[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
+            else:
+                config[joint.idx_q] = value
+        return config
+
+    def _velocity(self, t, v):
+        velocity = np.zeros(self.m.nv)
+        velocity[self.free] = v
+        for joint, (_, rate, acc) in self.driven:
+            velocity[joint.idx_v] = rate + acc * t
+        return velocity
+
+    def _passive(self, config):
+        tau = np.zeros(self.m.nv)
+        for iq, iv, k in self.springs:
+            tau[iv] = -k * config[iq]
+        return tau
+
+    def _full_acceleration(self, t, q, v):
+        config, velocity = self._configuration(t, q), self._velocity(t, v)
+        acc = np.zeros(self.m.nv)
+        for joint, (_, _, driven_acc) in self.driven:
+            acc[joint.idx_v] = driven_acc
+        bias = pin.rnea(self.m, self.d, config, velocity, acc)
+        mass = pin.crba(self.m, self.d, config)
+        mass = np.triu(mass) + np.triu(mass, 1).T
+        force = self._passive(config) - bias
+        acc[self.free] = np.linalg.solve(mass[np.ix_(self.free, self.free)], force[self.free])
+        return config, velocity, acc
+
+    # -- model interface ---------------------------------------------------
+    def accelerations(self, t, q, v):
+        return self._full_acceleration(t, q, v)[2][self.free]
+
+    def _inverse(self, t, q, v):
+        config, velocity, acc = self._full_acceleration(t, q, v)
+        return velocity, pin.rnea(self.m, self.d, config, velocity, acc)
+
+    def reactions(self, t, q, v):
+        self._inverse(t, q, v)  # fills data.f: force of each joint's parent on its subtree
+        out = {}
+        for name, (joint, axis, frame) in self.reaction_specs.items():
+            force = self.d.f[joint].linear
+            if frame == "world":
+                force = self.d.oMi[joint].rotation @ force
+            out[name] = float(force[axis])
+        return out
+
+    def energy(self, t, q, v):
+        config, velocity = self._configuration(t, q), self._velocity(t, v)
+        kinetic = pin.computeKineticEnergy(self.m, self.d, config, velocity)
+        potential = pin.computePotentialEnergy(self.m, self.d, config)
+        springs = sum(0.5 * k * config[iq] ** 2 for iq, _, k in self.springs)
+        return float(kinetic + potential + springs)
+
+    def drive_power(self, t, q, v):
+        velocity, tau = self._inverse(t, q, v)
+        return float(sum(tau[j.idx_v] * velocity[j.idx_v] for j, _ in self.driven))
