@@ -63,10 +63,14 @@ def _scipy(model, q0, v0, grid, method, rtol):
 def _mujoco(model, q0, v0, grid, method, dt):
     run = model.step(q0, v0, grid[-1], dt, method.split(":")[1])
     t, q, v = run["t"], run["q"], run["v"]
+    # MuJoCo answers a blow-up (NaN, Inf or |qvel| > 1e10) by resetting the state and the clock
+    # to their initial values, silently for a rollout: a clock that stops advancing by dt marks it.
     finite = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(v), axis=1)
-    if not finite.all():
-        step = int(np.argmin(finite))
-        raise Unstable(method, float(t[step]), step, "state is not finite")
+    advancing = np.concatenate([[True], np.abs(np.diff(t) - dt) < dt / 2])
+    if not (finite & advancing).all():
+        step = int(np.argmin(finite & advancing))
+        raise Unstable(method, step * dt, step, "non-finite or huge state; MuJoCo reset the simulation"
+                       if finite[step] else "state is not finite")
     # Work of the prescribed motions: drive power at every step, Simpson's rule (error ~ dt^4).
     power = np.array([model.drive_power(ti, qi, vi) for ti, qi, vi in zip(t, q, v)])
     work = cumulative_simpson(power, x=t, initial=0.0)

@@ -1,0 +1,63 @@
+"""The checks of both cases, the strict findings, and unstable integrations."""
+
+import numpy as np
+import pytest
+
+import dyncheck
+from dyncheck.checks import apply_findings, pointwise
+from dyncheck.simulate import Unstable, simulate
+from reference import spring_pendulum
+
+
+def test_every_check_passes_or_is_a_registered_finding(results):
+    for name, res in results.items():
+        bad = [r for r in res["rows"] if r["status"] not in ("pass", "finding")]
+        assert not bad, bad
+
+
+def test_engines_and_reference_agree_pointwise_to_1e9(results):
+    for res in results.values():
+        rows = [r for r in res["rows"] if r["check"] == "pointwise" and "book" not in r["sources"]]
+        assert rows and all(r["error"] <= 1e-9 for r in rows)
+
+
+def test_the_books_reaction_is_a_finding_of_the_size_of_the_missing_term(results):
+    rows = [r for r in results["spring_pendulum"]["rows"] if r["finding"] == "1.8.3-R"]
+    assert {r["quantity"] for r in rows} == {"R", "drive_power", "work-energy balance"}
+    assert all(r["status"] == "finding" for r in rows)
+    # The missing term m L psi' Omega cos(psi) is a large part of R over the random states.
+    assert all(r["error"] > 0.1 for r in rows if r["quantity"] == "R")
+
+
+def test_a_finding_that_stops_reproducing_fails(monkeypatch):
+    """Strict findings: correct the book's term and its registered finding must turn into a failure."""
+    monkeypatch.setattr(spring_pendulum.Book, "_coriolis_factor", lambda self: 2.0)
+    case = dyncheck.load_case("spring_pendulum")
+    rows, _ = pointwise(case)
+    rows = apply_findings(case, rows)
+    stale = [r for r in rows if r["finding"] == "1.8.3-R"]
+    assert stale and all(r["status"] == "fail" and "no longer reproduces" in r["detail"] for r in stale)
+
+
+def test_every_source_gives_the_same_trajectory_and_mujoco_holds_the_drive(results):
+    res = results["spring_pendulum"]
+    driven = [r for r in res["rows"] if r["quantity"] == "driven rate"]
+    assert driven and driven[0]["status"] == "pass"
+    tight = res["runs"]["reference"][1]
+    for source in ("book", "pinocchio", "mujoco"):
+        run = res["runs"][source][0]
+        assert np.max(np.abs(run["psi"] - tight["psi"])) < 1e-7
+
+
+def test_a_blown_up_mujoco_run_is_reported_unstable_with_time_and_step():
+    """RK4 is unstable for omega dt > 2.8; the spring's omega = 100 rad/s at dt = 0.05 s gives 5."""
+    case = dyncheck.load_case("spring_pendulum")
+    with pytest.raises(Unstable) as error:
+        simulate(case.model("mujoco"), case.initial[:2], 1.0, "mujoco:RK4", dt=0.05, output_step=0.05)
+    assert error.value.method == "mujoco:RK4" and 0 < error.value.t <= 1.0 and error.value.step > 0
+
+
+def test_unknown_method_is_named():
+    case = dyncheck.load_case("double_pendulum")
+    with pytest.raises(ValueError, match="unknown method 'Verlet'"):
+        simulate(case.model("reference"), case.initial[:2], 1.0, "Verlet", output_step=0.1)

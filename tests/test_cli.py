@@ -1,0 +1,71 @@
+"""The command line: exit codes, the table, JSON and reports."""
+
+import json
+
+import pytest
+
+from dyncheck import cli
+
+
+@pytest.fixture
+def canned(monkeypatch, results):
+    """`run_case` answering from the session's results, so CLI tests cost no simulation."""
+    monkeypatch.setattr(cli, "run_case", lambda case: {**results[case.name], "case": case})
+
+
+def test_list_names_both_cases(capsys):
+    assert cli.main(["list"]) == 0
+    out = capsys.readouterr().out
+    assert "spring_pendulum" in out and "double_pendulum" in out and "1.8.3" in out
+
+
+def test_run_exits_0_and_writes_the_json_of_the_design(canned, tmp_path, capsys):
+    path = tmp_path / "out.json"
+    assert cli.main(["run", "spring_pendulum", "double_pendulum", "--json", str(path)]) == 0
+    assert "finding" in capsys.readouterr().out
+    data = json.loads(path.read_text())
+    spring = next(c for c in data["cases"] if c["case"] == "spring_pendulum")
+    assert set(spring) == {"case", "section", "params", "checks", "findings"}
+    assert set(spring["checks"][0]) == {"check", "quantity", "sources", "error", "tolerance", "status", "finding"}
+    (finding,) = spring["findings"]
+    assert set(finding) == {"id", "title", "quantity", "sources", "error", "explanation"}
+    assert finding["id"] == "1.8.3-R" and finding["error"] > 0.1
+
+
+def test_run_exits_1_when_a_check_fails(monkeypatch, results):
+    def failing(case):
+        res = results[case.name]
+        rows = [dict(r) for r in res["rows"]]
+        rows[0]["status"] = "fail"
+        return {**res, "case": case, "rows": rows}
+    monkeypatch.setattr(cli, "run_case", failing)
+    assert cli.main(["run", "double_pendulum"]) == 1
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["run", "pendulum"], "unknown case 'pendulum'"),
+    (["run", "double_pendulum", "--set", "k=3"], "no selected case has a parameter 'k'"),
+    (["run", "spring_pendulum", "--set", "k"], "expected NAME=VALUE"),
+    (["run", "spring_pendulum", "--set", "k=soft"], "'soft' is not a number"),
+    (["report", "spring_pendulum", "--set", "m=inf"], "inf is not finite"),
+])
+def test_bad_input_exits_2_with_a_message(argv, message, capsys):
+    assert cli.main(argv) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_overrides_reach_the_run(monkeypatch, results):
+    seen = []
+    monkeypatch.setattr(cli, "run_case", lambda case: seen.append(case) or {**results[case.name], "case": case})
+    assert cli.main(["run", "--set", "g=3.5"]) == 0
+    assert {c.name: c.params["g"] for c in seen} == {"double_pendulum": 3.5, "spring_pendulum": 3.5}
+
+
+def test_report_writes_pages_figures_and_index(canned, tmp_path):
+    assert cli.main(["report", "--out", str(tmp_path)]) == 0
+    index = (tmp_path / "index.md").read_text()
+    assert "[spring_pendulum](spring_pendulum.md)" in index and "PASS" in index
+    page = (tmp_path / "spring_pendulum.md").read_text()
+    for link in [line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")]:
+        assert (tmp_path / link).stat().st_size > 10_000, link
+    assert "1.8.3-R" in page and not list(tmp_path.glob(".tmp-*"))
