@@ -4,8 +4,8 @@ Everything is written to a temporary folder first and moved into place only when
 complete, so a failed or interrupted run leaves the previous report intact.
 """
 
+import json
 import os
-import shutil
 import tempfile
 from pathlib import Path
 
@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from dyncheck.checks import energy_residual, state_columns  # noqa: E402
-from dyncheck.cli import OK_STATUSES, findings_of, format_rows  # noqa: E402
+from dyncheck.cli import OK_STATUSES, findings_of, format_rows, to_json  # noqa: E402
 
 STYLE = {  # source -> line style, so that coinciding curves stay visible
     "tight reference": dict(color="black", lw=2.6, alpha=0.35),
@@ -35,14 +35,27 @@ def write_reports(results, out):
     with tempfile.TemporaryDirectory(dir=out, prefix=".tmp-") as tmp:
         tmp = Path(tmp)
         (tmp / "figures").mkdir()
+        (tmp / "data").mkdir()
         written = []
         for res in results:
             written += write_case_page(res, tmp)
-        written.append(write_index(results, tmp))
-        (out / "figures").mkdir(exist_ok=True)
+            written.append(write_summary(res, tmp))
+        written.append(write_index(tmp, out))
+        for folder in ("figures", "data"):
+            (out / folder).mkdir(exist_ok=True)
         for rel in written:
             os.replace(tmp / rel, out / rel)
     return written
+
+
+def write_summary(res, tmp):
+    """data/<case>.json: the case's results (the schema of `dyncheck run --json`) for the index."""
+    rows = res["rows"]
+    summary = {**to_json([res])["cases"][0], "title": res["case"].title, "status": status_of(rows),
+               "worst_engine_error": worst_engine_error(rows)}
+    rel = f"data/{res['case'].name}.json"
+    (tmp / rel).write_text(json.dumps(summary, indent=1) + "\n")
+    return rel
 
 
 # -- figures ------------------------------------------------------------------------
@@ -71,7 +84,10 @@ def figure_scene(res, path):
         seg = chain[[parent, i + 1], :dims].T
         ax.plot(*seg, color="0.3", lw=2)
     ax.scatter(*chain[:, :dims].T, color="0.3", s=12)
+    body_ids = [model.body_id(name) for name in case.scene["paths"]]
     for b, name in enumerate(case.scene["paths"]):
+        arm = np.vstack([origins[body_ids[b] - 1], paths[0, b]])  # body origin to its point mass
+        ax.plot(*arm[:, :dims].T, color="0.3", lw=2)
         ax.plot(*paths[:, b, :dims].T, lw=0.6, label=f"{name} (tight reference, 0-{tight.index[-1]:g} s)")
         ax.scatter(*paths[0, b, :dims], s=40, marker="o", zorder=5)
     ax.set_xlabel("x [m]")
@@ -105,8 +121,8 @@ def figure_series(res, columns, ylabel, title, path, log_error=False):
         ax.grid(alpha=0.3)
         if log_error:
             ax.set_ylim(bottom=1e-16)
-    axes[0, 0].legend(fontsize=7, ncol=4)
-    axes[0, 0].set_title(title, fontsize=9)
+    axes[0, 0].legend(fontsize=7, ncol=4, loc="lower left", bbox_to_anchor=(0, 1.0), frameon=False)
+    fig.suptitle(title, fontsize=9)
     axes[-1, 0].set_xlabel("t [s]")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -125,7 +141,7 @@ def figure_energy(res, path):
     top.set_ylabel("[J]")
     top.set_title("energy balance" + (": E(t) - E(0) = W(t)" if driven else ": E(t) = E(0)")
                   + " (tight reference)", fontsize=9)
-    top.legend(fontsize=7)
+    top.legend(fontsize=7, loc="upper right", framealpha=0.9)
     top.grid(alpha=0.3)
     for label, run in runs.items():
         bottom.semilogy(run.index, energy_residual(run).abs() + 1e-300, label=label,
@@ -133,7 +149,7 @@ def figure_energy(res, path):
     bottom.set_ylim(bottom=1e-16)
     bottom.set_ylabel("|E(t) - E(0) - W(t)| [J]", fontsize=8)
     bottom.set_xlabel("t [s]")
-    bottom.legend(fontsize=7, ncol=4)
+    bottom.legend(fontsize=7, ncol=4, loc="lower left", bbox_to_anchor=(0, 1.0), frameon=False)
     bottom.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -275,8 +291,8 @@ def write_case_page(res, tmp):
             lines += [f"### {f['id']}: {f['title']}", "",
                       f"*Where:* {spec['where']}.  *Largest relative error it causes here:* {f['error']:.3g}"
                       f" (quantities {', '.join(f['quantity'])}; sources {', '.join(f['sources'])}"
-                      " against reference, MuJoCo and Pinocchio, which agree to the tolerance).", "",
-                      f["explanation"], ""]
+                      " against reference, MuJoCo and Pinocchio, which agree to the tolerance)."
+                      + finding_effects(res, f), "", f["explanation"], ""]
     lines += [
         "## Figures",
         "",
@@ -303,25 +319,44 @@ def write_case_page(res, tmp):
     return [page] + list(figures.values())
 
 
+def finding_effects(res, finding):
+    """What a finding changes in the book's own run: its reactions in newtons, its energy balance in joules."""
+    case, runs = res["case"], trajectories(res)
+    if "book" not in finding["sources"] or "book" not in runs:
+        return ""
+    book, tight = runs["book"], runs["tight reference"]
+    parts = [f"the book's {q} is off by up to {(book[q] - tight[q]).abs().max():.3g} N"
+             f" (|{q}| up to {tight[q].abs().max():.3g} N)"
+             for q in finding["quantity"] if q in case.reaction_names]
+    if any(q.startswith("work-energy") for q in finding["quantity"]):
+        parts.append(f"its work-energy balance misses by up to {energy_residual(book).abs().max():.3g} J")
+    return f"  Over the book's run ({case.initial[2]:g} s from the book's initial conditions), " \
+        + "; ".join(parts) + "." if parts else ""
+
+
 def _state(coords, q, v):
     return ", ".join(f"{c} = {x:.6g}" for c, x in zip(coords, q)) + ", " + \
         ", ".join(f"{c}' = {x:.6g}" for c, x in zip(coords, v))
 
 
-def write_index(results, tmp):
+def write_index(tmp, out):
+    """index.md over every case with results in `out` (kept) or `tmp` (this run's)."""
+    summaries = {p.name: p for p in sorted((out / "data").glob("*.json"))}
+    summaries.update({p.name: p for p in sorted((tmp / "data").glob("*.json"))})
     rows = []
-    for res in sorted(results, key=lambda res: res["case"].name):
-        case, case_rows = res["case"], res["rows"]
-        counts = pd.Series([r["status"] for r in case_rows]).value_counts()
+    for name in sorted(summaries):
+        case = json.loads(summaries[name].read_text())
+        counts = pd.Series([c["status"] for c in case["checks"]]).value_counts()
         rows.append({
-            "case": f"[{case.name}]({case.name}.md)", "section": case.section, "title": case.title,
-            "status": status_of(case_rows), "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
-            "worst engine error": f"{worst_engine_error(case_rows):.1e}",
-            "findings": len(case.findings)})
+            "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"], "title": case["title"],
+            "status": case["status"], "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
+            "worst engine error": f"{case['worst_engine_error']:.1e}",
+            "findings": ", ".join(f"{f['id']} ({f['error']:.2g})" for f in case["findings"]) or "none"})
     lines = ["# dyncheck reports", "",
              "The worked examples of I. F. Santos, *Dynamics of Machines*, ch. 1, checked against MuJoCo"
              " and Pinocchio.  *Worst engine error* is the largest pointwise relative error among"
-             " `reference`, MuJoCo and Pinocchio (accelerations, reactions, energy, drive power).", "",
+             " `reference`, MuJoCo and Pinocchio (accelerations, reactions, energy, drive power);"
+             " a finding is an error of the book, with the largest relative error it causes.", "",
              markdown_table(pd.DataFrame(rows)), ""]
     (tmp / "index.md").write_text("\n".join(lines))
     return "index.md"

@@ -46,7 +46,7 @@ class MujocoModel:
         self.driven = {self._dof(j): (self._qpos(j), motion) for j, motion in scene["driven"].items()}
         self.reaction_specs = {name: (self._sensor(spec["sensor"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
-        self.paths = [self._id(mujoco.mjtObj.mjOBJ_BODY, b) for b in scene["paths"]]
+        self.paths = [self.body_id(b) for b in scene["paths"]]
 
     # -- names -------------------------------------------------------------
     def _id(self, kind, name):
@@ -54,6 +54,9 @@ class MujocoModel:
         if i < 0:
             raise ValueError(f"{self.path}: no {kind.name[6:].lower()} named '{name}'")
         return i
+
+    def body_id(self, name):
+        return self._id(mujoco.mjtObj.mjOBJ_BODY, name)
 
     def _dof(self, joint):
         return int(self.m.jnt_dofadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, joint)])
