@@ -61,9 +61,12 @@ class Case:
     # -- numbers that may be expressions of the parameters --------------------
     def value(self, x):
         """A number from case.toml: a float, or an expression of the parameters and pi."""
-        if isinstance(x, str):
-            return float(eval(x, {"__builtins__": {}}, {**self.params, "pi": math.pi}))
-        return float(x)
+        try:
+            if isinstance(x, str):
+                return float(eval(x, {"__builtins__": {}}, {**self.params, "pi": math.pi}))
+            return float(x)
+        except Exception as error:  # any mistake in the expression is the case file's
+            raise ValueError(f"{self.file}: cannot evaluate {x!r}: {error}") from None
 
     @cached_property
     def initial(self):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from dyncheck.case import case_names, load_case
+from dyncheck.case import SOURCES, case_names, load_case
 from dyncheck.checks import run_case
 
 OK_STATUSES = ("pass", "finding")
@@ -81,7 +81,11 @@ def select_cases(names, set_pairs):
         if not any(key in d for d in defaults.values()):
             raise ValueError(f"--set {key}: no selected case has a parameter '{key}' "
                              f"(cases: {', '.join(names)})")
-    return [load_case(name, **{k: v for k, v in overrides.items() if k in defaults[name]}) for name in names]
+    cases = [load_case(name, **{k: v for k, v in overrides.items() if k in defaults[name]}) for name in names]
+    for case in cases:  # load every model now: a scene that disagrees with its case is bad input
+        for source in SOURCES:
+            case.model(source)
+    return cases
 
 
 def format_rows(rows):

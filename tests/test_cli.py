@@ -69,3 +69,15 @@ def test_report_writes_pages_figures_and_index(canned, tmp_path):
     for link in [line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")]:
         assert (tmp_path / link).stat().st_size > 10_000, link
     assert "1.8.3-R" in page and not list(tmp_path.glob(".tmp-*"))
+
+
+def test_a_scene_that_disagrees_with_its_case_exits_2(monkeypatch, tmp_path, capsys):
+    import shutil
+
+    from dyncheck import case as case_module
+    shutil.copytree(case_module.CASES_DIR, tmp_path / "cases")
+    scene = tmp_path / "cases" / "double_pendulum" / "scene.xml"
+    scene.write_text(scene.read_text().replace('mass="0.46"', 'mass="0.5"'))
+    monkeypatch.setattr(case_module, "CASES_DIR", tmp_path / "cases")
+    assert cli.main(["run", "double_pendulum"]) == 2
+    assert "scene.xml of case 'double_pendulum': body 'link2' mass[0] is 0.5" in capsys.readouterr().err

@@ -96,3 +96,11 @@ def test_unknown_case_and_source_are_named():
         dyncheck.load_case("pendulum")
     with pytest.raises(ValueError, match="unknown source 'drake'"):
         dyncheck.load_case("double_pendulum").model("drake")
+
+
+def test_a_bad_expression_in_a_case_file_is_named(tmp_path):
+    folder = copy_case(tmp_path, "spring_pendulum")
+    text = (folder / "case.toml").read_text().replace('q = ["pi/6", 0.0]', 'q = ["pi/sixth", 0.0]')
+    (folder / "case.toml").write_text(text)
+    with pytest.raises(ValueError, match=r"case.toml: cannot evaluate 'pi/sixth': name 'sixth' is not defined"):
+        Case(folder).initial
