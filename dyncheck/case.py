@@ -95,12 +95,23 @@ class Case:
     # -- the scene as the engines see it ---------------------------------------
     @cached_property
     def scene(self):
+        """The scene as the engine adapters take it (see engines.mujoco_adapter.MujocoModel)."""
         s = self.spec["scene"]
+        index = {c: i for i, c in enumerate(self.coords)}
+        layout = [("scalar", joint, [index[c]]) for c, joint in s["coords"].items()]
+        if "euler" in s:
+            layout.append(("euler", s["euler"]["joint"], [index[c] for c in s["euler"]["coords"]]))
         driven = {joint: (self.params[m["angle"]], self.params[m["rate"]],
                           self.params[m["acc"]] if "acc" in m else 0.0)
                   for joint, m in s["driven"].items()}
-        return {"coords": dict(s["coords"]), "driven": driven, "reactions": s["reactions"],
-                "paths": s.get("paths", [])}
+        applied = {joint: np.array([self.value(x) for x in force]) for joint, force in s.get("applied", {}).items()}
+        return {"coords": self.coords, "layout": layout, "driven": driven, "applied": applied,
+                "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", [])}
+
+    @property
+    def driven(self):
+        """Whether anything does work on the scene: prescribed motions or applied forces."""
+        return bool(self.scene["driven"] or self.scene["applied"])
 
     def model(self, source):
         """The model of this case by `source`: "book" | "reference" | "mujoco" | "pinocchio"."""

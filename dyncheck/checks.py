@@ -33,8 +33,13 @@ def evaluate(case, source, states):
     values = {f"{c}_acc": acc[:, i] for i, c in enumerate(case.coords)}
     reactions = [model.reactions(t, q, v) for t, q, v in states]
     values.update({name: np.array([r[name] for r in reactions]) for name in case.reaction_names})
+    if case.scene["points"]:
+        points = [model.point_accelerations(t, q, v) for t, q, v in states]
+        for name in case.scene["points"]:
+            for axis, label in enumerate("xyz"):
+                values[f"{name}_{label}"] = np.array([p[name][axis] for p in points])
     values["energy"] = np.array([model.energy(t, q, v) for t, q, v in states])
-    if case.scene["driven"]:
+    if case.driven:
         values["drive_power"] = np.array([model.drive_power(t, q, v) for t, q, v in states])
     return values
 
@@ -135,7 +140,7 @@ def energy_residual(run):
 
 def energy(case, runs):
     safety = case.tolerance["energy"]["safety"]
-    quantity = "work-energy balance" if case.scene["driven"] else "energy drift"
+    quantity = "work-energy balance" if case.driven else "energy drift"
     rows = []
     for source in INTEGRATED + ("mujoco",):
         label = source

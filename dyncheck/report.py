@@ -132,7 +132,7 @@ def figure_series(res, columns, ylabel, title, path, log_error=False):
 def figure_energy(res, path):
     case = res["case"]
     runs = trajectories(res)
-    driven = bool(case.scene["driven"])
+    driven = case.driven
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True)
     tight = runs["tight reference"]
     top.plot(tight.index, tight["energy"] - tight["energy"].iloc[0], label="E(t) - E(0)", **STYLE["tight reference"])
@@ -196,16 +196,16 @@ def markdown_table(frame):
     return frame.to_markdown(index=False)
 
 
-def scene_table(case, source):
-    """The joints of an engine model: what is free, what is prescribed."""
+def scene_table(case):
+    """The joints of the engine models: what is free, what is prescribed, what is applied."""
     scene = case.scene
-    free = {joint: coord for coord, joint in scene["coords"].items()}
-    rows = []
-    for joint, (angle, rate, acc) in scene["driven"].items():
-        rows.append({"joint": joint, "role": f"prescribed: {angle:g} + {rate:.6g} t"
-                     + (f" + {acc / 2:g} t^2" if acc else "")})
-    for joint, coord in free.items():
-        rows.append({"joint": joint, "role": f"free: the book's {coord}"})
+    rows = [{"joint": joint, "role": f"prescribed: {angle:g} + {rate:.6g} t" + (f" + {acc / 2:g} t^2" if acc else "")}
+            for joint, (angle, rate, acc) in scene["driven"].items()]
+    rows += [{"joint": joint, "role": "free: the book's " + ", ".join(case.coords[i] for i in idx)
+              + (" (ball joint, in the book's Euler angles)" if kind == "euler" else "")}
+             for kind, joint, idx in scene["layout"]]
+    rows += [{"joint": joint, "role": f"applied generalized force {list(force)} (joint frame)"}
+             for joint, force in scene["applied"].items()]
     return markdown_table(pd.DataFrame(rows))
 
 
@@ -273,7 +273,7 @@ def write_case_page(res, tmp):
         "",
         "Joints of `scene.xml` (MuJoCo) and `scene.urdf` (Pinocchio), the same in both:",
         "",
-        scene_table(case, "mujoco"),
+        scene_table(case),
         "",
         "## Checks",
         "",

@@ -17,15 +17,20 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
+from engines import euler
+
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
                "RK4": mujoco.mjtIntegrator.mjINT_RK4}
 
 
 class MujocoModel:
+    """scene (from the case): `layout` (book coordinates -> joints: ("scalar", joint, [i]) for a hinge
+    or slide, ("euler", joint, [i, j, k]) for a ball joint in the book's Euler angles), `driven`
+    (joint -> (q0, rate, acc)), `applied` (joint -> generalized force in the joint's frame),
+    `reactions` (name -> {sensor, axis, frame}), `points` (name -> {body, frame}), `paths` (bodies)."""
+
     file_elements = {"body", "joint", "option"}  # what scene.xml holds of a case's bindings
-    """scene: dict with `coords` (book coordinate -> joint), `driven` (joint -> (q0, rate, acc)),
-    `reactions` (name -> {sensor, axis, frame}), `paths` (bodies whose centre of mass to trace)."""
 
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
@@ -41,11 +46,17 @@ class MujocoModel:
         self.d = mujoco.MjData(self.m)
         self.coords = tuple(scene["coords"])
         self.reaction_names = tuple(scene["reactions"])
-        self.free = [self._dof(j) for j in scene["coords"].values()]
-        self.free_q = [self._qpos(j) for j in scene["coords"].values()]
-        self.driven = {self._dof(j): (self._qpos(j), motion) for j, motion in scene["driven"].items()}
+        self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
+        self.free = [dof for _, (_, dof), idx in self.layout for dof in range(dof, dof + len(idx))]
+        self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
+        self.applied = np.zeros(self.m.nv)
+        for joint, force in scene["applied"].items():
+            dof = self._joint(joint)[1]
+            self.applied[dof:dof + len(force)] = force
         self.reaction_specs = {name: (self._sensor(spec["sensor"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
+        self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"])
+                            for name, spec in scene["points"].items()}
         self.paths = [self.body_id(b) for b in scene["paths"]]
 
     # -- names -------------------------------------------------------------
@@ -58,11 +69,10 @@ class MujocoModel:
     def body_id(self, name):
         return self._id(mujoco.mjtObj.mjOBJ_BODY, name)
 
-    def _dof(self, joint):
-        return int(self.m.jnt_dofadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, joint)])
-
-    def _qpos(self, joint):
-        return int(self.m.jnt_qposadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, joint)])
+    def _joint(self, name):
+        """(qpos address, dof address) of a joint."""
+        j = self._id(mujoco.mjtObj.mjOBJ_JOINT, name)
+        return int(self.m.jnt_qposadr[j]), int(self.m.jnt_dofadr[j])
 
     def _sensor(self, name):
         i = self._id(mujoco.mjtObj.mjOBJ_SENSOR, name)
@@ -75,7 +85,7 @@ class MujocoModel:
         if element == "option":
             return float(getattr(self.m.opt, name)[index])
         if element == "body":
-            array = getattr(self.m, "body_" + location["attribute"])[self._id(mujoco.mjtObj.mjOBJ_BODY, name)]
+            array = getattr(self.m, "body_" + location["attribute"])[self.body_id(name)]
         else:
             array = getattr(self.m, "jnt_" + location["attribute"])[self._id(mujoco.mjtObj.mjOBJ_JOINT, name)]
         return float(np.atleast_1d(array)[index])
@@ -84,34 +94,45 @@ class MujocoModel:
     def _set_state(self, t, q, v, d=None):
         d = self.d if d is None else d
         d.time = t
-        d.qpos[self.free_q] = q
-        d.qvel[self.free] = v
-        for dof, (qadr, (q0, rate, acc)) in self.driven.items():
+        for kind, (qadr, dof), idx in self.layout:
+            if kind == "scalar":
+                d.qpos[qadr], d.qvel[dof] = q[idx[0]], v[idx[0]]
+            else:
+                d.qpos[qadr:qadr + 4] = euler.quaternion(q[idx])
+                d.qvel[dof:dof + 3] = euler.angular_velocity(q[idx], v[idx])
+        for (qadr, dof), (q0, rate, acc) in self.driven:
             d.qpos[qadr] = q0 + rate * t + 0.5 * acc * t**2
             d.qvel[dof] = rate + acc * t
+        d.qfrc_applied[:] = self.applied
 
     def _full_qacc(self, t, q, v):
         """Accelerations of every dof: driven ones imposed, free ones solved from M_ff."""
         self._set_state(t, q, v)
         mujoco.mj_forward(self.m, self.d)
-        mass = np.zeros((self.m.nv, self.m.nv))
-        mujoco.mj_fullM(self.m, self.d, mass)
         qacc = np.zeros(self.m.nv)
-        for dof, (_, (_, _, acc)) in self.driven.items():
+        for (_, dof), (_, _, acc) in self.driven:
             qacc[dof] = acc
-        force = self.d.qfrc_smooth - mass @ qacc
-        qacc[self.free] = np.linalg.solve(mass[np.ix_(self.free, self.free)], force[self.free])
+        if self.free:
+            mass = np.zeros((self.m.nv, self.m.nv))
+            mujoco.mj_fullM(self.m, self.d, mass)
+            force = self.d.qfrc_smooth - mass @ qacc
+            qacc[self.free] = np.linalg.solve(mass[np.ix_(self.free, self.free)], force[self.free])
         return qacc
 
     def _inverse(self, t, q, v):
-        qacc = self._full_qacc(t, q, v)
-        self.d.qacc[:] = qacc
+        self.d.qacc[:] = self._full_qacc(t, q, v)
         mujoco.mj_inverse(self.m, self.d)
-        return qacc
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        return self._full_qacc(t, q, v)[self.free]
+        qacc = self._full_qacc(t, q, v)
+        out = np.zeros(len(self.coords))
+        for kind, (_, dof), idx in self.layout:
+            if kind == "scalar":
+                out[idx[0]] = qacc[dof]
+            else:
+                out[idx] = euler.euler_accelerations(q[idx], v[idx], qacc[dof:dof + 3])
+        return out
 
     def reactions(self, t, q, v):
         self._inverse(t, q, v)
@@ -123,6 +144,20 @@ class MujocoModel:
             out[name] = float(force[axis])
         return out
 
+    def point_accelerations(self, t, q, v):
+        """Absolute accelerations of the named bodies' origins, in their own or the world frame."""
+        self._inverse(t, q, v)
+        mujoco.mj_rnePostConstraint(self.m, self.d)
+        out = {}
+        for name, (body, frame) in self.point_specs.items():
+            res = np.zeros(6)
+            mujoco.mj_objectAcceleration(self.m, self.d, mujoco.mjtObj.mjOBJ_XBODY, body, res, 0)
+            acc = res[3:] + self.m.opt.gravity  # MuJoCo's cacc is offset by -gravity (world cacc)
+            if frame == "body":
+                acc = self.d.xmat[body].reshape(3, 3).T @ acc
+            out[name] = acc
+        return out
+
     def energy(self, t, q, v):
         self._set_state(t, q, v)
         mujoco.mj_forward(self.m, self.d)
@@ -131,8 +166,10 @@ class MujocoModel:
         return float(self.d.energy[0] + self.d.energy[1])
 
     def drive_power(self, t, q, v):
+        """Power of the prescribed motions (inverse-dynamics forces) and of the applied forces."""
         self._inverse(t, q, v)
-        return float(sum(self.d.qfrc_inverse[dof] * self.d.qvel[dof] for dof in self.driven))
+        driven = sum(self.d.qfrc_inverse[dof] * self.d.qvel[dof] for (_, dof), _ in self.driven)
+        return float(driven + self.applied @ self.d.qvel)
 
     def points(self, t, q):
         """World positions of the traced bodies' centres of mass, and the chain of body origins."""
@@ -142,7 +179,7 @@ class MujocoModel:
 
     # -- time stepping with MuJoCo's own integrators -------------------------
     def step(self, q0, v0, t_end, dt, integrator):
-        """Step mj_step with `integrator` from (q0, v0); returns times, q, v of every step and the cost."""
+        """mj_step with `integrator` from (q0, v0); times, book q and v of every step, and the cost."""
         m = copy.copy(self.m)
         m.dof_armature[:] = self.armature
         m.opt.timestep = dt
@@ -153,22 +190,37 @@ class MujocoModel:
         state0 = np.empty(mujoco.mj_stateSize(m, spec))
         mujoco.mj_getState(m, d, state0, spec)
         nstep = int(round(t_end / dt))
+        control_spec = mujoco.mjtState.mjSTATE_QFRC_APPLIED  # constant applied forces, every step
         start = time.perf_counter()
-        states, _ = mujoco.rollout.rollout(m, d, state0[None], nstep=nstep)
+        states, _ = mujoco.rollout.rollout(m, d, state0[None], self.applied[None, None], nstep=nstep,
+                                           control_spec=control_spec)
         wall = time.perf_counter() - start
         states = np.concatenate([state0[None], states[0]])
         times = states[:, 0]
         qpos = states[:, 1:1 + m.nq]
         qvel = states[:, 1 + m.nq:1 + m.nq + m.nv]
+        q, v = self._book_states(qpos, qvel, q0)
         driven_error = max((float(np.max(np.abs(qvel[:, dof] - (rate + acc * times))))
-                            for dof, (_, (_, rate, acc)) in self.driven.items()), default=0.0)
-        return {"t": times, "q": qpos[:, self.free_q], "v": qvel[:, self.free],
-                "wall": wall, "steps": nstep, "evaluations": nstep * (4 if integrator == "RK4" else 1),
-                "driven_rate_error": driven_error}
+                            for (_, dof), (_, rate, acc) in self.driven), default=0.0)
+        return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep,
+                "evaluations": nstep * (4 if integrator == "RK4" else 1), "driven_rate_error": driven_error}
+
+    def _book_states(self, qpos, qvel, q0):
+        q = np.zeros((len(qpos), len(self.coords)))
+        v = np.zeros_like(q)
+        for kind, (qadr, dof), idx in self.layout:
+            if kind == "scalar":
+                q[:, idx[0]], v[:, idx[0]] = qpos[:, qadr], qvel[:, dof]
+                continue
+            with np.errstate(all="ignore"):  # a blown-up run is reported by the caller
+                q[:, idx] = euler.angles(qpos[:, qadr:qadr + 4], q0[idx])
+                for row in range(len(q)):
+                    v[row, idx] = np.linalg.solve(euler.jacobian(q[row, idx]), qvel[row, dof:dof + 3])
+        return q, v
 
 
 def _write(spec, location, value):
-    """Set a scene value in an MjSpec: body pos/ipos/mass, joint stiffness, option gravity."""
+    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia, joint stiffness, option gravity."""
     element, name, attribute = location["element"], location.get("name"), location.get("attribute")
     index = location.get("index", 0)
     if element == "option":

@@ -9,6 +9,8 @@ the case's bindings (`write`), and `read` reports them back from this adapter.
 import numpy as np
 import pinocchio as pin
 
+from engines import euler
+
 
 class PinocchioModel:
     file_elements = {"body"}  # URDF holds masses and lengths; stiffness and gravity come from the case
@@ -27,11 +29,17 @@ class PinocchioModel:
         self.d = self.m.createData()
         self.coords = tuple(scene["coords"])
         self.reaction_names = tuple(scene["reactions"])
-        self.free = [self._joint(j).idx_v for j in scene["coords"].values()]
-        self.free_joints = [self._joint(j) for j in scene["coords"].values()]
+        self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
+        self.free = [i for _, joint, idx in self.layout for i in range(joint.idx_v, joint.idx_v + len(idx))]
         self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
+        self.applied = np.zeros(self.m.nv)
+        for joint, force in scene["applied"].items():
+            iv = self._joint(joint).idx_v
+            self.applied[iv:iv + len(force)] = force
         self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
+        self.point_specs = {name: (self._body_frame(spec["body"]), spec["frame"])
+                            for name, spec in scene["points"].items()}
         self.springs = [(self._joint(j).idx_q, self._joint(j).idx_v, k) for j, k in self.stiffness.items()]
 
     # -- names -------------------------------------------------------------
@@ -40,11 +48,14 @@ class PinocchioModel:
             raise ValueError(f"{self.path}: no joint named '{name}'")
         return self.m.joints[self.m.getJointId(name)]
 
-    def _body_joint(self, body):
-        """Id of the joint that moves link `body` (URDF link frames are those joints' frames here)."""
+    def _body_frame(self, body):
         if not self.m.existBodyName(body):
             raise ValueError(f"{self.path}: no link named '{body}'")
-        return self.m.frames[self.m.getBodyId(body)].parentJoint
+        return self.m.getBodyId(body)
+
+    def _body_joint(self, body):
+        """Id of the joint that moves link `body` (URDF link frames are those joints' frames here)."""
+        return self.m.frames[self._body_frame(body)].parentJoint
 
     def _slot(self, location):
         """(object, attribute) holding a binding location's value in the Pinocchio model."""
@@ -76,18 +87,24 @@ class PinocchioModel:
     # -- state -------------------------------------------------------------
     def _configuration(self, t, q):
         config = pin.neutral(self.m)
-        angles = [(j, value) for j, value in zip(self.free_joints, q)]
-        angles += [(j, q0 + rate * t + 0.5 * acc * t**2) for j, (q0, rate, acc) in self.driven]
-        for joint, value in angles:
-            if joint.nq == 2:  # continuous joint: (cos, sin)
+        values = [(joint, q[idx[0]] if kind == "scalar" else q[idx]) for kind, joint, idx in self.layout]
+        values += [(j, q0 + rate * t + 0.5 * acc * t**2) for j, (q0, rate, acc) in self.driven]
+        for joint, value in values:
+            if joint.nq == 4:  # spherical: quaternion (x, y, z, w)
+                config[joint.idx_q:joint.idx_q + 4] = np.roll(euler.quaternion(value), -1)
+            elif joint.nq == 2:  # continuous joint: (cos, sin)
                 config[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
             else:
                 config[joint.idx_q] = value
         return config
 
-    def _velocity(self, t, v):
+    def _velocity(self, t, q, v):
         velocity = np.zeros(self.m.nv)
-        velocity[self.free] = v
+        for kind, joint, idx in self.layout:
+            if kind == "scalar":
+                velocity[joint.idx_v] = v[idx[0]]
+            else:
+                velocity[joint.idx_v:joint.idx_v + 3] = euler.angular_velocity(q[idx], v[idx])
         for joint, (_, rate, acc) in self.driven:
             velocity[joint.idx_v] = rate + acc * t
         return velocity
@@ -99,24 +116,32 @@ class PinocchioModel:
         return tau
 
     def _full_acceleration(self, t, q, v):
-        config, velocity = self._configuration(t, q), self._velocity(t, v)
+        config, velocity = self._configuration(t, q), self._velocity(t, q, v)
         acc = np.zeros(self.m.nv)
         for joint, (_, _, driven_acc) in self.driven:
             acc[joint.idx_v] = driven_acc
-        bias = pin.rnea(self.m, self.d, config, velocity, acc)
-        mass = pin.crba(self.m, self.d, config)
-        mass = np.triu(mass) + np.triu(mass, 1).T
-        force = self._passive(config) - bias
-        acc[self.free] = np.linalg.solve(mass[np.ix_(self.free, self.free)], force[self.free])
+        if self.free:
+            bias = pin.rnea(self.m, self.d, config, velocity, acc)
+            mass = pin.crba(self.m, self.d, config)
+            mass = np.triu(mass) + np.triu(mass, 1).T
+            force = self._passive(config) + self.applied - bias
+            acc[self.free] = np.linalg.solve(mass[np.ix_(self.free, self.free)], force[self.free])
         return config, velocity, acc
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        return self._full_acceleration(t, q, v)[2][self.free]
+        acc = self._full_acceleration(t, q, v)[2]
+        out = np.zeros(len(self.coords))
+        for kind, joint, idx in self.layout:
+            if kind == "scalar":
+                out[idx[0]] = acc[joint.idx_v]
+            else:
+                out[idx] = euler.euler_accelerations(q[idx], v[idx], acc[joint.idx_v:joint.idx_v + 3])
+        return out
 
     def _inverse(self, t, q, v):
         config, velocity, acc = self._full_acceleration(t, q, v)
-        return velocity, pin.rnea(self.m, self.d, config, velocity, acc)
+        return config, velocity, acc, pin.rnea(self.m, self.d, config, velocity, acc)
 
     def reactions(self, t, q, v):
         self._inverse(t, q, v)  # fills data.f: force of each joint's parent on its subtree
@@ -128,13 +153,26 @@ class PinocchioModel:
             out[name] = float(force[axis])
         return out
 
+    def point_accelerations(self, t, q, v):
+        """Absolute (classical) accelerations of the named links' origins, in their own or the world frame."""
+        config, velocity, acc, _ = self._inverse(t, q, v)
+        pin.forwardKinematics(self.m, self.d, config, velocity, acc)
+        out = {}
+        for name, (frame_id, frame) in self.point_specs.items():
+            reference = pin.LOCAL if frame == "body" else pin.LOCAL_WORLD_ALIGNED
+            pin.updateFramePlacement(self.m, self.d, frame_id)
+            out[name] = pin.getFrameClassicalAcceleration(self.m, self.d, frame_id, reference).linear.copy()
+        return out
+
     def energy(self, t, q, v):
-        config, velocity = self._configuration(t, q), self._velocity(t, v)
+        config, velocity = self._configuration(t, q), self._velocity(t, q, v)
         kinetic = pin.computeKineticEnergy(self.m, self.d, config, velocity)
         potential = pin.computePotentialEnergy(self.m, self.d, config)
         springs = sum(0.5 * k * config[iq] ** 2 for iq, _, k in self.springs)
         return float(kinetic + potential + springs)
 
     def drive_power(self, t, q, v):
-        velocity, tau = self._inverse(t, q, v)
-        return float(sum(tau[j.idx_v] * velocity[j.idx_v] for j, _ in self.driven))
+        """Power of the prescribed motions (inverse-dynamics torques) and of the applied forces."""
+        _, velocity, _, tau = self._inverse(t, q, v)
+        driven = sum(tau[j.idx_v] * velocity[j.idx_v] for j, _ in self.driven)
+        return float(driven + self.applied @ velocity)

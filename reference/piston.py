@@ -1,0 +1,198 @@
+"""Section 1.7, Examples 3-4: a mass at the end of a hydraulic piston turning about Z.
+
+Scene (book 1.7.3, Example 3, text lines 41-43 of the extraction).  "An hydraulic piston
+with a mass m located at its end, rotating with angular speed theta' relative to the axis Z
+(inertial frame).  A moving reference frame X1 Y1 Z1, fixed to the piston, also rotates with
+angular speed theta' ... the origin point coincides with the origin of the inertial frame,
+since the moving frame does not exhibit translation ... the mass m exhibit[s] motion in the
+positive direction of axis X1."  Hence:
+
+    frames     I (X Y Z, unit vectors i j k);  B1 = T_z(theta) I, (b) of the solution:
+               i1 = cos(theta) i + sin(theta) j,  j1 = -sin(theta) i + cos(theta) j,  k1 = k
+               ("positive rotation of the system B1 around the axis Z (inertial)")
+    origin     O = A, fixed: I a_A = 0
+    mass B     B1 L = (L, 0, 0);  I L = T^T B1 L = (L cos(theta), L sin(theta), 0)   ((d))
+    rotation   I omega = (0, 0, theta'),  I omega' = (0, 0, theta'')                  ((c))
+    motions    prescribed (this project): theta = theta0 + theta_rate t + theta_acc t^2/2,
+               L = L0 + L_rate t + L_acc t^2/2; no free coordinate, q = v = ().
+
+Gravity.  Examples 3-4 are pure kinematics and never mention gravity.  The chapter's rule
+(gravity along -Z, book README) puts the arm in the horizontal plane Z = 0, so gravity is
+I g = (0, 0, -g) = B1 g (Z1 = Z).  It does no work (the mass stays at Z = 0) and only the
+arm's vertical support F3 = m g carries it.
+
+What the book prints (extraction: overdots, minus signs and zeros lost; '+' survives).
+
+  (1.13) = (1.15)  I v_B = d/dt(I L) = (L' cos - L theta' sin,  L' sin + L theta' cos,  0)
+  (1.18)           I v_Rel + I omega x I L: the same vector (printed once more, signs lost)
+  (1.20)           d2/dt2(I L) = d/dt(1.13), printed term by term
+                     (L'' cos - L' theta' sin - L' theta' sin - L theta'' sin - L theta'^2 cos,
+                      L'' sin + L' theta' cos + L' theta' cos + l theta'' cos - L theta'^2 sin, 0)
+                   and collected
+                     (L'' cos - 2 L' theta' sin - L theta'' sin - L theta'^2 cos,
+                      L'' sin + 2 L' theta' cos + L theta'' cos - L theta'^2 sin,  0)
+  (1.23)           Example 4, "1st way": the same collected vector as (1.20).
+  (1.10)           I a_B = I a_A + I omega' x I r_AB + I omega x (I omega x I r_AB)
+                           + 2 I omega x I v_Rel + I a_Rel       (printed "(1.1)", zero lost)
+  Example 4, "2nd way", its four terms (I a_A = 0):
+    normal         I omega x (I omega x I L) = (-L theta'^2 cos, -L theta'^2 sin, 0)
+    tangential     I omega' x I L            = (-L theta'' sin,   L theta'' cos,   0)
+    Coriolis       2 I omega x I v_Rel       = (-2 theta' L' sin,  2 theta' L' cos, 0)
+    relative       I a_Rel = T^T (L'', 0, 0) = ( L'' cos,          L'' sin,         0)   (1.22)
+  (1.24)           "By adding up the four terms":
+                     (L'' cos - 2 L' theta' sin - L theta'' sin - L theta'^2 cos,
+                      L'' sin + 2 L' theta' SIN + L theta'' cos - L theta'^2 sin,  0)
+
+Restored signs and symbols, and where from:
+  * every lost minus in (1.13), (1.20), (1.23) and in the four terms: the book's own
+    determinants "i j k / 0 0 theta' / L cos L sin 0" printed with each cross product give
+    k x i1-type products (-sin, cos), and the un-collected line of (1.20) is d/dt of (1.13)
+    term by term; its surviving '+' signs in the Y row fix the rest (d/dt cos = -sin);
+  * the lowercase "l theta'' cos" in (1.20), (1.23), (1.24) is L theta'' cos(theta): the
+    example has no other length;
+  * the zero Z entries of every vector (zeros are lost everywhere).
+Nothing else is restored: the '+2 L' theta' sin' of (1.24) is printed with its '+' and with
+'sin', and is kept as printed (see below).
+
+The book gives no numbers in Examples 3-4 (no m, L, theta or rates, no numerical results);
+they are symbolic throughout.  Nothing numerical to transcribe.
+
+Quantities (all vectors with components in B1; T = T_z(theta) maps I to B1):
+
+  a_eq110   T (1.24): the five-term formula as the book sums it.
+  a_d2dt2   T (1.23): the double differentiation of I L.
+  reactions F = (F1, F2, F3), the force of the arm on the mass in B1 (this project's definition;
+            the book computes none in 1.7): Newton for the mass, m B1 a_B = F + m B1 g, so
+            F = m B1 a_B + (0, 0, m g).  `Book` takes B1 a_B from (1.24), the route the book
+            recommends "when one desires to express the absolute acceleration of a particle in a
+            moving reference frame" (end of Example 4) -- the one a reader uses for reactions
+            in B1 (flip `_reaction_route` to "a_d2dt2" to take (1.23) instead).
+  energy    (1/2) m |I v_B|^2 + m g Z_B, with (1.15) and Z_B = 0.
+  drive_power  F . v_B: the power of the arm (both prescribed motions) on the mass; gravity
+            does no work.  Equals dE/dt.
+
+Correction (class `Reference`).  Sum the four printed terms of Example 4, component Y:
+
+    Y = -L theta'^2 sin + L theta'' cos + 2 theta' L' cos + L'' sin,
+
+so the Coriolis contribution to Y is +2 L' theta' cos(theta), as the Coriolis term itself is
+printed two lines above (1.24) and as (1.20)/(1.23) print it.  (1.24) prints
++2 L' theta' sin(theta): a typo in the sum, cos -> sin.  The inertial error of (1.24) is
+
+    delta = (1.24) - a = (0, 2 L' theta' (sin(theta) - cos(theta)), 0)          (in I)
+    T delta = 2 L' theta' (sin(theta) - cos(theta)) (sin(theta), cos(theta), 0)  (in B1)
+
+so a_eq110_x and a_eq110_y of `Book` are off by those amounts, F1 and F2 by m times them, and
+the drive power by m delta . v_B = 2 m L' theta' (sin - cos)(L' sin + L theta' cos).  F3,
+a_eq110_z, a_d2dt2 and the energy are right.  The corrected vector in B1, by either route, is
+
+    B1 a_B = (L'' - L theta'^2,  2 L' theta' + L theta'',  0),
+
+which is also what the B1 form of (1.10) printed at the end of 1.6 gives directly
+(B1 omega' x B1 r + B1 omega x (B1 omega x B1 r) + 2 B1 omega x d/dt(B1 r) + d2/dt2(B1 r)).
+`Reference.point_accelerations` computes a_eq110 as the vector sum of the five terms
+(numpy cross products in I, then T), and a_d2dt2 from (1.23) -- two independent routes.
+"""
+
+import numpy as np
+
+COORDS = ()
+REACTIONS = ("F1", "F2", "F3")
+
+
+def t_z(angle):
+    """The book's T_z: B1 s = T_z(theta) I s."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+class Book:
+    """Examples 3-4 as printed: (1.15) velocity, (1.23) double differentiation, (1.24) five terms."""
+
+    coords = COORDS
+    reaction_names = REACTIONS
+    _reaction_route = "a_eq110"  # which acceleration the reactions use (see module docstring)
+
+    def __init__(self, params):
+        self.p = dict(params)
+
+    def _motion(self, t):
+        """theta, theta', theta'', L, L', L'' at time t (constant second derivatives)."""
+        p = self.p
+        theta = p["theta0"] + p["theta_rate"] * t + 0.5 * p["theta_acc"] * t**2
+        L = p["L0"] + p["L_rate"] * t + 0.5 * p["L_acc"] * t**2
+        return (theta, p["theta_rate"] + p["theta_acc"] * t, p["theta_acc"],
+                L, p["L_rate"] + p["L_acc"] * t, p["L_acc"])
+
+    # -- kinematics, inertial components ----------------------------------------
+    def _velocity_inertial(self, t):
+        """(1.13) = (1.15) = (1.18)."""
+        th, w, _, L, Ld, _ = self._motion(t)
+        s, c = np.sin(th), np.cos(th)
+        return np.array([Ld * c - L * w * s, Ld * s + L * w * c, 0.0])
+
+    def _a_d2dt2_inertial(self, t):
+        """(1.20) collected = (1.23)."""
+        th, w, wd, L, Ld, Ldd = self._motion(t)
+        s, c = np.sin(th), np.cos(th)
+        return np.array([Ldd * c - 2 * Ld * w * s - L * wd * s - L * w**2 * c,
+                         Ldd * s + 2 * Ld * w * c + L * wd * c - L * w**2 * s,
+                         0.0])
+
+    def _a_eq110_inertial(self, t):
+        """(1.24) as printed: the Y row's Coriolis part reads 2 L' theta' sin(theta)."""
+        th, w, wd, L, Ld, Ldd = self._motion(t)
+        s, c = np.sin(th), np.cos(th)
+        return np.array([Ldd * c - 2 * Ld * w * s - L * wd * s - L * w**2 * c,
+                         Ldd * s + 2 * Ld * w * s + L * wd * c - L * w**2 * s,
+                         0.0])
+
+    # -- model interface -----------------------------------------------------------
+    def accelerations(self, t, q, v):
+        return np.zeros(0)
+
+    def point_accelerations(self, t, q, v):
+        """Absolute acceleration of the mass, components in B1, by the book's two routes."""
+        T = t_z(self._motion(t)[0])
+        return {"a_eq110": T @ self._a_eq110_inertial(t), "a_d2dt2": T @ self._a_d2dt2_inertial(t)}
+
+    def _force(self, t):
+        """Force of the arm on the mass in B1: m a - m g, gravity (0, 0, -g)."""
+        p = self.p
+        a = self.point_accelerations(t, (), ())[self._reaction_route]
+        return p["m"] * a + np.array([0.0, 0.0, p["m"] * p["g"]])
+
+    def reactions(self, t, q, v):
+        F = self._force(t)
+        return {"F1": float(F[0]), "F2": float(F[1]), "F3": float(F[2])}
+
+    def energy(self, t, q, v):
+        """Kinetic + gravity potential of the mass; the mass stays at Z = 0."""
+        p = self.p
+        vel = self._velocity_inertial(t)
+        height = 0.0  # I L = (L cos, L sin, 0)
+        return float(0.5 * p["m"] * vel @ vel + p["m"] * p["g"] * height)
+
+    def drive_power(self, t, q, v):
+        """Power of the arm on the mass, F . v (F from B1 to I by T^T)."""
+        T = t_z(self._motion(t)[0])
+        return float((T.T @ self._force(t)) @ self._velocity_inertial(t))
+
+
+class Reference(Book):
+    """Right: (1.24) replaced by the vector sum of the five terms of (1.10); the rest is the book's."""
+
+    _reaction_route = "a_eq110"
+
+    def _a_eq110_inertial(self, t):
+        """I a_B = I a_A + I omega' x I L + I omega x (I omega x I L) + 2 I omega x I v_Rel + I a_Rel."""
+        th, w, wd, L, Ld, Ldd = self._motion(t)
+        Tt = t_z(th).T
+        a_A = np.zeros(3)                     # origin fixed
+        omega = np.array([0.0, 0.0, w])       # (c)
+        omega_dot = np.array([0.0, 0.0, wd])  # (c)
+        r = Tt @ np.array([L, 0.0, 0.0])      # (d)
+        v_rel = Tt @ np.array([Ld, 0.0, 0.0])   # (1.17)
+        a_rel = Tt @ np.array([Ldd, 0.0, 0.0])  # (1.22)
+        return (a_A + np.cross(omega_dot, r) + np.cross(omega, np.cross(omega, r))
+                + 2 * np.cross(omega, v_rel) + a_rel)
