@@ -78,11 +78,11 @@ class Case:
         """The pointwise check's seeded random states: a list of (t, q, v)."""
         s = self.spec["sample"]
         rng = np.random.default_rng(s["seed"])
-        bounds = lambda ranges: np.array([[self.value(lo), self.value(hi)] for lo, hi in ranges])
+        bounds = lambda ranges: np.array([[self.value(lo), self.value(hi)] for lo, hi in ranges]).reshape(-1, 2)
         q_bounds, v_bounds = bounds(s["q"]), bounds(s["v"])
         t_lo, t_hi = self.value(s["t"][0]), self.value(s["t"][1])
-        return [(rng.uniform(t_lo, t_hi), rng.uniform(*q_bounds.T), rng.uniform(*v_bounds.T))
-                for _ in range(s["count"])]
+        return [(rng.uniform(t_lo, t_hi), rng.uniform(q_bounds[:, 0], q_bounds[:, 1]),
+                 rng.uniform(v_bounds[:, 0], v_bounds[:, 1])) for _ in range(s["count"])]
 
     @property
     def integration(self):
@@ -106,7 +106,8 @@ class Case:
                   for joint, m in s["driven"].items()}
         applied = {joint: np.array([self.value(x) for x in force]) for joint, force in s.get("applied", {}).items()}
         return {"coords": self.coords, "layout": layout, "driven": driven, "applied": applied,
-                "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", [])}
+                "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", []),
+                "urdf_root_joint": s.get("urdf_root_joint")}
 
     @property
     def driven(self):
@@ -133,9 +134,13 @@ class Case:
             path = self.folder / "scene.urdf"
         bindings = self.spec["scene"].get("bindings", {})
         # The scene file must already hold the defaults; write what it cannot hold, and overrides.
-        writes = [(loc, self.params[p] * loc.get("scale", 1.0))
-                  for p, locations in bindings.items() for loc in locations
-                  if p in self.overrides or loc["element"] not in Model.file_elements]
+        # A location that `depends` on other parameters (an inertia about the origin depends on the
+        # mass and the centre of mass) is rewritten when they change, after them.
+        changed = lambda p, loc: p in self.overrides or set(loc.get("depends", ())) & set(self.overrides)
+        writes = sorted([(loc, self.params[p] * loc.get("scale", 1.0))
+                         for p, locations in bindings.items() for loc in locations
+                         if changed(p, loc) or loc["element"] not in Model.file_elements],
+                        key=lambda write: "depends" in write[0])
         model = Model(path, self.scene, writes)
         self._verify(model, path, bindings)
         return model

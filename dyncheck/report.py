@@ -179,6 +179,71 @@ def figure_pointwise(res, path):
     plt.close(fig)
 
 
+def namespace(res, run):
+    """What a case's [report] expressions may use: the run's columns, t, the parameters, the traced
+    bodies' centre-of-mass coordinates (<body>_x, _y, _z), numpy's functions and first(condition);
+    up to the case's `stop` condition, if it has one."""
+    case = res["case"]
+    model = case.model("mujoco")
+    q = run[list(case.coords)].to_numpy()
+    positions = np.array([model.points(t, qi)[0] for t, qi in zip(run.index, q)])
+    t = run.index.to_numpy()
+    names = {name: getattr(np, name) for name in ("sin", "cos", "tan", "arctan", "sqrt", "abs", "max", "min", "pi")}
+    names.update(case.params)
+    names.update({column: run[column].to_numpy() for column in run.columns})
+    for b, body in enumerate(case.scene["paths"]):
+        names.update({f"{body}_{axis}": positions[:, b, i] for i, axis in enumerate("xyz")})
+    names["t"] = t
+    stop = case.spec["report"].get("stop")
+    if stop:  # the book's program stops here: cut every series after the first time it holds
+        with np.errstate(all="ignore"):
+            hit = eval(stop, {"__builtins__": {}}, names)
+        end = int(np.argmax(hit)) + 1 if np.any(hit) else len(t)
+        names = {k: (x[:end] if isinstance(x, np.ndarray) and x.shape[:1] == t.shape else x) for k, x in names.items()}
+        t = names["t"]
+    names["first"] = lambda condition: float(t[np.argmax(condition)]) if np.any(condition) else float("nan")
+    return names
+
+
+def report_namespaces(res):
+    """{source: namespace} along each source's run, for a case's own figures and values."""
+    return {label: namespace(res, run) for label, run in trajectories(res).items()}
+
+
+def figure_extra(res, spaces, item, path):
+    """One of a case's own figures: y against x for every source, overlaid."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for label, names in spaces.items():
+        with np.errstate(all="ignore"):
+            x, y = (eval(item[k], {"__builtins__": {}}, names) for k in ("x", "y"))
+        ax.plot(x, y, label=label, **STYLE[label])
+    ax.set_xlabel(item["xlabel"])
+    ax.set_ylabel(item["ylabel"])
+    if item.get("ylim"):
+        ax.set_ylim(*item["ylim"])
+    if item.get("equal"):
+        ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=4, loc="lower left", bbox_to_anchor=(0, 1.0), frameon=False)
+    fig.suptitle(item["title"], fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def values_table(res, spaces):
+    """A case's named results (e.g. the least friction coefficient), computed for every source."""
+    rows = []
+    for key, item in res["case"].spec["report"].get("values", {}).items():
+        row = {"result": item["about"], "unit": item["unit"]}
+        for label, names in spaces.items():
+            with np.errstate(all="ignore"):
+                value = float(eval(item["expression"], {"__builtins__": {}}, names))
+            row[label] = "not reached" if np.isnan(value) else f"{value:.4g}"
+        rows.append(row)
+    return markdown_table(pd.DataFrame(rows))
+
+
 # -- pages --------------------------------------------------------------------------
 
 def status_of(rows):
@@ -212,25 +277,29 @@ def scene_table(case):
 def write_case_page(res, tmp):
     case, rows = res["case"], res["rows"]
     name = case.name
-    figures = {
-        "scene": f"figures/{name}_scene.png",
-        "coordinates": f"figures/{name}_coordinates.png",
-        "errors": f"figures/{name}_errors.png",
-        "energy": f"figures/{name}_energy.png",
-        "reactions": f"figures/{name}_reactions.png",
-        "pointwise": f"figures/{name}_pointwise.png",
-    }
-    units = case.units
     coord_unit = dict(zip(case.coords, case.spec["coord_units"]))
-    figure_scene(res, tmp / figures["scene"])
-    figure_series(res, state_columns(case)[::2], lambda c: f"{c} [{coord_unit[c]}]",
-                  "coordinates over time, every source overlaid", tmp / figures["coordinates"])
-    figure_series(res, state_columns(case), lambda c: f"|{c} error|",
-                  "error against the tight reference solution", tmp / figures["errors"], log_error=True)
-    figure_energy(res, tmp / figures["energy"])
-    figure_series(res, list(case.reaction_names), lambda c: f"{c} [N]",
-                  "reactions along the trajectory, every source", tmp / figures["reactions"])
-    figure_pointwise(res, tmp / figures["pointwise"])
+    plots = {  # figure -> how to draw it; the coordinate plots only where there are coordinates
+        "scene": lambda path: figure_scene(res, path),
+        "coordinates": lambda path: figure_series(res, state_columns(case)[::2], lambda c: f"{c} [{coord_unit[c]}]",
+                                                  "coordinates over time, every source overlaid", path),
+        "errors": lambda path: figure_series(res, state_columns(case), lambda c: f"|{c} error|",
+                                             "error against the tight reference solution", path, log_error=True),
+        "energy": lambda path: figure_energy(res, path),
+        "reactions": lambda path: figure_series(res, list(case.reaction_names), lambda c: f"{c} [N]",
+                                                "reactions over time, every source", path),
+        "pointwise": lambda path: figure_pointwise(res, path),
+    }
+    if not case.coords:
+        del plots["coordinates"], plots["errors"]
+    extras = case.spec["report"].get("figures", {})
+    spaces = report_namespaces(res) if extras or case.spec["report"].get("values") else {}
+    for key, item in extras.items():
+        plots[key] = lambda path, item=item: figure_extra(res, spaces, item, path)
+    figures = {}
+    for kind, draw in plots.items():
+        figures[kind] = f"figures/{name}_{kind}.png"
+        draw(tmp / figures[kind])
+    units = case.units
 
     params = pd.DataFrame([{"parameter": k, "value": f"{v:.10g}", "unit": units[k],
                             "meaning": case.spec["params"][k]["about"]
@@ -275,6 +344,8 @@ def write_case_page(res, tmp):
         "",
         scene_table(case),
         "",
+        *(["## Results", "", "Computed along each source's run of the book's initial conditions.", "",
+           values_table(res, spaces), ""] if case.spec["report"].get("values") else []),
         "## Checks",
         "",
         "Errors are relative: pointwise to the largest magnitude of the quantity over the random states,"
@@ -296,16 +367,7 @@ def write_case_page(res, tmp):
     lines += [
         "## Figures",
         "",
-        f"![coordinates]({figures['coordinates']})",
-        "",
-        f"![errors]({figures['errors']})",
-        "",
-        f"![energy]({figures['energy']})",
-        "",
-        f"![reactions]({figures['reactions']})",
-        "",
-        f"![pointwise]({figures['pointwise']})",
-        "",
+        *[f"![{kind}]({path})\n" for kind, path in figures.items() if kind != "scene"],
         "## Tolerances and why",
         "",
     ]

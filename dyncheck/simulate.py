@@ -18,27 +18,28 @@ class Unstable(Exception):
         self.method, self.t, self.step, self.why = method, t, step, why
 
 
-def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step):
+def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True):
     """Integrate `model` from ic = (q0, v0) over [0, t_end].
 
     method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol`) or
     MUJOCO_METHODS (MuJoCo's own mj_step at step `dt`; the model must be a MujocoModel).
     Returns a DataFrame indexed by t: coordinates, their rates, reactions, energy, and the work
-    of the prescribed motions so far (`work`), with the cost in `.attrs`.
+    of the prescribed motions and applied forces so far (`work`; pass work=False for a scene where
+    nothing does work, to skip the drive power), with the cost in `.attrs`.
     """
     q0, v0 = (np.asarray(x, dtype=float) for x in ic)
     n_out = int(round(t_end / output_step))
     grid = np.linspace(0.0, t_end, n_out + 1)
     if method in SCIPY_METHODS:
-        t, q, v, work, cost = _scipy(model, q0, v0, grid, method, rtol)
+        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work)
     elif method in MUJOCO_METHODS:
-        t, q, v, work, cost = _mujoco(model, q0, v0, grid, method, dt)
+        t, q, v, w, cost = _mujoco(model, q0, v0, grid, method, dt, work)
     else:
         raise ValueError(f"unknown method '{method}'; methods are {', '.join(SCIPY_METHODS + MUJOCO_METHODS)}")
-    return _frame(model, t, q, v, work, {"method": method, "rtol": rtol, "dt": dt, **cost})
+    return _frame(model, t, q, v, w, {"method": method, "rtol": rtol, "dt": dt, **cost})
 
 
-def _scipy(model, q0, v0, grid, method, rtol):
+def _scipy(model, q0, v0, grid, method, rtol, work):
     n = len(q0)
     evaluations = 0
 
@@ -46,7 +47,8 @@ def _scipy(model, q0, v0, grid, method, rtol):
         nonlocal evaluations
         evaluations += 1
         q, v = y[:n], y[n:2 * n]
-        return np.concatenate([v, model.accelerations(t, q, v), [model.drive_power(t, q, v)]])
+        power = model.drive_power(t, q, v) if work else 0.0
+        return np.concatenate([v, model.accelerations(t, q, v), [power]])
 
     start = time.perf_counter()
     with np.errstate(all="ignore"):
@@ -60,7 +62,7 @@ def _scipy(model, q0, v0, grid, method, rtol):
     return sol.t, y[:, :n], y[:, n:2 * n], y[:, -1], {"wall": wall, "evaluations": evaluations}
 
 
-def _mujoco(model, q0, v0, grid, method, dt):
+def _mujoco(model, q0, v0, grid, method, dt, work):
     run = model.step(q0, v0, grid[-1], dt, method.split(":")[1])
     t, q, v = run["t"], run["q"], run["v"]
     # MuJoCo answers a blow-up (NaN, Inf or |qvel| > 1e10) by resetting the state and the clock
@@ -72,8 +74,11 @@ def _mujoco(model, q0, v0, grid, method, dt):
         raise Unstable(method, step * dt, step, "non-finite or huge state; MuJoCo reset the simulation"
                        if finite[step] else "state is not finite")
     # Work of the prescribed motions: drive power at every step, Simpson's rule (error ~ dt^4).
-    power = np.array([model.drive_power(ti, qi, vi) for ti, qi, vi in zip(t, q, v)])
-    work = cumulative_simpson(power, x=t, initial=0.0)
+    if work:
+        power = np.array([model.drive_power(ti, qi, vi) for ti, qi, vi in zip(t, q, v)])
+        work = cumulative_simpson(power, x=t, initial=0.0)
+    else:
+        work = np.zeros(len(t))
     every = int(round((grid[1] - grid[0]) / dt))
     keep = slice(None, None, every)
     # Index by the nominal output times: MuJoCo accumulates time step by step, so its clock

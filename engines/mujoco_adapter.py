@@ -4,8 +4,9 @@ Prescribed joints ("driven") are handled exactly in the pointwise evaluations:
 their accelerations are imposed and only the free block of the mass matrix is
 solved, so the evaluation model carries no armature at all.  For time stepping
 with MuJoCo's own integrators the scene's armature is put back: a very large
-armature on the driven joints, so that the reaction torques of the free motion
-change their rates by about torque * time / armature (< 1e-11 rad/s).  Its
+armature on the driven joints, pushed by armature x the prescribed acceleration,
+so that the reaction torques of the free motion change their rates by about
+torque * time / armature (< 1e-11 rad/s).  Its
 kinetic energy (~1e14 J) is never part of `energy`: subtracting it would
 cancel every digit of the scene's ~1 J.
 """
@@ -42,13 +43,14 @@ class MujocoModel:
         except (ValueError, KeyError) as error:
             raise ValueError(f"{self.path}: {error}") from error
         self.armature = self.m.dof_armature.copy()
-        self.m.dof_armature[:] = 0.0
         self.d = mujoco.MjData(self.m)
         self.coords = tuple(scene["coords"])
         self.reaction_names = tuple(scene["reactions"])
         self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
         self.free = [dof for _, (_, dof), idx in self.layout for dof in range(dof, dof + len(idx))]
         self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
+        for (_, dof), _ in self.driven:  # the evaluation model imposes these exactly: no armature
+            self.m.dof_armature[dof] = 0.0
         self.applied = np.zeros(self.m.nv)
         for joint, force in scene["applied"].items():
             dof = self._joint(joint)[1]
@@ -84,6 +86,12 @@ class MujocoModel:
         index = location.get("index", 0)
         if element == "option":
             return float(getattr(self.m.opt, name)[index])
+        if element == "body" and location["attribute"] == "inertia_about_origin":
+            body = self.body_id(name)
+            ipos, mass = self.m.body_ipos[body], self.m.body_mass[body]
+            ball = self.m.dof_armature[self.m.body_dofadr[body]:][:self.m.body_dofnum[body]]
+            armature = ball[index] if len(ball) == 3 else 0.0
+            return float(self.m.body_inertia[body][index] + mass * (ipos @ ipos - ipos[index] ** 2) + armature)
         if element == "body":
             array = getattr(self.m, "body_" + location["attribute"])[self.body_id(name)]
         else:
@@ -190,17 +198,23 @@ class MujocoModel:
         state0 = np.empty(mujoco.mj_stateSize(m, spec))
         mujoco.mj_getState(m, d, state0, spec)
         nstep = int(round(t_end / dt))
-        control_spec = mujoco.mjtState.mjSTATE_QFRC_APPLIED  # constant applied forces, every step
+        # Constant generalized forces every step: the applied ones, and armature x acceleration
+        # on each driven joint, which gives the armature the prescribed (constant) acceleration.
+        forces = self.applied.copy()
+        for (_, dof), (_, _, acc) in self.driven:
+            forces[dof] += self.armature[dof] * acc
         start = time.perf_counter()
-        states, _ = mujoco.rollout.rollout(m, d, state0[None], self.applied[None, None], nstep=nstep,
-                                           control_spec=control_spec)
+        states, _ = mujoco.rollout.rollout(m, d, state0[None], forces[None, None], nstep=nstep,
+                                           control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
         wall = time.perf_counter() - start
         states = np.concatenate([state0[None], states[0]])
         times = states[:, 0]
         qpos = states[:, 1:1 + m.nq]
         qvel = states[:, 1 + m.nq:1 + m.nq + m.nv]
         q, v = self._book_states(qpos, qvel, q0)
-        driven_error = max((float(np.max(np.abs(qvel[:, dof] - (rate + acc * times))))
+        # How well the armature held each prescribed rate, relative to that rate's largest value.
+        driven_error = max((float(np.max(np.abs(qvel[:, dof] - (rate + acc * times)))
+                                  / np.max(np.abs(rate + acc * times)))
                             for (_, dof), (_, rate, acc) in self.driven), default=0.0)
         return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep,
                 "evaluations": nstep * (4 if integrator == "RK4" else 1), "driven_rate_error": driven_error}
@@ -220,7 +234,7 @@ class MujocoModel:
 
 
 def _write(spec, location, value):
-    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia, joint stiffness, option gravity."""
+    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia_about_origin, joint stiffness, option gravity."""
     element, name, attribute = location["element"], location.get("name"), location.get("attribute")
     index = location.get("index", 0)
     if element == "option":
@@ -231,6 +245,13 @@ def _write(spec, location, value):
         target = spec.joint(name)
     if target is None:
         raise KeyError(f"no {element} named '{name}'")
+    if attribute == "inertia_about_origin":
+        # The moment of inertia about body axis `index` through the body origin: subtract the
+        # parallel-axis term of the centre of mass and the body's ball-joint armature (see the top).
+        ipos = np.array(target.ipos)
+        armature = sum(j.armature for j in target.joints if j.type == mujoco.mjtJoint.mjJNT_BALL)
+        value = value - target.mass * (ipos @ ipos - ipos[index] ** 2) - armature
+        attribute = "inertia"
     current = getattr(target, attribute)
     if np.ndim(current) == 0:
         setattr(target, attribute, value)

@@ -11,6 +11,8 @@ import pinocchio as pin
 
 from engines import euler
 
+ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
+
 
 class PinocchioModel:
     file_elements = {"body"}  # URDF holds masses and lengths; stiffness and gravity come from the case
@@ -18,8 +20,12 @@ class PinocchioModel:
 
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
+        root = scene.get("urdf_root_joint")
         try:
-            self.m = pin.buildModelFromUrdf(self.path)
+            if root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
+                self.m = pin.buildModelFromUrdf(self.path, ROOT_JOINTS[root["type"]](), root["name"])
+            else:
+                self.m = pin.buildModelFromUrdf(self.path)
         except (ValueError, RuntimeError) as error:
             raise ValueError(f"{self.path}: {error}") from error
         self.stiffness = {}
@@ -67,19 +73,29 @@ class PinocchioModel:
         joint = self._body_joint(name)
         if attribute == "pos":
             return self.m.jointPlacements[joint], "translation"
+        if attribute == "inertia_about_origin":
+            return self.m.inertias[joint], attribute
         return self.m.inertias[joint], {"mass": "mass", "ipos": "lever"}[attribute]
 
     def _write(self, location, value):
         holder, key = self._slot(location)
-        if holder is self.stiffness:
+        i = location.get("index", 0)
+        if key == "inertia_about_origin":  # about the body origin: less the parallel-axis term
+            lever, inertia = holder.lever, holder.inertia.copy()
+            inertia[i, i] = value - holder.mass * (lever @ lever - lever[i] ** 2)
+            self.m.inertias[self._body_joint(location["name"])] = pin.Inertia(holder.mass, lever, inertia)
+        elif holder is self.stiffness:
             self.stiffness[key] = value
         elif np.ndim(getattr(holder, key)) == 0:
             setattr(holder, key, value)
         else:  # Pinocchio's bindings return these arrays by reference
-            getattr(holder, key)[location.get("index", 0)] = value
+            getattr(holder, key)[i] = value
 
     def read(self, location):
         holder, key = self._slot(location)
+        i = location.get("index", 0)
+        if key == "inertia_about_origin":
+            return float(holder.inertia[i, i] + holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2))
         if holder is self.stiffness:
             return float(self.stiffness.get(key, 0.0))
         return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
@@ -144,7 +160,8 @@ class PinocchioModel:
         return config, velocity, acc, pin.rnea(self.m, self.d, config, velocity, acc)
 
     def reactions(self, t, q, v):
-        self._inverse(t, q, v)  # fills data.f: force of each joint's parent on its subtree
+        config, *_ = self._inverse(t, q, v)  # fills data.f: force of each joint's parent on its subtree
+        pin.forwardKinematics(self.m, self.d, config)  # rnea leaves data.oMi stale (Pinocchio 4.1)
         out = {}
         for name, (joint, axis, frame) in self.reaction_specs.items():
             force = self.d.f[joint].linear

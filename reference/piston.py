@@ -1,6 +1,10 @@
 """Section 1.7, Examples 3-4: a mass at the end of a hydraulic piston turning about Z.
 
-Scene (book 1.7.3, Example 3, text lines 41-43 of the extraction).  "An hydraulic piston
+Sources in the extraction (one page per line): Example 3 statement line 41, solution (a)-(e)
+lines 43-45, (1.17)-(1.20) lines 45-47, (1.21)-(1.23) and Example 4 line 49, the four terms and
+(1.24) line 51; (1.10) itself (printed "(1.1)") and its B1 form at the end of 1.6, line 35.
+
+Scene (book 1.7.3, Example 3).  "An hydraulic piston
 with a mass m located at its end, rotating with angular speed theta' relative to the axis Z
 (inertial frame).  A moving reference frame X1 Y1 Z1, fixed to the piston, also rotates with
 angular speed theta' ... the origin point coincides with the origin of the inertial frame,
