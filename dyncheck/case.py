@@ -101,8 +101,7 @@ class Case:
         layout = [("scalar", joint, [index[c]]) for c, joint in s["coords"].items()]
         if "euler" in s:
             layout.append(("euler", s["euler"]["joint"], [index[c] for c in s["euler"]["coords"]]))
-        driven = {joint: (self.params[m["angle"]], self.params[m["rate"]],
-                          self.params[m["acc"]] if "acc" in m else 0.0)
+        driven = {joint: tuple(self.value(m.get(key, 0.0)) for key in ("angle", "rate", "acc"))
                   for joint, m in s["driven"].items()}
         applied = {joint: np.array([self.value(x) for x in force]) for joint, force in s.get("applied", {}).items()}
         return {"coords": self.coords, "layout": layout, "driven": driven, "applied": applied,

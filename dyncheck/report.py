@@ -405,9 +405,9 @@ def write_index(tmp, out):
     """index.md over every case with results in `out` (kept) or `tmp` (this run's)."""
     summaries = {p.name: p for p in sorted((out / "data").glob("*.json"))}
     summaries.update({p.name: p for p in sorted((tmp / "data").glob("*.json"))})
+    cases = [json.loads(path.read_text()) for path in summaries.values()]
     rows = []
-    for name in sorted(summaries):
-        case = json.loads(summaries[name].read_text())
+    for case in sorted(cases, key=lambda c: [int(n) for n in c["section"].split(".")]):  # book order
         counts = pd.Series([c["status"] for c in case["checks"]]).value_counts()
         rows.append({
             "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"], "title": case["title"],

@@ -212,10 +212,11 @@ class MujocoModel:
         qpos = states[:, 1:1 + m.nq]
         qvel = states[:, 1 + m.nq:1 + m.nq + m.nv]
         q, v = self._book_states(qpos, qvel, q0)
-        # How well the armature held each prescribed rate, relative to that rate's largest value.
-        driven_error = max((float(np.max(np.abs(qvel[:, dof] - (rate + acc * times)))
-                                  / np.max(np.abs(rate + acc * times)))
-                            for (_, dof), (_, rate, acc) in self.driven), default=0.0)
+        # How well the armatures held the prescribed rates, relative to the largest prescribed
+        # rate (a joint may be held at rate 0).
+        drift = [np.max(np.abs(qvel[:, dof] - (rate + acc * times))) for (_, dof), (_, rate, acc) in self.driven]
+        scale = max((np.max(np.abs(rate + acc * times)) for _, (_, rate, acc) in self.driven), default=0.0)
+        driven_error = float(max(drift) / scale) if drift and scale > 0 else float(max(drift, default=0.0))
         return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep,
                 "evaluations": nstep * (4 if integrator == "RK4" else 1), "driven_rate_error": driven_error}
 

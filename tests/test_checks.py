@@ -31,7 +31,8 @@ def test_the_books_reaction_is_a_finding_of_the_size_of_the_missing_term(results
 
 def test_a_finding_that_stops_reproducing_fails(monkeypatch):
     """Strict findings: correct the book's term and its registered finding must turn into a failure."""
-    monkeypatch.setattr(spring_pendulum.Book, "_coriolis_factor", lambda self: 2.0)
+    monkeypatch.setattr(spring_pendulum.Book, "reactions", spring_pendulum.Reference.reactions)
+    monkeypatch.setattr(spring_pendulum.Book, "_motion", spring_pendulum.Reference._motion, raising=False)
     case = dyncheck.load_case("spring_pendulum")
     rows, _ = pointwise(case)
     rows = apply_findings(case, rows)

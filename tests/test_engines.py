@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 import dyncheck
 from dyncheck.case import Case
-from dyncheck.checks import evaluate, relative_error
+from dyncheck.checks import compare, evaluate
 
 TOL = 1e-9  # the cases' pointwise tolerance (see case.toml for its derivation)
 
@@ -18,9 +18,8 @@ def assert_engines_agree(case, count=10):
     states = case.sample_states()[:count]
     ref = evaluate(case, "reference", states)
     for engine in ("mujoco", "pinocchio"):
-        values = evaluate(case, engine, states)
-        for quantity in ref:
-            assert relative_error(ref[quantity], values[quantity]) <= TOL, (case, engine, quantity)
+        for quantity, error in compare(case, ref, evaluate(case, engine, states)).items():
+            assert error <= TOL, (case, engine, quantity, error)
 
 
 @settings(max_examples=8, deadline=None)
@@ -104,3 +103,22 @@ def test_a_bad_expression_in_a_case_file_is_named(tmp_path):
     (folder / "case.toml").write_text(text)
     with pytest.raises(ValueError, match=r"case.toml: cannot evaluate 'pi/sixth': name 'sixth' is not defined"):
         Case(folder).initial
+
+
+# Overrides that move every kind of parameter of each case away from the book's numbers.
+OVERRIDES = {
+    "spring_pendulum": dict(k=150.0, b=0.3, l0=0.2, g=3.0, alpha_rate=1.0, beta_rate=-5.0, beta0=0.4),
+    "double_pendulum": dict(m1=0.3, m2=0.1, l1=0.2, l2=0.05, g=5.0),
+    "rotating_pendulum": dict(l=0.3, m=0.5, alpha_rate=1.0, beta_rate=3.14, h=0.1, r=0.2, g=9.0),
+    "rotating_particle": dict(psi=2.5, l=0.25, alpha_rate=-2.0, beta_rate=0.5, b=0.7),
+    "piston": dict(m=0.5, L0=0.3, theta_rate=-2.0, theta_acc=1.0, L_rate=-0.05, L_acc=0.2, g=1.6),
+    "spinning_top": dict(m=0.6, h=0.05, Ixx=0.003, Izz=0.002, Mz=-0.01, g=9.0),
+}
+
+
+@pytest.mark.parametrize("name", sorted(OVERRIDES))
+def test_every_case_agrees_with_overridden_parameters(name):
+    assert set(OVERRIDES) == set(dyncheck.case_names())
+    case = dyncheck.load_case(name, **OVERRIDES[name])
+    assert case.overrides == OVERRIDES[name]
+    assert_engines_agree(case, count=20)
