@@ -113,16 +113,23 @@ class Case:
         """Whether anything does work on the scene: prescribed motions or applied forces."""
         return bool(self.scene["driven"] or self.scene["applied"])
 
+    @property
+    def has_program(self):
+        """Whether the book prints a program for this case (reference module's `Program`)."""
+        return hasattr(importlib.import_module(f"reference.{self.name}"), "Program")
+
     def model(self, source):
-        """The model of this case by `source`: "book" | "reference" | "mujoco" | "pinocchio"."""
-        if source not in SOURCES:
-            raise ValueError(f"unknown source '{source}'; sources are {', '.join(SOURCES)}")
+        """The model of this case by `source`: "book" | "reference" | "mujoco" | "pinocchio" | "program"."""
+        if source not in SOURCES + ("program",):
+            raise ValueError(f"unknown source '{source}'; sources are {', '.join(SOURCES)}, program")
+        if source == "program" and not self.has_program:
+            raise ValueError(f"case '{self.name}': the book prints no program for {self.section}")
         if source not in self._models:
             self._models[source] = self._build(source)
         return self._models[source]
 
     def _build(self, source):
-        if source in ("book", "reference"):
+        if source in ("book", "reference", "program"):
             module = importlib.import_module(f"reference.{self.name}")
             return getattr(module, source.capitalize())(self.params)
         if source == "mujoco":

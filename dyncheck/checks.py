@@ -6,6 +6,9 @@ import time
 import numpy as np
 
 from dyncheck.case import SOURCES
+from dyncheck.expressions import evaluate as evaluate_expression
+from dyncheck.expressions import namespace
+from dyncheck.localise import localise
 from dyncheck.simulate import Unstable, simulate
 
 EPS = np.finfo(float).eps
@@ -186,7 +189,8 @@ def apply_findings(case, rows):
     """A failing row that a registered finding explains is a finding; a finding that no longer fails fails."""
     for r in rows:
         for finding in case.findings:
-            involved = set(r["sources"].replace(" vs ", " ").split()) & set(finding["sources"])
+            # A finding names whole sources ("book": every comparison with it) or one comparison.
+            involved = (set(r["sources"].split(" vs ")) | {r["sources"]}) & set(finding["sources"])
             if involved and r["quantity"] in finding["quantities"] and r["status"] in ("pass", "fail"):
                 r["finding"] = finding["id"]
                 if r["status"] == "fail":
@@ -203,8 +207,146 @@ def run_case(case, progress=None):
     rows, sample = pointwise(case)
     runs = run_sources(case)
     rows += trajectory(case, runs) + energy(case, runs)
+    program_rows, program_runs = program_checks(case)
+    rows += program_rows
     apply_findings(case, rows)
     for r in rows:
         r["case"] = case.name
-    return {"case": case, "rows": rows, "sample": sample, "runs": runs,
+    return {"case": case, "rows": rows, "sample": sample, "runs": runs, "program": program_runs,
             "wall": time.perf_counter() - start}
+
+
+# -- the book's programs ------------------------------------------------------------
+
+def program_checks(case):
+    """The book's printed program against its derived equations, the engines and its own figures.
+
+    (1) its formulas at the random states, against `reference`; (2) its run against the book's
+    derived equations integrated by the same integrator and step (isolates formula errors from
+    integrator errors); (3) its run against the tight reference solution (the integrator's own
+    error, allowed up to `safety` times the Richardson estimate of that integrator at that step);
+    (4) its run inside the ranges of the book's figures.  Returns rows and the runs.
+    """
+    if not case.has_program:
+        return [], {}
+    program = case.model("program")
+    states = case.sample_states()
+    tolerance = case.tolerance["pointwise"]["value"]
+    reference = case.model("reference")
+    rows = []
+    mine = {"acc": np.array([program.accelerations(t, q, v) for t, q, v in states]),
+            "reactions": [program.reactions(t, q, v) for t, q, v in states]}
+    right = {"acc": np.array([reference.accelerations(t, q, v) for t, q, v in states]),
+             "reactions": [reference.reactions(t, q, v) for t, q, v in states]}
+    for i, coord in enumerate(case.coords):
+        rows.append(row("program", f"{coord}_acc", "program vs reference",
+                        relative_error(mine["acc"][:, i], right["acc"][:, i]), tolerance,
+                        f"{len(states)} random states"))
+    for name in program.reaction_names:
+        rows.append(row("program", name, "program vs reference",
+                        relative_error(np.array([r[name] for r in mine["reactions"]]),
+                                       np.array([r[name] for r in right["reactions"]])), tolerance,
+                        f"{len(states)} random states"))
+
+    q0, v0, _ = case.initial
+    listing = program.run(q0, v0)
+    every = max(1, int(round(case.integration["output_step"] / program.dt)))
+    listing = listing.iloc[::every]
+    t_end = (len(listing) - 1) * every * program.dt
+    book = case.model("book")
+    same = lambda q, dt: simulate(book, (q, v0), t_end, program.integrator, dt=dt,
+                                  output_step=every * program.dt, work=False)
+    twin_runs = {"same": same(q0, program.dt), "half": same(q0, program.dt / 2)}
+    # Rounding: the same run from a start moved by a few ulps shows how the motion amplifies them.
+    twin_runs["nudged"] = same(q0 + 4 * EPS * np.maximum(np.abs(q0), 1.0), program.dt)
+    tight = simulate(reference, (q0, v0), t_end, "DOP853", rtol=case.integration["tight_rtol"],
+                     output_step=every * program.dt, work=False)
+    safety = case.tolerance["trajectory"]["safety"]
+    label = f"{program.integrator}, dt = {program.dt:.4g} s, {t_end:.4g} s"
+    for column in state_columns(case):
+        x = listing[column].to_numpy()
+        scale = np.max(np.abs(tight[column]))
+        rounding = np.max(np.abs(twin_runs["same"][column] - twin_runs["nudged"][column])) / scale
+        rows.append(row("program", column, "program vs book equations, same integrator",
+                        np.max(np.abs(x - twin_runs["same"][column].to_numpy())) / scale,
+                        safety * rounding + ROUNDING_FLOOR, label))
+        # First-order schemes: error(dt) ~ 2 |x(dt) - x(dt/2)| (Richardson).
+        integrator = 2 * np.max(np.abs(twin_runs["same"][column] - twin_runs["half"][column])) / scale
+        rows.append(row("program", column, "program vs tight reference",
+                        np.max(np.abs(x - tight[column].to_numpy())) / scale,
+                        safety * integrator + ROUNDING_FLOOR, label))
+    for name, figure in case.spec.get("program", {}).get("figures", {}).items():
+        lo, hi = figure["range"]
+        for source, run in (("program", listing), ("tight reference", tight)):
+            values = evaluate_expression(figure["expression"], namespace(case, run))
+            outside = max(lo - np.min(values), np.max(values) - hi, 0.0) / (hi - lo)
+            rows.append(row("figure", name, f"{source} vs book figure", outside, 0.0,
+                            f"{figure['where']}: range [{lo:g}, {hi:g}]; run [{np.min(values):.4g}, {np.max(values):.4g}]"))
+    return rows, {"listing": listing, "same integrator": twin_runs["same"], "tight": tight}
+
+
+def finding_effect(res, finding):
+    """What a finding changes in the book's own run: its reactions in newtons, its energy balance in joules."""
+    case, runs = res["case"], res["runs"]
+    if "book" not in finding["sources"] or not isinstance(runs.get("book"), tuple):
+        return ""
+    book, tight = runs["book"][0], runs["reference"][1]
+    parts = [f"the book's {q} is off by up to {(book[q] - tight[q]).abs().max():.3g} N"
+             f" (|{q}| up to {tight[q].abs().max():.3g} N)"
+             for q in finding["quantities"] if q in case.reaction_names]
+    if "work-energy balance" in finding["quantities"]:
+        parts.append(f"its work-energy balance misses by up to {energy_residual(book).abs().max():.3g} J")
+    return (f"Over the book's run ({case.initial[2]:g} s from the book's initial conditions), "
+            + "; ".join(parts) + ".") if parts else ""
+
+
+def localise_finding(case, finding, sample):
+    """The smallest edit of the book's printed expression that explains `finding` (dyncheck.localise)."""
+    # The finding's source: the book's derived equations, or its program.
+    book = case.model("program" if any("program" in s for s in finding["sources"]) else "book")
+    printed = getattr(book, "PRINTED", {})
+    engine = sample["values"]["mujoco"]
+
+    def components(key):
+        """A printed vector's components as the checks name them: a_eq110_x, ... or Rx, ..."""
+        for names in ([f"{key}_{axis}" for axis in "xyz"], [f"{key}{axis}" for axis in "xyz"]):
+            if all(n in engine for n in names):
+                return names
+        return [key]
+
+    quantities = [k for k in printed if set(components(k)) & set(finding["quantities"])]
+    if not quantities:
+        return "not searched: the book's module declares no printed expression for " + ", ".join(finding["quantities"])
+    parts = []
+    for quantity in quantities:
+        names = components(quantity)
+        target = engine[names[0]] if len(names) == 1 else np.column_stack([engine[n] for n in names])
+        namespaces = [book.symbols(t, q, v) for t, q, v in sample["states"]]
+        found, tried, printed_error = localise(printed[quantity], namespaces, target,
+                                               case.tolerance["pointwise"]["value"])
+        if found:
+            parts.append(f"{quantity}: " + "; or ".join(f"{label} (then off by {err:.1e})" for label, err in found)
+                         + f" [{tried} edits tried; as printed off by {printed_error:.2g}]")
+        else:
+            parts.append(f"{quantity}: none of the {tried} searched edits (single and pairs) explains it"
+                         f" (as printed off by {printed_error:.2g})")
+    return "; ".join(parts)
+
+
+def findings_of(res):
+    """The case's registered findings with their measured size, where and how established, and effect."""
+    engines = [r["error"] for r in res["rows"] if r["check"] == "pointwise"
+               and set(r["sources"].split(" vs ")) <= {"reference", "mujoco", "pinocchio"}]
+    states = res["case"].spec["sample"]["count"]
+    out = []
+    for finding in res["case"].findings:
+        errors = [r["error"] for r in res["rows"] if r["finding"] == finding["id"] and r["error"] is not None]
+        out.append({"id": finding["id"], "title": finding["title"], "quantity": finding["quantities"],
+                    "sources": finding["sources"], "error": max(errors, default=None),
+                    "explanation": " ".join(finding["explanation"].split()),
+                    "where": finding["where"],
+                    "established": f"reference, MuJoCo and Pinocchio agree to {max(engines, default=0):.1e} "
+                                   f"at {states} random states; {', '.join(finding['sources'])} differs",
+                    "effect": finding_effect(res, finding),
+                    "localised": localise_finding(res["case"], finding, res["sample"])})
+    return out

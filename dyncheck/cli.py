@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from dyncheck.case import SOURCES, case_names, load_case
-from dyncheck.checks import run_case
+from dyncheck.checks import findings_of, run_case
 
 OK_STATUSES = ("pass", "finding")
 TABLE_COLUMNS = ["check", "quantity", "sources", "error", "tolerance", "status"]
@@ -105,17 +105,6 @@ def print_results(results, table=True):
         counts = pd.Series([r["status"] for r in rows]).value_counts().to_dict()
         summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
         print(f"{case.name}: {summary} ({res['wall']:.1f} s)")
-
-
-def findings_of(res):
-    out = []
-    for finding in res["case"].findings:
-        rows = [r for r in res["rows"] if r["finding"] == finding["id"]]
-        errors = [r["error"] for r in rows if r["error"] is not None]
-        out.append({"id": finding["id"], "title": finding["title"], "quantity": finding["quantities"],
-                    "sources": finding["sources"], "error": max(errors, default=None),
-                    "explanation": " ".join(finding["explanation"].split())})
-    return out
 
 
 def to_json(results):

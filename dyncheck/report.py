@@ -16,8 +16,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from dyncheck.checks import energy_residual, state_columns  # noqa: E402
-from dyncheck.cli import OK_STATUSES, findings_of, format_rows, to_json  # noqa: E402
+from dyncheck.checks import energy_residual, findings_of, state_columns  # noqa: E402
+from dyncheck.cli import OK_STATUSES, format_rows, to_json  # noqa: E402
+from dyncheck.expressions import evaluate, namespace  # noqa: E402
 
 STYLE = {  # source -> line style, so that coinciding curves stay visible
     "tight reference": dict(color="black", lw=2.6, alpha=0.35),
@@ -41,6 +42,7 @@ def write_reports(results, out):
             written += write_case_page(res, tmp)
             written.append(write_summary(res, tmp))
         written.append(write_index(tmp, out))
+        written.append(write_errata(tmp, out))
         for folder in ("figures", "data"):
             (out / folder).mkdir(exist_ok=True)
         for rel in written:
@@ -179,43 +181,16 @@ def figure_pointwise(res, path):
     plt.close(fig)
 
 
-def namespace(res, run):
-    """What a case's [report] expressions may use: the run's columns, t, the parameters, the traced
-    bodies' centre-of-mass coordinates (<body>_x, _y, _z), numpy's functions and first(condition);
-    up to the case's `stop` condition, if it has one."""
-    case = res["case"]
-    model = case.model("mujoco")
-    q = run[list(case.coords)].to_numpy()
-    positions = np.array([model.points(t, qi)[0] for t, qi in zip(run.index, q)])
-    t = run.index.to_numpy()
-    names = {name: getattr(np, name) for name in ("sin", "cos", "tan", "arctan", "sqrt", "abs", "max", "min", "pi")}
-    names.update(case.params)
-    names.update({column: run[column].to_numpy() for column in run.columns})
-    for b, body in enumerate(case.scene["paths"]):
-        names.update({f"{body}_{axis}": positions[:, b, i] for i, axis in enumerate("xyz")})
-    names["t"] = t
-    stop = case.spec["report"].get("stop")
-    if stop:  # the book's program stops here: cut every series after the first time it holds
-        with np.errstate(all="ignore"):
-            hit = eval(stop, {"__builtins__": {}}, names)
-        end = int(np.argmax(hit)) + 1 if np.any(hit) else len(t)
-        names = {k: (x[:end] if isinstance(x, np.ndarray) and x.shape[:1] == t.shape else x) for k, x in names.items()}
-        t = names["t"]
-    names["first"] = lambda condition: float(t[np.argmax(condition)]) if np.any(condition) else float("nan")
-    return names
-
-
 def report_namespaces(res):
     """{source: namespace} along each source's run, for a case's own figures and values."""
-    return {label: namespace(res, run) for label, run in trajectories(res).items()}
+    return {label: namespace(res["case"], run) for label, run in trajectories(res).items()}
 
 
 def figure_extra(res, spaces, item, path):
     """One of a case's own figures: y against x for every source, overlaid."""
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for label, names in spaces.items():
-        with np.errstate(all="ignore"):
-            x, y = (eval(item[k], {"__builtins__": {}}, names) for k in ("x", "y"))
+        x, y = (evaluate(item[k], names) for k in ("x", "y"))
         ax.plot(x, y, label=label, **STYLE[label])
     ax.set_xlabel(item["xlabel"])
     ax.set_ylabel(item["ylabel"])
@@ -237,8 +212,7 @@ def values_table(res, spaces):
     for key, item in res["case"].spec["report"].get("values", {}).items():
         row = {"result": item["about"], "unit": item["unit"]}
         for label, names in spaces.items():
-            with np.errstate(all="ignore"):
-                value = float(eval(item["expression"], {"__builtins__": {}}, names))
+            value = float(evaluate(item["expression"], names))
             row[label] = "not reached" if np.isnan(value) else f"{value:.4g}"
         rows.append(row)
     return markdown_table(pd.DataFrame(rows))
@@ -321,7 +295,7 @@ def write_case_page(res, tmp):
         "",
         f"**{status_of(rows)}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
         + f"; worst pointwise error among reference, MuJoCo and Pinocchio: {worst_engine_error(rows):.1e}"
-        + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md)"
+        + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md), [errata](errata.md)"
         + (f"  \nParameters overridden: {case.overrides}" if case.overrides else ""),
         "",
         "## The scene",
@@ -363,7 +337,9 @@ def write_case_page(res, tmp):
                       f"*Where:* {spec['where']}.  *Largest relative error it causes here:* {f['error']:.3g}"
                       f" (quantities {', '.join(f['quantity'])}; sources {', '.join(f['sources'])}"
                       " against reference, MuJoCo and Pinocchio, which agree to the tolerance)."
-                      + finding_effects(res, f), "", f["explanation"], ""]
+                      + (f"  {f['effect']}" if f["effect"] else ""), "",
+                      f"*Localised automatically* (edits of the printed expression searched until one agrees"
+                      f" with the engines): {f['localised']}.", "", f["explanation"], ""]
     lines += [
         "## Figures",
         "",
@@ -381,33 +357,48 @@ def write_case_page(res, tmp):
     return [page] + list(figures.values())
 
 
-def finding_effects(res, finding):
-    """What a finding changes in the book's own run: its reactions in newtons, its energy balance in joules."""
-    case, runs = res["case"], trajectories(res)
-    if "book" not in finding["sources"] or "book" not in runs:
-        return ""
-    book, tight = runs["book"], runs["tight reference"]
-    parts = [f"the book's {q} is off by up to {(book[q] - tight[q]).abs().max():.3g} N"
-             f" (|{q}| up to {tight[q].abs().max():.3g} N)"
-             for q in finding["quantity"] if q in case.reaction_names]
-    if any(q.startswith("work-energy") for q in finding["quantity"]):
-        parts.append(f"its work-energy balance misses by up to {energy_residual(book).abs().max():.3g} J")
-    return f"  Over the book's run ({case.initial[2]:g} s from the book's initial conditions), " \
-        + "; ".join(parts) + "." if parts else ""
-
-
 def _state(coords, q, v):
     return ", ".join(f"{c} = {x:.6g}" for c, x in zip(coords, q)) + ", " + \
         ", ".join(f"{c}' = {x:.6g}" for c, x in zip(coords, v))
 
 
+def summaries(tmp, out):
+    """Every case with results in `out` (kept from earlier runs) or `tmp` (this run's), in book order."""
+    paths = {p.name: p for p in sorted((out / "data").glob("*.json"))}
+    paths.update({p.name: p for p in sorted((tmp / "data").glob("*.json"))})
+    cases = [json.loads(path.read_text()) for path in paths.values()]
+    return sorted(cases, key=lambda c: [int(n) for n in c["section"].split(".")])
+
+
+def write_errata(tmp, out):
+    """errata.md: every finding of every case in one table, then each in full."""
+    cases = summaries(tmp, out)
+    table = [{"finding": f"[{f['id']}](#{f['id'].replace('.', '').lower()})", "case": f"[{c['case']}]({c['case']}.md)",
+              "where": f["where"], "what": f["title"], "largest relative error": f"{f['error']:.3g}",
+              "localised edit": f["localised"]}
+             for c in cases for f in c["findings"]]
+    lines = ["# Errata: where the book is wrong", "",
+             "Each finding is a disagreement between the book and the engines that an error of the book"
+             " explains.  It is registered in its case file and checked on every run: if the book's"
+             " version ever agrees with the engines, the run fails.  [All cases](index.md)", "",
+             markdown_table(pd.DataFrame(table)) if table else "No findings.", ""]
+    for c in cases:
+        for f in c["findings"]:
+            lines += [f"## {f['id']}", "", f"**{f['title']}** ([{c['case']}]({c['case']}.md), {c['section']})", "",
+                      f"- *Where:* {f['where']}",
+                      f"- *Quantities:* {', '.join(f['quantity'])}; largest relative error {f['error']:.3g}",
+                      f"- *How established:* {f['established']}",
+                      *([f"- *Effect:* {f['effect']}"] if f["effect"] else []),
+                      f"- *Localised edit:* {f['localised']}", "",
+                      f["explanation"], ""]
+    (tmp / "errata.md").write_text("\n".join(lines))
+    return "errata.md"
+
+
 def write_index(tmp, out):
     """index.md over every case with results in `out` (kept) or `tmp` (this run's)."""
-    summaries = {p.name: p for p in sorted((out / "data").glob("*.json"))}
-    summaries.update({p.name: p for p in sorted((tmp / "data").glob("*.json"))})
-    cases = [json.loads(path.read_text()) for path in summaries.values()]
     rows = []
-    for case in sorted(cases, key=lambda c: [int(n) for n in c["section"].split(".")]):  # book order
+    for case in summaries(tmp, out):
         counts = pd.Series([c["status"] for c in case["checks"]]).value_counts()
         rows.append({
             "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"], "title": case["title"],
@@ -418,7 +409,8 @@ def write_index(tmp, out):
              "The worked examples of I. F. Santos, *Dynamics of Machines*, ch. 1, checked against MuJoCo"
              " and Pinocchio.  *Worst engine error* is the largest pointwise relative error among"
              " `reference`, MuJoCo and Pinocchio (accelerations, reactions, energy, drive power);"
-             " a finding is an error of the book, with the largest relative error it causes.", "",
+             " a finding is an error of the book, with the largest relative error it causes: all of them"
+             " are in the [errata](errata.md).", "",
              markdown_table(pd.DataFrame(rows)), ""]
     (tmp / "index.md").write_text("\n".join(lines))
     return "index.md"

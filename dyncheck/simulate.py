@@ -7,7 +7,9 @@ import pandas as pd
 from scipy.integrate import cumulative_simpson, solve_ivp
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
+FIXED_METHODS = ("explicit Euler", "semi-implicit Euler", "RK4")  # the book's programs use the Eulers
 MUJOCO_METHODS = ("mujoco:Euler", "mujoco:implicitfast", "mujoco:RK4")
+METHODS = SCIPY_METHODS + FIXED_METHODS + MUJOCO_METHODS
 
 
 class Unstable(Exception):
@@ -21,7 +23,9 @@ class Unstable(Exception):
 def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True):
     """Integrate `model` from ic = (q0, v0) over [0, t_end].
 
-    method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol`) or
+    method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol`),
+    FIXED_METHODS (driven by model.accelerations at step `dt`: the explicit Euler of the book's
+    Matlab program, the semi-implicit Euler of its Pascal programs, classical RK4), or
     MUJOCO_METHODS (MuJoCo's own mj_step at step `dt`; the model must be a MujocoModel).
     Returns a DataFrame indexed by t: coordinates, their rates, reactions, energy, and the work
     of the prescribed motions and applied forces so far (`work`; pass work=False for a scene where
@@ -32,10 +36,12 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
     grid = np.linspace(0.0, t_end, n_out + 1)
     if method in SCIPY_METHODS:
         t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work)
+    elif method in FIXED_METHODS:
+        t, q, v, w, cost = _fixed(model, q0, v0, grid, method, dt, work)
     elif method in MUJOCO_METHODS:
         t, q, v, w, cost = _mujoco(model, q0, v0, grid, method, dt, work)
     else:
-        raise ValueError(f"unknown method '{method}'; methods are {', '.join(SCIPY_METHODS + MUJOCO_METHODS)}")
+        raise ValueError(f"unknown method '{method}'; methods are {', '.join(METHODS)}")
     return _frame(model, t, q, v, w, {"method": method, "rtol": rtol, "dt": dt, **cost})
 
 
@@ -60,6 +66,52 @@ def _scipy(model, q0, v0, grid, method, rtol, work):
         raise Unstable(method, float(bad), len(sol.t), sol.message)
     y = sol.y.T
     return sol.t, y[:, :n], y[:, n:2 * n], y[:, -1], {"wall": wall, "evaluations": evaluations}
+
+
+def _fixed(model, q0, v0, grid, method, dt, work):
+    """Fixed-step integration; the work W' = P rides along with the scheme's own update."""
+    every = int(round((grid[1] - grid[0]) / dt))
+    nstep = every * (len(grid) - 1)
+    n = len(q0)
+    evaluations = 0
+
+    def rates(t, q, v):
+        nonlocal evaluations
+        evaluations += 1
+        return model.accelerations(t, q, v), (model.drive_power(t, q, v) if work else 0.0)
+
+    def derivative(t, y):
+        acc, power = rates(t, y[:n], y[n:2 * n])
+        return np.concatenate([y[n:2 * n], acc, [power]])
+
+    q, v, w = q0.copy(), v0.copy(), 0.0
+    out_q, out_v, out_w = [q.copy()], [v.copy()], [w]
+    start = time.perf_counter()
+    with np.errstate(all="ignore"):
+        for i in range(nstep):
+            t = i * dt
+            if method == "RK4":
+                y = np.concatenate([q, v, [w]])
+                k1 = derivative(t, y)
+                k2 = derivative(t + dt / 2, y + dt / 2 * k1)
+                k3 = derivative(t + dt / 2, y + dt / 2 * k2)
+                k4 = derivative(t + dt, y + dt * k3)
+                y = y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                q, v, w = y[:n], y[n:2 * n], y[-1]
+            else:
+                acc, power = rates(t, q, v)
+                v_new = v + dt * acc
+                q = q + dt * (v_new if method == "semi-implicit Euler" else v)
+                v, w = v_new, w + dt * power
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                raise Unstable(method, (i + 1) * dt, i + 1, "state is not finite")
+            if (i + 1) % every == 0:
+                out_q.append(q.copy())
+                out_v.append(v.copy())
+                out_w.append(w)
+    wall = time.perf_counter() - start
+    return grid, np.array(out_q).reshape(len(grid), n), np.array(out_v).reshape(len(grid), n), np.array(out_w), \
+        {"wall": wall, "evaluations": evaluations, "steps": nstep}
 
 
 def _mujoco(model, q0, v0, grid, method, dt, work):

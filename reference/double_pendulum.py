@@ -20,9 +20,20 @@ listing of 1.9.3, which prints the same four expressions with ASCII operators
 (ddt1, ddt2, Tr1, Tr2).  The book's x axis: the derivation puts m1 at
 (l1 sin theta1, -l1 cos theta1); the listing plots -l1 sin theta1.  The mirror
 leaves the equations of motion unchanged (they are odd in the angles).
+
+`Program` is the Pascal listing of 1.9.3 (`program pend2`) transcribed line by line: its loop
+(semi-implicit Euler: the new rates first, then the angles from the new rates), its step
+deltat = (tempo/na)/n, its rows (the initial one, then one per step), its mirrored positions
+h1x = -l1 sin(theta1), and its four expressions, which are `Book`'s (the same closed forms, so
+its accelerations and reactions equal Book's and agree with Reference to rounding).  The zeros
+the extraction dropped from its numbers are restored in the class docstring, with the evidence.
 """
 
+import math
+import time
+
 import numpy as np
+import pandas as pd
 
 COORDS = ("theta1", "theta2")
 REACTIONS = ("T1", "T2")
@@ -112,3 +123,144 @@ class Book(Reference):
                - dt2**2 * l1 * l2**2 * m1 * m2**2 - dt1**2 * l1**2 * l2 * m1 * m2**2 * c2
                - g * l1 * l2 * m1 * m2**2 * c12 - g * l1 * l2 * m1 * m2**2 * s1 * s2) / den
         return np.array([tr1, tr2, ddt1, ddt2])
+
+
+class Program:
+    """The 1.9.3 Pascal listing `program pend2`, transcribed line by line.
+
+    What it computes.  ddt1, ddt2, Tr1, Tr2 are the listing's four expressions, which `Book`
+    already transcribes (Book._solve), so `accelerations` and `reactions` here are Book's closed
+    forms (1.29)-(1.32) at the given state; the listing computes no energy and no drive power.
+    `run(q0, v0)` replays the loop
+
+        for nj := 1 to na do for ni := 2 to n do begin
+          t := t + deltat;  ddt1 := ...; ddt2 := ...; Tr1 := ...; Tr2 := ...;
+          dt1 := dt1 + deltat*ddt1;  dt2 := dt2 + deltat*ddt2;
+          t1 := t1 + deltat*dt1;     t2 := t2 + deltat*dt2;      { the NEW rates }
+          h1x := (-l1*sin(t1)); h1y := -(l1*cos(t1));
+          h2x := (-l1*sin(t1) - l2*sin(t1 + t2)); h2y := -(l1*cos(t1) + l2*cos(t1 + t2));
+          writeln(arq1, t, t1); writeln(arq2, t, t2);
+          writeln(arq3, h1x, h1y); writeln(arq4, h2x, h2y)
+        end
+
+    after writing the initial row before the loop: na (n - 1) steps and as many rows plus one.
+    The time index is the listing's accumulated t (t := t + deltat), not k deltat.  So the run
+    ends at t = tempo - deltat = 3.9984 s, one step short of tempo: the loop counts the initial row
+    as point 1 of n while deltat divides tempo by n.  The x axis is the listing's, mirrored from
+    the derivation's (m1 at -l1 sin(theta1), not +l1 sin(theta1)).  The listing never writes Tr1,
+    Tr2: it evaluates them at the start of each step from the state of the row before, so the
+    T1, T2 of a row are those values, and for the last row the same expressions at its state.
+    Rates are what the listing prints on the screen.  Masses, lengths and g come from the case
+    parameters (overrides apply); tempo, n, na are the listing's own literals.  The listing's
+    `real` is Turbo Pascal's 6-byte real (about 12 digits); this replay runs in doubles.
+
+    Zeros restored (the extraction drops every 0).  Each reading was replayed against the tick
+    labels of the 1.9 figures, which the plotter (apparently gnuplot: the keys name the plotted
+    files, "arqt1.res") rounds outward to the next tick: theta1, theta2 in [-0.8, 0.8], ticks
+    0.2; mass 1 (arqh1) x in [-0.05, 0.05], y in [-0.075, -0.045]; mass 2 (arqh2) x in
+    [-0.06, 0.06], y in [-0.14, -0.115]; t in [0, 4].  The run must lie inside each range and
+    reach into its outermost tick intervals.
+
+
+    - `tempo : 4.;` is 4.0 s: the time axes run to 4 ("4." is no Pascal real; "4.0" lost its
+      0).  `t :.;` and `dt1 :.; dt2 :.;` are 0.0.  `-3.1416/4.` is -3.1416/4.0.
+    - `l1 :.7; l2 :.7;` are 0.07 m: mass 2 bottoms out at y = -(l1 + l2) = -0.14 ("-.14") and
+      starts at -0.1195 (top tick "-.115"); 0.7 m would print "-1.4".
+    - `m1 :.46; m2 :.46;` are 0.046 and 0.46 kg: only m2/m1 moves the angles, and the figures
+      need 10.  Equal masses send theta2 to 1.12 rad and mass 2 up to y = -0.0995, off both
+      axes; m2/m1 = 0.1 swings theta2 to 2.9 rad; m2/m1 = 100 stays inside but fills neither
+      theta axis (theta1 <= 0.42, theta2 >= -0.20: gnuplot would stop them at 0.6 and -0.2).
+      The absolute masses (0.046/0.46 against 0.0046/0.046, ...) move only T1 and T2, which no
+      figure shows: they are the reading with the fewest restored zeros, nothing more.
+    - `na : 1;` is 1: the reading without a restored zero, the same as the 1.10 listing's
+      `a : 1;`; only n na matters to the step, so 250 x 10 would be the same dt.
+    - `n : 25;` is 2500 (deltat = 1.6 ms).  n = 25 blows up at t = 0.64 s (deltat = 0.16 s);
+      n = 250 puts mass 2 at |x| = 0.0613, past the 0.06 tick, and theta1 tops out at 0.47 (the
+      axis would stop at 0.6); n = 250000 overflows Turbo Pascal's 16-bit integer.  n = 2500 and
+      n = 25000 both land inside every range and fill it (theta1 reaches 0.618 and 0.746,
+      theta2 -0.713 and -0.781, mass 2's |x| 0.0576 and 0.0547).  With na = 1 the figures admit
+      n from about 2200 (theta1 must pass 0.6) to about 50000 (beyond, theta2 passes -0.8 and
+      would have taken the axis to -1; the exact motion swings theta2 to -0.83 and +0.84).  So
+      the figures do not choose between 2500 and 25000; the 1.10 listing's `n : 3;` (30000, near
+      the integer limit) leans to 25000.  Kept: 2500, the project's recorded reading
+      (book/README.md) and the larger of the two steps, so the program check sees the listing's
+      integrator at its worst admissible step; 25000 is a one-line change of `n`.
+
+    Its integrator, not its formulas, sets its error.  At deltat = 1.6 ms the run stays within
+    0.1 rad of the exact motion (Reference, DOP853 at rtol 1e-12) only for the first 0.12 s, and
+    sheds 0.04 J, 40 % of the swing energy above the rest position, most of it in the first
+    second; at 0.16 ms it stays within 0.1 rad for 0.27 s and sheds 0.025 J.  That numerical
+    damping keeps the program's theta2 inside the figure's +-0.8, where the exact motion does
+    not stay: the figures fit this integrator's output better than the exact motion.
+    """
+
+    coords = COORDS
+    reaction_names = REACTIONS
+    integrator = "semi-implicit Euler"
+    tempo = 4.0                   # tempo : 4.0;  {total time [s]}
+    n = 2500                      # n : 2500;     {number of integration points}
+    na = 1                        # na : 1;       {number of integration repetition}
+    dt = (tempo / na) / n         # deltat := (tempo/na)/n = 1.6 ms
+    steps = na * (n - 1)          # for nj := 1 to na do for ni := 2 to n do
+
+    def __init__(self, params):
+        self.p = dict(params)
+        self._listing = Book(self.p)  # ddt1, ddt2, Tr1, Tr2: the listing's expressions
+
+    def accelerations(self, t, q, v):
+        """(ddt1, ddt2) of the listing: Book's (1.31)-(1.32)."""
+        return self._listing._solve(q, v)[2:]
+
+    def reactions(self, t, q, v):
+        """Tr1, Tr2 of the listing: Book's (1.29)-(1.30)."""
+        tr1, tr2, _, _ = self._listing._solve(q, v)
+        return {"T1": tr1, "T2": tr2}
+
+    def energy(self, t, q, v):
+        raise NotImplementedError("program pend2 (1.9.3) computes no energy; "
+                                  "use Reference.energy on its run")
+
+    def drive_power(self, t, q, v):
+        raise NotImplementedError("program pend2 (1.9.3) computes no drive power "
+                                  "(nothing is driven in 1.9)")
+
+    def _positions(self, t1, t2):
+        """The listing's trajectory lines: x mirrored from the derivation's."""
+        l1, l2 = self.p["l1"], self.p["l2"]
+        h1x = (-l1 * math.sin(t1))
+        h1y = -(l1 * math.cos(t1))
+        h2x = (-l1 * math.sin(t1) - l2 * math.sin(t1 + t2))
+        h2y = -(l1 * math.cos(t1) + l2 * math.cos(t1 + t2))
+        return h1x, h1y, h2x, h2y
+
+    def run(self, q0, v0):
+        """The listing's run from (q0, v0), indexed by its t: one row per line it writes."""
+        start = time.perf_counter()
+        t1, t2 = (float(x) for x in q0)
+        dt1, dt2 = (float(x) for x in v0)
+        deltat = (self.tempo / self.na) / self.n
+        t = 0.0
+        rows = [[t, t1, t2, dt1, dt2, *self._positions(t1, t2)]]
+        reactions = []
+        for nj in range(1, self.na + 1):
+            for ni in range(2, self.n + 1):
+                t = t + deltat
+                tr1, tr2, ddt1, ddt2 = self._listing._solve((t1, t2), (dt1, dt2)).tolist()
+                reactions.append((tr1, tr2))  # at the state of the row before
+                dt1 = dt1 + deltat * ddt1
+                dt2 = dt2 + deltat * ddt2
+                t1 = t1 + deltat * dt1
+                t2 = t2 + deltat * dt2
+                rows.append([t, t1, t2, dt1, dt2, *self._positions(t1, t2)])
+        tr1, tr2, _, _ = self._listing._solve((t1, t2), (dt1, dt2)).tolist()
+        reactions.append((tr1, tr2))  # the last row's: never computed by the listing
+        frame = pd.DataFrame(
+            [row[1:5] + list(r) + row[5:] for row, r in zip(rows, reactions)],
+            columns=["theta1", "theta2", "theta1_rate", "theta2_rate", "T1", "T2",
+                     "h1x", "h1y", "h2x", "h2y"],
+            index=pd.Index([row[0] for row in rows], name="t"))
+        steps = self.na * (self.n - 1)
+        frame.attrs.update({"method": "program", "integrator": self.integrator, "dt": deltat,
+                            "steps": steps, "evaluations": steps + 1,
+                            "wall": time.perf_counter() - start})
+        return frame

@@ -135,21 +135,21 @@ class Book:
         s, c = np.sin(th), np.cos(th)
         return np.array([Ld * c - L * w * s, Ld * s + L * w * c, 0.0])
 
-    def _a_d2dt2_inertial(self, t):
-        """(1.20) collected = (1.23)."""
-        th, w, wd, L, Ld, Ldd = self._motion(t)
-        s, c = np.sin(th), np.cos(th)
-        return np.array([Ldd * c - 2 * Ld * w * s - L * wd * s - L * w**2 * c,
-                         Ldd * s + 2 * Ld * w * c + L * wd * c - L * w**2 * s,
-                         0.0])
+    # The two accelerations as printed, in the inertial frame, turned into B1 by T_z(theta); the
+    # strings are the code (evaluated with `symbols`), so that dyncheck can search edits of them.
+    PRINTED = {
+        # (1.20) collected = (1.23)
+        "a_d2dt2": "Tz(th) @ array([Ldd*cos(th) - 2*Ld*w*sin(th) - L*wd*sin(th) - L*w**2*cos(th),"
+                   " Ldd*sin(th) + 2*Ld*w*cos(th) + L*wd*cos(th) - L*w**2*sin(th), 0.0])",
+        # (1.24) as printed: the Y row's Coriolis part reads 2 L' theta' sin(theta)
+        "a_eq110": "Tz(th) @ array([Ldd*cos(th) - 2*Ld*w*sin(th) - L*wd*sin(th) - L*w**2*cos(th),"
+                   " Ldd*sin(th) + 2*Ld*w*sin(th) + L*wd*cos(th) - L*w**2*sin(th), 0.0])",
+    }
 
-    def _a_eq110_inertial(self, t):
-        """(1.24) as printed: the Y row's Coriolis part reads 2 L' theta' sin(theta)."""
+    def symbols(self, t, q=(), v=()):
         th, w, wd, L, Ld, Ldd = self._motion(t)
-        s, c = np.sin(th), np.cos(th)
-        return np.array([Ldd * c - 2 * Ld * w * s - L * wd * s - L * w**2 * c,
-                         Ldd * s + 2 * Ld * w * s + L * wd * c - L * w**2 * s,
-                         0.0])
+        return {"th": th, "w": w, "wd": wd, "L": L, "Ld": Ld, "Ldd": Ldd, "sin": np.sin, "cos": np.cos,
+                "array": np.array, "Tz": t_z}
 
     # -- model interface -----------------------------------------------------------
     def accelerations(self, t, q, v):
@@ -157,8 +157,8 @@ class Book:
 
     def point_accelerations(self, t, q, v):
         """Absolute acceleration of the mass, components in B1, by the book's two routes."""
-        T = t_z(self._motion(t)[0])
-        return {"a_eq110": T @ self._a_eq110_inertial(t), "a_d2dt2": T @ self._a_d2dt2_inertial(t)}
+        names = self.symbols(t)
+        return {name: eval(expression, {"__builtins__": {}}, names) for name, expression in self.PRINTED.items()}
 
     def _force(self, t):
         """Force of the arm on the mass in B1: m a - m g, gravity (0, 0, -g)."""
@@ -186,9 +186,7 @@ class Book:
 class Reference(Book):
     """Right: (1.24) replaced by the vector sum of the five terms of (1.10); the rest is the book's."""
 
-    _reaction_route = "a_eq110"
-
-    def _a_eq110_inertial(self, t):
+    def point_accelerations(self, t, q, v):
         """I a_B = I a_A + I omega' x I L + I omega x (I omega x I L) + 2 I omega x I v_Rel + I a_Rel."""
         th, w, wd, L, Ld, Ldd = self._motion(t)
         Tt = t_z(th).T
@@ -198,5 +196,6 @@ class Reference(Book):
         r = Tt @ np.array([L, 0.0, 0.0])      # (d)
         v_rel = Tt @ np.array([Ld, 0.0, 0.0])   # (1.17)
         a_rel = Tt @ np.array([Ldd, 0.0, 0.0])  # (1.22)
-        return (a_A + np.cross(omega_dot, r) + np.cross(omega, np.cross(omega, r))
-                + 2 * np.cross(omega, v_rel) + a_rel)
+        five_terms = (a_A + np.cross(omega_dot, r) + np.cross(omega, np.cross(omega, r))
+                      + 2 * np.cross(omega, v_rel) + a_rel)
+        return {**super().point_accelerations(t, q, v), "a_eq110": t_z(th) @ five_terms}

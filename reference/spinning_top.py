@@ -145,7 +145,103 @@ The book's data against its own formulas (parameters of case.toml, zeros restore
   h - l/2 = 0.04505 m (stop at 42.02 deg); 0.0442 puts the disk's mid-plane at 0.05495 m, 0.85 mm
   below the centre of mass (plausible for a real top whose stem raises the centre of mass), or
   is a rounded measurement.  The difference moves the stop by 0.54 deg of nutation.
+
+The Pascal listing (pp. 83-85, `program top`) and `Program`.  Names: the listing's psi is the
+precession (hx := h*sin(teta)*sin(psi), hy := -h*sin(teta)*cos(psi): Rz(psi) Rx(teta) (0, 0, h),
+the centre of mass of the module's frames exactly), teta the nutation and phi the spin (DDphi
+carries Mz/Izz; files arqpsi, arqteta, arqphi).  Beware: the listing's phi is the book's spin,
+not the book's varphi, which is the precession.
+
+- Equations.  The loop computes, in this order, from the state before the step:
+      DDteta := (1/Ixx)*(mp*g*h*sin(teta)+Sqr(Dpsi)*(-Izz+Iyy)*sin(teta)*cos(teta)-izz*dphi*dpsi*sin(teta))
+      DDpsi  := (1/(Iyy*sin(teta)))*(Izz*Dpsi*Dteta*cos(teta)+Dpsi*Dteta*cos(teta)*(-Ixx-Iyy)+Izz*Dphi*Dteta)
+      DDphi  := (1/Izz)*(-Izz*DDpsi*cos(teta)+Izz*Dpsi*Dteta*sin(teta)+Dpsi*Dteta*(-Iyy+Ixx)*sin(teta)+Mz)
+  (ASCII minus signs survive; Pascal is case-insensitive, so izz, dphi, dpsi are Izz, Dphi,
+  Dpsi).  These are the X2, Y2 and Z2 rows above solved one at a time, DDphi with the DDpsi just
+  computed from the same state (no lag).  They equal the displayed equations of p. 81, and
+  `Book`/`Reference`, identically: the precession line divides by Iyy where p. 81 has
+  CM_Ixx + m h^2 (equal for the symmetric top), and substituting DDpsi into DDphi gives the
+  printed spin equation term by term.  `Book` transcribes p. 81's closed forms, not these lines,
+  so `Program` carries its own transcription (`Program._listing`).  Over the case's 100 sample
+  states the two agree to rounding: largest difference 1.9e-16, 2.2e-16, 4.0e-16 of the largest
+  acceleration (precession, nutation, spin), 25-42 of 100 bitwise equal; the largest pointwise
+  relative difference, 1.3e-14 in the spin, is at a state where -DDpsi cos(teta) = 11.64 and
+  Mz/Izz = -11.07 cancel to 0.395 rad/s^2.
+- Integrator.  Per step: t := t + deltat; the three accelerations; Dpsi, Dphi, Dteta :=
+  old + deltat * DD; psi, phi, teta := old + deltat * the new rates; hx, hy, hz from the new
+  angles; write; stop test.  That is the semi-implicit Euler of `dyncheck.simulate`
+  ("semi-implicit Euler"): along case (a) the listing and Reference's
+  accelerations in that scheme at the same step differ by at most 1.6e-13 rad (spin) and 5.4e-13
+  rad/s over all 7151 steps.  The accelerations depend on the rates (gyroscopic terms), so the
+  scheme is not symplectic here and is only first order: against DOP853 at rtol 1e-12 the
+  listing's case (a) is off by up to 0.18 rad (10.6 deg) in precession, 0.048 rad (2.7 deg) in
+  nutation, 0.22 rad (12.4 deg) in spin and 1.3, 0.43, 1.2 rad/s in the rates; it touches at
+  2.3837 s (step 7151) where the tight solution touches at 2.3948 s; its work-energy residual
+  E - E0 - W (Reference.energy, W by Simpson's rule on Mz (p' cos n + s') along the run) reaches
+  3.1e-3 J against E0 = 3.12 J, W = -2.195 J (the tight solution's: 3e-14 J).  At a tenth of the
+  step the angle errors and the residual shrink twelvefold (0.016 rad, 2.6e-4 J) and the touch
+  moves to 2.3941 s.  At a spin of 40*2*pi rad/s (fast nutation near Izz s'/Ixx = 193 rad/s,
+  0.064 rad a step; the default start otherwise) the scheme grows without bound within 1 s where
+  the true nutation stays within 10-10.07 deg.
+- Outputs.  The files get t with psi, phi, teta, Dpsi, Dphi, Dteta and hz, and (hx, hy), once
+  for the initial conditions and once per step; `run` returns them as the case's columns plus hx,
+  hy, hz, indexed by the listing's accumulated t (2e-13 s from i*deltat at the touch).  The
+  screen line ddpsi, ddteta, ddphi is not kept.  The listing computes no reaction, energy or
+  power, and never the no-slip test: the errors of the printed reactions (finding 1.10-R) do not
+  reach its results.  Turbo Pascal's `real` has a 40-bit mantissa (about 2e-12); `Program` uses
+  doubles.
+- Zeros restored in the listing's own numbers (the top's m, h, Ixx = Iyy, Izz, r, Mz come from
+  the case's [params], its initial values from [initial]; 3.14159 there has no zero to lose; the
+  stop test's PI is Pascal's built-in pi, no literal).  Evidence from replaying the loop against
+  the text ("the disk touches the floor after 2,5 [s]") and the case (a) figures (height of the
+  centre of mass: ticks .41 ... .51 -> 0.041-0.051 m over t = 0 ... 3 s in steps of 0.5; XY path:
+  ticks -.4 ... .4 -> -0.04 ... 0.04 m on both axes):
+  * `t :.;` -> t := 0.0 (`0.` with its zero lost).
+  * `tempo : 1;` -> 10 s.  The loop covers tempo (n - 1)/n s at most: with tempo = 1 it ends at
+    1 s, short of the touch at about 2.4 s that text and figure need.  10 is the smallest reading
+    that reaches the touch.
+  * `n : 3;`, `a : 1;` -> n = 30000, a = 1, deltat := (tempo/a)/n = 1/3000 s (a restores the
+    zeros of a*n together).  deltat = 1/300 (n = 3000 with a = 1, or tempo 100 with n = 30000)
+    touches at 0.83 s with the centre of mass up to 0.0539 m: outside text and figure.
+    deltat = 1/3000 touches at 2.3837 s, height 0.04178-0.05189 m, |hx| <= 0.0369,
+    |hy| <= 0.0303 m; deltat = 1/30000 (n = 30000, a = 10) touches at 2.3941 s, height
+    0.04180-0.05149 m.  The figures cannot tell these two apart (both top out above the 0.051 m
+    tick; see below), so the choice of 1/3000 is the simplest reading (one repetition, "number of
+    points" 30000, within Turbo Pascal's 16-bit integer, which rules out n = 300000 but not
+    a = 10): medium-to-weak evidence.  (a = 10, n = 3000) is the same step and the same run to
+    the touch (7151 identical steps); only an untouched run would end at 9.9967 s, not 9.99967 s.
+  * `fim : 1;`, `fim:;`, `if fim < > then` -> fim := 1, fim := 0, fim <> 0: only whether the
+    files are closed once more; no number depends on it.
+  * `arctan(r/.442)` -> 0.0442 (see "Stop constant").  0.442 stops at 83.5 deg of nutation, at
+    3.09 s, with the centre of mass down to 0.006 m and |hy| up to 0.055 m (outside both
+    figures); 0.00442 stops at 5.05 deg, i.e. after the first step of any start above it (case
+    (a) starts at 30 deg, the default at 10 deg); 0.0442 stops at 41.48 deg, where the height is
+    h cos = 0.0418 m, just above the figure's lowest tick 0.041 m.
+  * `for j:1 to a`, `for i:2 to n`, and every `:` for `:=`, lose no digit.  The stop block sets
+    j := a; i := n (Turbo Pascal lets a for loop's body assign its counter): the run ends on the
+    step whose row the test first finds past the angle, after that row is written.
+- Case (a) against the figures.  XY: the listing's path stays within |hx| <= 0.0369,
+  |hy| <= 0.0303 m, the tight solution's within 0.0353, 0.0298 m: inside +-0.04 m.  Height: the
+  lowest point, at the stop, is 0.04178 m (listing) and 0.04181 m (tight), inside; the highest is
+  0.05189 m (listing, at each nutation minimum from t = 0.075 s on, rising from 0.05134 to
+  0.05189 m) and 0.05146 m (tight, 0.05132-0.05146 m): above the 0.051 m tick by 0.9 and 0.46 mm.
+  Time: both stop before the 2.5 s tick, where the text says "after 2,5 [s]" and the axis runs
+  to 3 s.  Either the figure's axes were set by hand (the XY figure's y axis runs to +0.04 m where
+  every run stays below +0.030 m) or the book's run is not exactly these parameters; the
+  listing's own integrator does not explain the gap (its step moves the top by 0.4 mm and the
+  touch by 11 ms, in the wrong direction for the height).
+- The default run in the listing (nutation (5/180)*2*3.14159 = 10 deg, precession rate 0, spin
+  4*2*3.14159 rad/s, Mz = -0.01 N m per the README, low confidence): the spin, 25.1 rad/s, is
+  below the sleeping-top limit 2 sqrt(Ixx m g h)/Izz = 27.1 rad/s and the top falls at once: the
+  listing touches at 0.3133 s (940 steps; nutation 10 -> 41.5 deg, precession to 1.96 rad,
+  precession rate to 9.97 rad/s, spin rate 25.13 -> 16.22 rad/s, height 0.0550 -> 0.0418 m,
+  |hx| <= 0.0343, |hy| <= 0.0160 m), the tight solution at 0.31366 s (angles within 2.3e-3 rad
+  of the listing's; work-energy residual of the listing 2.5e-4 J against E0 = 1.027 J).  With
+  Mz = -0.1 it touches at 0.2487 s.  The book shows no figure of it.
 """
+
+import math
+import time
 
 import numpy as np
 
@@ -184,24 +280,6 @@ class Book:
                  + (p["Mz"] + dp * dn * sn * (cxx - cyy + czz)) / czz)
         return np.array([p_acc, n_acc, s_acc])
 
-    def _transport_rate(self, q, v):
-        """The z rate that turns v in the book's reactions: omega_z = p' cos n + s' (printed)."""
-        return v[0] * np.cos(q[1]) + v[2]
-
-    def _newton(self, q, v, acc):
-        """F = m a - B2 P in B2, with the transport term Omega_z or omega_z (see _transport_rate)."""
-        p = self.p
-        m, h, g = p["m"], p["h"], p["g"]
-        n = q[1]
-        dp, dn, _ = v
-        p_acc, n_acc, _ = acc
-        sn, cn = np.sin(n), np.cos(n)
-        wz = self._transport_rate(q, v)
-        f1 = m * dn * h * wz + m * h * (p_acc * sn + dp * dn * cn)
-        f2 = m * g * sn + m * dp * h * sn * wz - m * h * n_acc
-        f3 = m * g * cn - m * h * (dn**2 + dp**2 * sn**2)
-        return np.array([f1, f2, f3])
-
     @staticmethod
     def _tz_t(a):
         c, s = np.cos(a), np.sin(a)
@@ -212,14 +290,23 @@ class Book:
         c, s = np.cos(a), np.sin(a)
         return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])  # T_x(a)^T
 
-    def _to_inertial(self, q, force):
-        """The printed rows: T_x(n)^T T_z(p)^T F (the book's own previous line has T_z^T T_x^T)."""
-        return self._tx_t(q[1]) @ (self._tz_t(q[0]) @ force)
+    # The printed reaction: the rows are those of T_x(n)^T T_z(p)^T F, F = m a - B2 P in B2 with the
+    # top's omega_z = p' cos n + s' in the transport term.  The string is the code (evaluated with
+    # `symbols`), so that dyncheck can search edits of it.
+    PRINTED = {"R": "TxT(n) @ TzT(p) @ array(["
+                    "m*dn*h*(dp*cos(n) + ds) + m*h*(ddp*sin(n) + dp*dn*cos(n)),"
+                    " m*g*sin(n) + m*dp*h*sin(n)*(dp*cos(n) + ds) - m*h*ddn,"
+                    " m*g*cos(n) - m*h*(dn**2 + dp**2*sin(n)**2)])"}
+
+    def symbols(self, t, q, v):
+        p = self.p
+        ddp, ddn, _ = self.accelerations(t, q, v)
+        return {"m": p["m"], "g": p["g"], "h": p["h"], "p": q[0], "n": q[1], "dp": v[0], "dn": v[1],
+                "ds": v[2], "ddp": ddp, "ddn": ddn, "sin": np.sin, "cos": np.cos, "array": np.array,
+                "TxT": self._tx_t, "TzT": self._tz_t}
 
     def reactions(self, t, q, v):
-        q, v = np.asarray(q, float), np.asarray(v, float)
-        acc = self.accelerations(t, q, v)
-        r = self._to_inertial(q, self._newton(q, v, acc))
+        r = eval(self.PRINTED["R"], {"__builtins__": {}}, self.symbols(t, np.asarray(q, float), np.asarray(v, float)))
         return {"Rx": float(r[0]), "Ry": float(r[1]), "Rz": float(r[2])}
 
     def energy(self, t, q, v):
@@ -240,7 +327,158 @@ class Reference(Book):
     """The book's equations of motion; reactions with Omega in (7) and T_z^T T_x^T (finding 1.10-R)."""
 
     def _transport_rate(self, q, v):
-        return v[0] * np.cos(q[1])  # Omega_z: the centre of mass is carried by B2
+        """Omega_z = p' cos n: the centre of mass is carried by B2, the spin does not move it."""
+        return v[0] * np.cos(q[1])
 
-    def _to_inertial(self, q, force):
-        return self._tz_t(q[0]) @ (self._tx_t(q[1]) @ force)
+    def _newton(self, q, v, acc):
+        """F = m a - B2 P in B2, from the acceleration (7) of the centre of mass."""
+        p = self.p
+        m, h, g = p["m"], p["h"], p["g"]
+        n = q[1]
+        dp, dn, _ = v
+        p_acc, n_acc, _ = acc
+        sn, cn = np.sin(n), np.cos(n)
+        wz = self._transport_rate(q, v)
+        f1 = m * dn * h * wz + m * h * (p_acc * sn + dp * dn * cn)
+        f2 = m * g * sn + m * dp * h * sn * wz - m * h * n_acc
+        f3 = m * g * cn - m * h * (dn**2 + dp**2 * sn**2)
+        return np.array([f1, f2, f3])
+
+    def reactions(self, t, q, v):
+        q, v = np.asarray(q, float), np.asarray(v, float)
+        force = self._newton(q, v, self.accelerations(t, q, v))
+        r = self._tz_t(q[0]) @ (self._tx_t(q[1]) @ force)  # T_z(p)^T T_x(n)^T, the book's own line
+        return {"Rx": float(r[0]), "Ry": float(r[1]), "Rz": float(r[2])}
+
+
+class Program:
+    """The 1.10 Pascal listing `program top` (pp. 83-85) transcribed line by line.
+
+    The listing's psi, teta, phi are the precession, nutation and spin (see the module docstring,
+    "The Pascal listing").  Its DDteta, DDpsi, DDphi lines are the Euler rows solved one by one, in
+    that order, DDphi with the DDpsi just computed; its loop is a semi-implicit Euler at
+    deltat = (tempo/a)/n = 1/3000 s that stops when "THE DISK TOUCHED THE FLOOR".  Its own numbers
+    (tempo, n, a, the stop constant 0.0442) are the listing's literals with their zeros restored;
+    the top (m, g, h, Ixx = Iyy, Izz, Mz, r) comes from the case's parameters, so overrides apply;
+    the initial conditions come in through `run(q0, v0)`.  Plain Python floats (IEEE doubles; the
+    original ran in Turbo Pascal's 6-byte `real`, 40-bit mantissa, about 12 digits).
+    """
+
+    coords = COORDS
+    reaction_names = ()            # no listing line computes the floor's reaction
+    integrator = "semi-implicit Euler"
+    # The listing's own numbers, zeros restored (evidence in the module docstring).
+    tempo = 10.0                   # tempo := 10;      {total time [s]}           printed `tempo : 1;`
+    n = 30000                      # n := 30000;       {number of points}         printed `n : 3;`
+    a = 1                          # a := 1;           {repetition of the ...}    printed `a : 1;`
+    dt = (tempo / a) / n           # deltat := (tempo/a)/n;  = 1/3000 s
+    steps = a * (n - 1)            # for j := 1 to a do for i := 2 to n do: 29999 steps at most
+    stop_constant = 0.0442         # arctan(r/0.0442)                             printed `arctan(r/.442)`
+    message = "THE DISK TOUCHED THE FLOOR"
+
+    def __init__(self, params):
+        self.p = dict(params)
+
+    # -- the listing's three acceleration lines ----------------------------------------------
+    def _listing(self, teta, Dpsi, Dteta, Dphi):
+        """DDteta, DDpsi, DDphi as the listing computes them, in its order (plain floats).
+
+        Pascal is case-insensitive (`izz*dphi*dpsi` is Izz*Dphi*Dpsi); `Sqr(x)` is x*x; Pascal and
+        Python both evaluate * and / left to right, so the operations are the listing's own.
+        """
+        p = self.p
+        mp, g, h, Ixx, Izz, Mz = p["m"], p["g"], p["h"], p["Ixx"], p["Izz"], p["Mz"]
+        Iyy = Ixx                  # Iyy := .29393, the same literal as Ixx (DESIGN: Ixx = Iyy)
+        # DDteta := (1/Ixx)*(mp*g*h*sin(teta)+Sqr(Dpsi)*(-Izz+Iyy)*sin(teta)*cos(teta)
+        #           -izz*dphi*dpsi*sin(teta));
+        DDteta = (1 / Ixx) * (mp * g * h * math.sin(teta) + (Dpsi * Dpsi) * (-Izz + Iyy) * math.sin(teta)
+                              * math.cos(teta) - Izz * Dphi * Dpsi * math.sin(teta))
+        # DDpsi := (1/(Iyy*sin(teta)))*(Izz*Dpsi*Dteta*cos(teta)+
+        #          Dpsi*Dteta*cos(teta)*(-Ixx-Iyy)+Izz*Dphi*Dteta);
+        DDpsi = (1 / (Iyy * math.sin(teta))) * (Izz * Dpsi * Dteta * math.cos(teta)
+                                                + Dpsi * Dteta * math.cos(teta) * (-Ixx - Iyy) + Izz * Dphi * Dteta)
+        # DDphi := (1/Izz)*(-Izz*DDpsi*cos(teta)+Izz*Dpsi*Dteta*sin(teta)+
+        #          Dpsi*Dteta*(-Iyy+Ixx)*sin(teta)+Mz);
+        DDphi = (1 / Izz) * (-Izz * DDpsi * math.cos(teta) + Izz * Dpsi * Dteta * math.sin(teta)
+                             + Dpsi * Dteta * (-Iyy + Ixx) * math.sin(teta) + Mz)
+        return DDteta, DDpsi, DDphi
+
+    # -- model interface ----------------------------------------------------------------------
+    def accelerations(self, t, q, v):
+        """(DDpsi, DDteta, DDphi) at the state, in the order of `coords`; t is not used."""
+        _, teta, _ = (float(x) for x in q)
+        Dpsi, Dteta, Dphi = (float(x) for x in v)
+        DDteta, DDpsi, DDphi = self._listing(teta, Dpsi, Dteta, Dphi)
+        return np.array([DDpsi, DDteta, DDphi])
+
+    def reactions(self, t, q, v):
+        return {}
+
+    def energy(self, t, q, v):
+        raise NotImplementedError("the 1.10 listing computes no energy")
+
+    def drive_power(self, t, q, v):
+        raise NotImplementedError("the 1.10 listing computes no power")
+
+    @property
+    def stop_nutation(self):
+        """The stop test's angle: teta > (PI/2) - arctan(r/0.0442) (Pascal's PI is the exact pi)."""
+        return math.pi / 2 - math.atan(self.p["r"] / self.stop_constant)
+
+    # -- the listing's loop -------------------------------------------------------------------
+    def run(self, q0, v0):
+        """The listing's run from (psi, teta, phi) = q0, (Dpsi, Dteta, Dphi) = v0.
+
+        A DataFrame indexed by the listing's t (accumulated, t := t + deltat), one row for the
+        initial conditions and one per step, as its files get them: `precession`, `nutation`,
+        `spin` (arqpsi, arqteta, arqphi), their `_rate`s (arqdpsi, arqdteta, arqdphi) and the
+        centre of mass hx, hy (arqh) and hz (arqhz).  The run ends after the row on which the stop
+        test first holds (the listing writes that row, then sets j := a; i := n) or after
+        a (n - 1) steps.  attrs: method, dt, steps (taken), evaluations, wall, touched (t of the
+        stop, or None), message.
+        """
+        import pandas as pd       # only here: the equations above need numpy alone
+
+        start = time.perf_counter()
+        h = self.p["h"]
+        stop = self.stop_nutation
+        psi, teta, phi = (float(x) for x in q0)
+        Dpsi, Dteta, Dphi = (float(x) for x in v0)
+        sin, cos = math.sin, math.cos
+        # t := 0; deltat := (tempo/a)/n;
+        t = 0.0
+        deltat = (self.tempo / self.a) / self.n
+        # hx := h*sin(teta)*sin(psi); hy := -h*sin(teta)*cos(psi); hz := h*cos(teta);
+        hx, hy, hz = h * sin(teta) * sin(psi), -h * sin(teta) * cos(psi), h * cos(teta)
+        rows = [(t, psi, teta, phi, Dpsi, Dteta, Dphi, hx, hy, hz)]   # the initial conditions
+        touched = None
+        for j in range(1, self.a + 1):                     # for j := 1 to a do
+            for i in range(2, self.n + 1):                 # for i := 2 to n do
+                t = t + deltat
+                DDteta, DDpsi, DDphi = self._listing(teta, Dpsi, Dteta, Dphi)
+                # the angular velocities, then the angles with the new velocities
+                Dpsi = Dpsi + deltat * DDpsi
+                Dphi = Dphi + deltat * DDphi
+                Dteta = Dteta + deltat * DDteta
+                psi = psi + deltat * Dpsi
+                phi = phi + deltat * Dphi
+                teta = teta + deltat * Dteta
+                hx = h * sin(teta) * sin(psi)
+                hy = -h * sin(teta) * cos(psi)
+                hz = h * cos(teta)
+                rows.append((t, psi, teta, phi, Dpsi, Dteta, Dphi, hx, hy, hz))
+                # if teta > (PI/2) - arctan(r/0.0442) then ... j := a; i := n; fim := 0
+                if teta > stop:
+                    touched = t
+                    break
+            if touched is not None:
+                break
+        wall = time.perf_counter() - start
+        data = np.array(rows)
+        names = ("precession", "nutation", "spin", "precession_rate", "nutation_rate", "spin_rate",
+                 "hx", "hy", "hz")
+        frame = pd.DataFrame(data[:, 1:], columns=names, index=pd.Index(data[:, 0], name="t"))
+        frame.attrs.update({"method": "program", "integrator": self.integrator, "rtol": None, "dt": deltat,
+                            "steps": len(rows) - 1, "evaluations": len(rows) - 1, "wall": wall,
+                            "touched": touched, "message": self.message if touched is not None else None})
+        return frame

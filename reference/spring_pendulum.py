@@ -20,7 +20,24 @@ the arm on the particle and R = m a_E,x, so R carries the minus of a_E,x.
 
 `Reference` does not patch the printed sum: it evaluates the book's method numerically, frame by
 frame (reference/spinning_base.py), so the correction above is found, not assumed.
+
+`Program` is the section's Matlab listing (i) transcribed line by line: its own explicit Euler at
+its own step (deltat = 5e-5 s, n_int = 60000), its own formulas with their slips kept, so that
+the checks can expose them:
+  - `ldd`: its parentheses, `(g*cos(psi)+(b*alfad^2*cos(beta)) + r*(alfad+betad)^2)*sin(psi)`,
+    multiply g cos(psi) by sin(psi); (h) and Reference have g cos(psi) alone.
+  - `Reaction(1)`, before the loop, is `m*( b*alfad^2*sin(beta) + (lo+l)*psid*(alfad+betad)*cos(psi)
+    + 2*ld*(alfad+betad)*sin(psi))`: no leading minus, so exactly -R of (h) (the force of the
+    particle on the arm), with (h)'s single L psi' Omega cos(psi) term.  `Reaction(i)`, in the
+    loop, has `- 2*ld*...` instead: its first two terms are -R of (h), its third is +R of (h),
+    so it is neither R nor -R.  Right (Reference): R = -m (b alpha'^2 sin(beta)
+    + 2 L psi' Omega cos(psi) + 2 l' Omega sin(psi)).
+  - `psidd` is (h)'s psi'' exactly.
+The zeros the text lost in the listing, and where each comes from, are listed in `Program`.
 """
+
+import math
+import time
 
 import numpy as np
 
@@ -52,17 +69,18 @@ class Book:
                  + length * (psi_rate**2 + omega**2 * s**2))
         return np.array([psi_acc, l_acc])
 
-    def reactions(self, t, q, v):
-        """R = m a_E,x with the printed a_E,x: one L psi' Omega cos(psi) term."""
+    # R = m a_E,x with the printed a_E,x (one L psi' Omega cos(psi) term).  The string is the code
+    # (evaluated with `symbols`), so that dyncheck can search edits of it.
+    PRINTED = {"R": "-m*(b*alpha_rate**2*sin(beta) + L*psi_rate*Omega*cos(psi) + 2*l_rate*Omega*sin(psi))"}
+
+    def symbols(self, t, q, v):
         p = self.p
-        psi, l = q
-        psi_rate, l_rate = v
         beta, omega, _ = base_terms(p, t)
-        length = p["l0"] + l
-        R = -p["m"] * (p["b"] * p["alpha_rate"] ** 2 * np.sin(beta)
-                       + length * psi_rate * omega * np.cos(psi)
-                       + 2 * l_rate * omega * np.sin(psi))
-        return {"R": R}
+        return {"m": p["m"], "b": p["b"], "alpha_rate": p["alpha_rate"], "beta": beta, "Omega": omega,
+                "L": p["l0"] + q[1], "psi": q[0], "psi_rate": v[0], "l_rate": v[1], "sin": np.sin, "cos": np.cos}
+
+    def reactions(self, t, q, v):
+        return {"R": eval(self.PRINTED["R"], {"__builtins__": {}}, self.symbols(t, q, v))}
 
     def energy(self, t, q, v):
         p = self.p
@@ -124,3 +142,192 @@ class Reference:
         -k l l' (the spring's energy is in E): R v_E,x + k l (v_E,z + l') = R v_E,x + k l v_D,z."""
         _, _, v_e, force = self._motion(t, q, v)
         return force @ v_e + self.p["k"] * q[1] * v[1]
+
+
+class Program:
+    """The 1.8.3 Matlab listing (i), transcribed line by line, slips kept.
+
+    Physical constants come from the case (`params`: a b c r h l0 m k g alpha0 beta0 alpha_rate
+    beta_rate), so that overrides apply; the step, the number of points and the integrator are the
+    program's own.  Initial conditions are `run`'s arguments (the listing's psi(1) = pi/6, the rest
+    0, are case.toml's [initial]).
+
+    The listing as the text prints it ("=" lost everywhere; zeros lost; MATLAB's ' shows as a
+    blank, as in "mass m s trajectory"), and how it is read here:
+        a.5; c.5; h.2; r.1; lo.1; m.2; k 2;   -> the case's a, c, h, r, l0, m, k
+        alfa(1) ; beta(1) ; l(1).; ld(1) ; psid(1) ;   -> 0 (run's q0, v0 and alpha0, beta0)
+        alfad 2*pi/2; betad 2*pi*4          -> the case's alpha_rate, beta_rate (no zero lost)
+        deltat.5;  n_int 6;                 -> deltat = .00005 (5e-5 s), n_int = 60000
+            n_int deltat must be 3 s (figure 1.5's time axes end at 3).  Replayed from the case's
+            initial state: deltat = .005 and .0005 blow up (t = 0.25 s, 1.36 s); .00005 gives
+            l in [-0.0069, 0.0358] m, .000005 gives [-0.0012, 0.0354] m.  Figure 1.5's l axis
+            runs from -.01 to .04 in steps of .005 (its ticks, zeros restored), which MATLAB's
+            automatic limits give only for a least l below -0.005: deltat = .00005.
+        Iroa [; ; a]; B1rab [; b; ]; B2rbc [; ; c]; B2rcd [; r; h]; B3rde [; ; -(lo+l)]
+                                            -> [0;0;a], [0;b;0], [0;0;c], [0;r;h], [0;0;-(lo+l)]
+        Talfa [cos sin -sin cos 1]          -> [cos sin 0; -sin cos 0; 0 0 1]  (T_z of the book)
+        Tpsi [1 cos sin; -sin cos]          -> [1 0 0; 0 cos sin; 0 -sin cos]  (T_x of the book)
+        roe Iroa + Talfa *B1rab + ...       -> Iroa + Talfa'*B1rab + Talfa'*Tbeta'*(B2rbc+B2rcd)
+                                               + Talfa'*Tbeta'*Tpsi'*B3rde
+        "end" printed at the top of the next page, before "B2rbc": it closes the loop after
+        rz(i) (rx, ry, rz are indexed by i and plotted as a trajectory).
+    Not transcribed, being plots only: figure(4) plots `reaction(1:nplot)`, lower case, which
+    MATLAB (case-sensitive) does not know: the listing as printed stops there with an error.
+
+    The loop `for i=2:n_int` (n_int - 1 = 59999 steps): t_int(i-1) = (i-2)*deltat; psidd(i-1),
+    ldd(i-1) from the state i-1; then alfa, beta advanced by their rates; psid(i), ld(i) from the
+    accelerations i-1 and psi(i), l(i) from the velocities i-1 (explicit Euler); Reaction(i) and
+    roe from the state i.  `run` returns the rows of t_int (n_int - 1 of them, 0 to 2.9999 s: the
+    listing plots 1:nplot, nplot = n_int - 1); the last state psi(n_int), at (n_int - 1) deltat,
+    is in the frame's attrs["final"].
+    """
+
+    coords = COORDS
+    reaction_names = REACTIONS
+    integrator = "explicit Euler"
+    dt = 5e-5  # deltat = .00005
+    n_int = 60000
+    steps = n_int - 1  # for i=2:n_int
+
+    def __init__(self, params):
+        self.p = dict(params)
+
+    # -- the listing's lines, at a state ------------------------------------------------------
+    def _psidd(self, beta, psi, l, psid, ld):
+        p = self.p
+        g, b, r, lo = p["g"], p["b"], p["r"], p["l0"]
+        alfad, betad = p["alpha_rate"], p["beta_rate"]
+        return (-g / (lo + l) * math.sin(psi)
+                + (b * alfad**2 * math.cos(beta) + r * (alfad + betad)**2) / (lo + l) * math.cos(psi)
+                + (alfad + betad)**2 * math.sin(psi) * math.cos(psi)
+                - 2 * ld * psid / (lo + l))
+
+    def _ldd(self, beta, psi, l, psid, ld):
+        p = self.p
+        g, b, r, lo, k, m = p["g"], p["b"], p["r"], p["l0"], p["k"], p["m"]
+        alfad, betad = p["alpha_rate"], p["beta_rate"]
+        return (-k / m * l
+                + (g * math.cos(psi) + (b * alfad**2 * math.cos(beta))
+                   + r * (alfad + betad)**2) * math.sin(psi)
+                + (lo + l) * (psid**2 + (alfad + betad)**2 * math.sin(psi)**2))
+
+    def _reaction(self, beta, psi, l, psid, ld):
+        """The loop's Reaction(i) (minus before 2*ld)."""
+        p = self.p
+        m, b, lo = p["m"], p["b"], p["l0"]
+        alfad, betad = p["alpha_rate"], p["beta_rate"]
+        return m * (b * alfad**2 * math.sin(beta)
+                    + (lo + l) * psid * (alfad + betad) * math.cos(psi)
+                    - 2 * ld * (alfad + betad) * math.sin(psi))
+
+    def _reaction_first(self, beta, psi, l, psid, ld):
+        """Reaction(1), before the loop (plus before 2*ld)."""
+        p = self.p
+        m, b, lo = p["m"], p["b"], p["l0"]
+        alfad, betad = p["alpha_rate"], p["beta_rate"]
+        return m * (b * alfad**2 * math.sin(beta)
+                    + (lo + l) * psid * (alfad + betad) * math.cos(psi)
+                    + 2 * ld * (alfad + betad) * math.sin(psi))
+
+    def _roe(self, alfa, beta, psi, l):
+        """roe = Iroa + Talfa'*B1rab + Talfa'*Tbeta'*(B2rbc+B2rcd) + Talfa'*Tbeta'*Tpsi'*B3rde."""
+        p = self.p
+
+        def tz_t(angle, x, y, z):  # [cos sin 0; -sin cos 0; 0 0 1]' * [x; y; z]
+            c, s = math.cos(angle), math.sin(angle)
+            return c * x - s * y, s * x + c * y, z
+
+        def tx_t(angle, x, y, z):  # [1 0 0; 0 cos sin; 0 -sin cos]' * [x; y; z]
+            c, s = math.cos(angle), math.sin(angle)
+            return x, c * y - s * z, s * y + c * z
+
+        x1, y1, z1 = tz_t(alfa, 0.0, p["b"], 0.0)
+        x2, y2, z2 = tz_t(alfa, *tz_t(beta, 0.0, p["r"], p["c"] + p["h"]))  # B2rbc+B2rcd
+        x3, y3, z3 = tz_t(alfa, *tz_t(beta, *tx_t(psi, 0.0, 0.0, -(p["l0"] + l))))
+        return x1 + x2 + x3, y1 + y2 + y3, p["a"] + z1 + z2 + z3  # Iroa = [0; 0; a]
+
+    # -- the model interface ------------------------------------------------------------------
+    # The listing's ldd and loop Reaction lines in Python syntax (^ -> **), for dyncheck's search
+    # of edits; `accelerations` and `reactions` evaluate the same lines as plain floats.
+    PRINTED = {
+        "l_acc": "-k/m*l + (g*cos(psi)+(b*alfad**2*cos(beta)) + r*(alfad+betad)**2)*sin(psi)"
+                 " + (lo+l)*(psid**2+(alfad+betad)**2*sin(psi)**2)",
+        "R": "m*(b*alfad**2*sin(beta) + (lo+l)*psid*(alfad+betad)*cos(psi) - 2*ld*(alfad+betad)*sin(psi))",
+    }
+
+    def symbols(self, t, q, v):
+        p = self.p
+        return {"k": p["k"], "m": p["m"], "g": p["g"], "b": p["b"], "r": p["r"], "lo": p["l0"],
+                "alfad": p["alpha_rate"], "betad": p["beta_rate"], "beta": p["beta0"] + p["beta_rate"] * t,
+                "psi": q[0], "l": q[1], "psid": v[0], "ld": v[1], "sin": np.sin, "cos": np.cos}
+
+    def accelerations(self, t, q, v):
+        """The listing's psidd, ldd at (t, q, v), beta = beta0 + beta_rate t."""
+        beta = self.p["beta0"] + self.p["beta_rate"] * t
+        args = (beta, float(q[0]), float(q[1]), float(v[0]), float(v[1]))
+        return np.array([self._psidd(*args), self._ldd(*args)])
+
+    def reactions(self, t, q, v):
+        """The listing's loop line Reaction(i) at (t, q, v)."""
+        beta = self.p["beta0"] + self.p["beta_rate"] * t
+        return {"R": self._reaction(beta, float(q[0]), float(q[1]), float(v[0]), float(v[1]))}
+
+    def energy(self, t, q, v):
+        raise NotImplementedError("the 1.8.3 Matlab listing computes no energy")
+
+    def drive_power(self, t, q, v):
+        raise NotImplementedError("the 1.8.3 Matlab listing computes no drive power")
+
+    def run(self, q0, v0):
+        """The listing's loop from psi(1), l(1) = q0 and psid(1), ld(1) = v0.
+
+        A DataFrame indexed by t (t_int): psi, l, psi_rate, l_rate, R (Reaction, its first
+        element from the line before the loop), x, y, z (rx, ry, rz); attrs: method, dt, steps,
+        wall, evaluations, final (t, q, v of the state n_int, which t_int does not reach).
+        FloatingPointError, naming the time and step, if the state stops being finite.
+        """
+        import pandas as pd  # only here: the equations above are plain math
+
+        start = time.perf_counter()
+        p = self.p
+        alfad, betad = p["alpha_rate"], p["beta_rate"]
+        deltat, n_int = self.dt, self.n_int
+        alfa, beta = p["alpha0"], p["beta0"]                    # alfa(1), beta(1)
+        psi, l = float(q0[0]), float(q0[1])                     # psi(1), l(1)
+        psid, ld = float(v0[0]), float(v0[1])                   # psid(1), ld(1)
+        out_psi, out_l, out_psid, out_ld = [psi], [l], [psid], [ld]
+        x, y, z = self._roe(alfa, beta, psi, l)
+        out_x, out_y, out_z = [x], [y], [z]
+        out_R = [self._reaction_first(beta, psi, l, psid, ld)]  # Reaction(1)
+        t_int = []
+        try:
+            for i in range(2, n_int + 1):
+                t_int.append((i - 2) * deltat)                      # t_int(i-1)
+                psidd = self._psidd(beta, psi, l, psid, ld)         # psidd(i-1)
+                ldd = self._ldd(beta, psi, l, psid, ld)             # ldd(i-1)
+                alfa = alfa + alfad * deltat                        # alfa(i)
+                beta = beta + betad * deltat                        # beta(i)
+                psid_new = psid + psidd * deltat                    # psid(i)
+                ld_new = ld + ldd * deltat                          # ld(i)
+                psi = psi + psid * deltat                           # psi(i), from psid(i-1)
+                l = l + ld * deltat                                 # l(i), from ld(i-1)
+                psid, ld = psid_new, ld_new
+                if not math.isfinite(psi + l + psid + ld):  # MATLAB would go on with NaN
+                    raise FloatingPointError(f"the 1.8.3 listing's explicit Euler is unstable: state "
+                                             f"not finite at t = {(i - 1) * deltat:.6g} s (step {i - 1})")
+                out_R.append(self._reaction(beta, psi, l, psid, ld))  # Reaction(i)
+                x, y, z = self._roe(alfa, beta, psi, l)             # rx(i), ry(i), rz(i)
+                out_psi.append(psi), out_l.append(l), out_psid.append(psid), out_ld.append(ld)
+                out_x.append(x), out_y.append(y), out_z.append(z)
+        except (OverflowError, ValueError) as error:  # x**2 or cos of a huge or infinite state
+            raise FloatingPointError(f"the 1.8.3 listing's explicit Euler is unstable: {error} at "
+                                     f"t = {(i - 2) * deltat:.6g} s (step {i - 1})") from None
+        rows = len(t_int)  # n_int - 1, as plotted (1:nplot)
+        frame = pd.DataFrame({"psi": out_psi[:rows], "l": out_l[:rows], "psi_rate": out_psid[:rows],
+                              "l_rate": out_ld[:rows], "R": out_R[:rows], "x": out_x[:rows],
+                              "y": out_y[:rows], "z": out_z[:rows]},
+                             index=pd.Index(np.array(t_int), name="t"))
+        frame.attrs.update({"method": self.integrator, "dt": deltat, "steps": self.steps,
+                            "wall": time.perf_counter() - start, "evaluations": self.steps,
+                            "final": ((n_int - 1) * deltat, (psi, l), (psid, ld))})
+        return frame
