@@ -206,6 +206,32 @@ def figure_extra(res, spaces, item, path):
     plt.close(fig)
 
 
+def figure_program(res, path):
+    """The book's program figures: left from the listing's run, right from the corrected equations."""
+    case, runs = res["case"], res["program"]
+    plots = case.spec["program"]["plots"]
+    sides = (("listing", runs["listing"], "tab:red"),
+             ("corrected", runs["tight"], "black"))
+    fig, axes = plt.subplots(len(plots), 2, figsize=(9.0, 2.8 * len(plots)), squeeze=False)
+    for row, item in enumerate(plots):
+        for col, (label, run, color) in enumerate(sides):
+            names = namespace(case, run)
+            ax = axes[row, col]
+            ax.plot(evaluate(item["x"], names), evaluate(item["y"], names), color=color, lw=0.8)
+            for key, setter in (("xlim", ax.set_xlim), ("ylim", ax.set_ylim)):
+                if key in item:
+                    setter(*item[key])
+            ax.set_title(f"{item['title']}: {label}", fontsize=8)
+            ax.set_xlabel("t [s]" if item["x"] == "t" else item["x"], fontsize=8)
+            ax.grid(alpha=0.3)
+    program = case.model("program")
+    fig.suptitle(f"{case.section}: the book's figures from its program ({program.integrator}, dt = {program.dt:.3g} s)"
+                 " and from the corrected equations; axes as the book's", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def values_table(res, spaces):
     """A case's named results (e.g. the least friction coefficient), computed for every source."""
     rows = []
@@ -265,6 +291,8 @@ def write_case_page(res, tmp):
     }
     if not case.coords:
         del plots["coordinates"], plots["errors"]
+    if res["program"] and case.spec.get("program", {}).get("plots"):
+        plots["program"] = lambda path: figure_program(res, path)
     extras = case.spec["report"].get("figures", {})
     spaces = report_namespaces(res) if extras or case.spec["report"].get("values") else {}
     for key, item in extras.items():
@@ -391,6 +419,15 @@ def write_errata(tmp, out):
                       *([f"- *Effect:* {f['effect']}"] if f["effect"] else []),
                       f"- *Localised edit:* {f['localised']}", "",
                       f["explanation"], ""]
+    programs = [c for c in cases if (tmp / f"figures/{c['case']}_program.png").exists()
+                or (out / f"figures/{c['case']}_program.png").exists()]
+    if programs:
+        lines += ["## The book's programs: its figures redrawn", "",
+                  "Each figure the book draws from a program, from a line-by-line transcription of that"
+                  " program (left) and from the corrected equations integrated tightly (right), on the"
+                  " book's axes.", ""]
+        lines += [f"### {c['section']} ([{c['case']}]({c['case']}.md))\n\n![program](figures/{c['case']}_program.png)\n"
+                  for c in programs]
     (tmp / "errata.md").write_text("\n".join(lines))
     return "errata.md"
 

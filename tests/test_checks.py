@@ -62,3 +62,21 @@ def test_unknown_method_is_named():
     case = dyncheck.load_case("double_pendulum")
     with pytest.raises(ValueError, match="unknown method 'Verlet'"):
         simulate(case.model("reference"), case.initial[:2], 1.0, "Verlet", output_step=0.1)
+
+
+def test_the_programs_are_checked_against_their_own_equations_and_figures(results):
+    rows = {(r["case"], r["check"], r["quantity"], r["sources"]): r for res in results.values() for r in res["rows"]}
+    same = "program vs book equations, same integrator"
+    # The Pascal double pendulum computes with the book's closed forms: its run is the book's, bit for bit.
+    assert rows[("double_pendulum", "program", "theta2", same)]["error"] == 0.0
+    # The Matlab listing's bracket slip shows in its l'' and, integrated, in its run: a registered finding.
+    assert rows[("spring_pendulum", "program", "l_acc", "program vs reference")]["status"] == "finding"
+    assert rows[("spring_pendulum", "program", "l", same)]["status"] == "finding"
+    # The book's double-pendulum figure holds the listing's run but not the exact motion.
+    assert rows[("double_pendulum", "figure", "theta2", "program vs book figure")]["status"] == "pass"
+    assert rows[("double_pendulum", "figure", "theta2", "tight reference vs book figure")]["status"] == "finding"
+
+
+def test_a_case_without_a_program_says_so():
+    with pytest.raises(ValueError, match="the book prints no program for 1.8.1"):
+        dyncheck.load_case("rotating_pendulum").model("program")

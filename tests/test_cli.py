@@ -72,6 +72,11 @@ def test_report_writes_pages_figures_and_index(canned, tmp_path):
     for link in [line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")]:
         assert (tmp_path / link).stat().st_size > 10_000, link
     assert "1.8.3-R" in page and not list(tmp_path.glob(".tmp-*"))
+    errata = (tmp_path / "errata.md").read_text()
+    for finding in ("1.7-eq1.24", "1.8.3-R", "1.8.3-listing-ldd", "1.8.3-listing-R", "1.9-figure", "1.10-R"):
+        assert f"## {finding}" in errata, finding
+    for link in [line.split("(")[1].rstrip(")") for line in errata.splitlines() if line.startswith("![")]:
+        assert (tmp_path / link).stat().st_size > 10_000, link
 
 
 def test_a_scene_that_disagrees_with_its_case_exits_2(monkeypatch, tmp_path, capsys):
