@@ -57,7 +57,7 @@ class MujocoModel:
             self.applied[dof:dof + len(force)] = force
         self.reaction_specs = {name: (self._sensor(spec["sensor"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
-        self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"])
+        self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
         self.paths = [self.body_id(b) for b in scene["paths"]]
 
@@ -153,17 +153,21 @@ class MujocoModel:
         return out
 
     def point_accelerations(self, t, q, v):
-        """Absolute accelerations of the named bodies' origins, in their own or the world frame."""
+        """The named bodies' kinematics, in their own or the world frame: the absolute acceleration
+        of the body's origin, or the body's angular velocity or angular acceleration."""
         self._inverse(t, q, v)
         mujoco.mj_rnePostConstraint(self.m, self.d)
         out = {}
-        for name, (body, frame) in self.point_specs.items():
+        for name, (body, frame, kind) in self.point_specs.items():
             res = np.zeros(6)
-            mujoco.mj_objectAcceleration(self.m, self.d, mujoco.mjtObj.mjOBJ_XBODY, body, res, 0)
-            acc = res[3:] + self.m.opt.gravity  # MuJoCo's cacc is offset by -gravity (world cacc)
-            if frame == "body":
-                acc = self.d.xmat[body].reshape(3, 3).T @ acc
-            out[name] = acc
+            if kind == "angular velocity":
+                mujoco.mj_objectVelocity(self.m, self.d, mujoco.mjtObj.mjOBJ_XBODY, body, res, 0)
+                vector = res[:3]
+            else:
+                mujoco.mj_objectAcceleration(self.m, self.d, mujoco.mjtObj.mjOBJ_XBODY, body, res, 0)
+                # MuJoCo's cacc is offset by -gravity (the world's cacc), in its linear part only.
+                vector = res[:3] if kind == "angular acceleration" else res[3:] + self.m.opt.gravity
+            out[name] = self.d.xmat[body].reshape(3, 3).T @ vector if frame == "body" else vector
         return out
 
     def energy(self, t, q, v):

@@ -44,7 +44,7 @@ class PinocchioModel:
             self.applied[iv:iv + len(force)] = force
         self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
-        self.point_specs = {name: (self._body_frame(spec["body"]), spec["frame"])
+        self.point_specs = {name: (self._body_frame(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
         self.springs = [(self._joint(j).idx_q, self._joint(j).idx_v, k) for j, k in self.stiffness.items()]
 
@@ -171,14 +171,21 @@ class PinocchioModel:
         return out
 
     def point_accelerations(self, t, q, v):
-        """Absolute (classical) accelerations of the named links' origins, in their own or the world frame."""
+        """The named links' kinematics, in their own or the world frame: the absolute (classical)
+        acceleration of the link's origin, or its angular velocity or angular acceleration."""
         config, velocity, acc, _ = self._inverse(t, q, v)
         pin.forwardKinematics(self.m, self.d, config, velocity, acc)
         out = {}
-        for name, (frame_id, frame) in self.point_specs.items():
+        for name, (frame_id, frame, kind) in self.point_specs.items():
             reference = pin.LOCAL if frame == "body" else pin.LOCAL_WORLD_ALIGNED
             pin.updateFramePlacement(self.m, self.d, frame_id)
-            out[name] = pin.getFrameClassicalAcceleration(self.m, self.d, frame_id, reference).linear.copy()
+            if kind == "angular velocity":
+                vector = pin.getFrameVelocity(self.m, self.d, frame_id, reference).angular
+            elif kind == "angular acceleration":
+                vector = pin.getFrameAcceleration(self.m, self.d, frame_id, reference).angular
+            else:
+                vector = pin.getFrameClassicalAcceleration(self.m, self.d, frame_id, reference).linear
+            out[name] = vector.copy()
         return out
 
     def energy(self, t, q, v):

@@ -50,7 +50,12 @@ def cross(a, b):
 
 
 def particle_motion(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0):
-    """I r_OE, B3 v_E, B3 a_E and gravity per unit mass in B3, by the book's method of 1.8 (a)-(g).
+    """I r_OE, B3 v_E, B3 a_E and gravity per unit mass in B3 (see `chain`)."""
+    return chain(p, t, psi, psi_rate, psi_acc, length, length_rate, length_acc)[:4]
+
+
+def chain(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0):
+    """I r_OE, B3 v_E, B3 a_E, gravity per unit mass in B3, and B3 w3, w3', by the book's method.
 
     The chain is three rotations, each about an axis through a point that is fixed in both the
     parent and the child frame (A, then B on the disk's axis, then D), each followed by the vector
@@ -81,4 +86,4 @@ def particle_motion(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, lengt
         rotation = turn @ rotation
         position = position + rotation.T @ r
     gravity = rotation @ np.array([0.0, 0.0, -p["g"]])
-    return position, v, a, gravity
+    return position, v, a, gravity, w, w_dot

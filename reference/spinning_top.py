@@ -298,12 +298,22 @@ class Book:
                     " m*g*sin(n) + m*dp*h*sin(n)*(dp*cos(n) + ds) - m*h*ddn,"
                     " m*g*cos(n) - m*h*(dn**2 + dp**2*sin(n)**2)])"}
 
+    # The top's angular velocity (4) and acceleration (5) as printed in B2, turned into the inertial
+    # frame by T_z(p)^T T_x(n)^T to meet the engines (whose body frame spins with the top).
+    PRINTED["omega"] = "TzT(p) @ TxT(n) @ array([dn, dp*sin(n), dp*cos(n) + ds])"
+    PRINTED["omega_dot"] = ("TzT(p) @ TxT(n) @ array([ddn + dp*ds*sin(n), ddp*sin(n) + dp*dn*cos(n) - dn*ds,"
+                            " ddp*cos(n) - dp*dn*sin(n) + dds])")
+
     def symbols(self, t, q, v):
         p = self.p
-        ddp, ddn, _ = self.accelerations(t, q, v)
+        ddp, ddn, dds = self.accelerations(t, q, v)
         return {"m": p["m"], "g": p["g"], "h": p["h"], "p": q[0], "n": q[1], "dp": v[0], "dn": v[1],
-                "ds": v[2], "ddp": ddp, "ddn": ddn, "sin": np.sin, "cos": np.cos, "array": np.array,
+                "ds": v[2], "ddp": ddp, "ddn": ddn, "dds": dds, "sin": np.sin, "cos": np.cos, "array": np.array,
                 "TxT": self._tx_t, "TzT": self._tz_t}
+
+    def point_accelerations(self, t, q, v):
+        names = self.symbols(t, np.asarray(q, float), np.asarray(v, float))
+        return {key: eval(self.PRINTED[key], {"__builtins__": {}}, names) for key in ("omega", "omega_dot")}
 
     def reactions(self, t, q, v):
         r = eval(self.PRINTED["R"], {"__builtins__": {}}, self.symbols(t, np.asarray(q, float), np.asarray(v, float)))

@@ -41,7 +41,7 @@ import time
 
 import numpy as np
 
-from reference.spinning_base import base_terms, book_height, book_velocities, particle_motion
+from reference.spinning_base import base_terms, book_height, book_velocities, chain, particle_motion
 
 COORDS = ("psi", "l")
 REACTIONS = ("R",)
@@ -71,13 +71,28 @@ class Book:
 
     # R = m a_E,x with the printed a_E,x (one L psi' Omega cos(psi) term).  The string is the code
     # (evaluated with `symbols`), so that dyncheck can search edits of it.
-    PRINTED = {"R": "-m*(b*alpha_rate**2*sin(beta) + L*psi_rate*Omega*cos(psi) + 2*l_rate*Omega*sin(psi))"}
+    # The intermediate results the book prints, in B3: (c) w3, (e) w3', (f) a_D and the sum a_E of
+    # terms (I)-(V), with the book's own psi'' and l''.
+    PRINTED = {"R": "-m*(b*alpha_rate**2*sin(beta) + L*psi_rate*Omega*cos(psi) + 2*l_rate*Omega*sin(psi))",
+               "omega3": "array([psi_rate, Omega*sin(psi), Omega*cos(psi)])",
+               "omega3_dot": "array([psi_acc, Omega*psi_rate*cos(psi), -Omega*psi_rate*sin(psi)])",
+               "a_D": "array([-b*alpha_rate**2*sin(beta), -K*cos(psi), K*sin(psi)])",
+               "a_E": "array([-(b*alpha_rate**2*sin(beta) + L*psi_rate*Omega*cos(psi) + 2*l_rate*Omega*sin(psi)),"
+                      " -K*cos(psi) - L*Omega**2*sin(psi)*cos(psi) + L*psi_acc + 2*l_rate*psi_rate,"
+                      " K*sin(psi) + L*(psi_rate**2 + Omega**2*sin(psi)**2) - l_acc])"}
 
     def symbols(self, t, q, v):
         p = self.p
-        beta, omega, _ = base_terms(p, t)
-        return {"m": p["m"], "b": p["b"], "alpha_rate": p["alpha_rate"], "beta": beta, "Omega": omega,
-                "L": p["l0"] + q[1], "psi": q[0], "psi_rate": v[0], "l_rate": v[1], "sin": np.sin, "cos": np.cos}
+        beta, omega, k = base_terms(p, t)
+        psi_acc, l_acc = self.accelerations(t, q, v)
+        return {"m": p["m"], "b": p["b"], "alpha_rate": p["alpha_rate"], "beta": beta, "Omega": omega, "K": k,
+                "L": p["l0"] + q[1], "psi": q[0], "psi_rate": v[0], "l_rate": v[1], "psi_acc": psi_acc,
+                "l_acc": l_acc, "sin": np.sin, "cos": np.cos, "array": np.array}
+
+    def point_accelerations(self, t, q, v):
+        names = self.symbols(t, q, v)
+        return {key: eval(self.PRINTED[key], {"__builtins__": {}}, names)
+                for key in ("omega3", "omega3_dot", "a_D", "a_E")}
 
     def reactions(self, t, q, v):
         return {"R": eval(self.PRINTED["R"], {"__builtins__": {}}, self.symbols(t, q, v))}
@@ -128,6 +143,14 @@ class Reference:
 
     def accelerations(self, t, q, v):
         return self._motion(t, q, v)[0]
+
+    def point_accelerations(self, t, q, v):
+        """B3 w3, w3', a_D and a_E from the chain of frames (a_D: the chain with DE of length 0)."""
+        p = self.p
+        (psi_acc, l_acc), _, _, force = self._motion(t, q, v)
+        *_, gravity, w, w_dot = chain(p, t, q[0], v[0], psi_acc, p["l0"] + q[1], v[1], l_acc)
+        a_d = chain(p, t, q[0], v[0], psi_acc, 0.0)[2]
+        return {"omega3": w, "omega3_dot": w_dot, "a_D": a_d, "a_E": force / p["m"] + gravity}
 
     def reactions(self, t, q, v):
         return {"R": self._motion(t, q, v)[3][0]}

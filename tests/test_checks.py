@@ -23,16 +23,18 @@ def test_engines_and_reference_agree_pointwise_to_1e9(results):
 
 def test_the_books_reaction_is_a_finding_of_the_size_of_the_missing_term(results):
     rows = [r for r in results["spring_pendulum"]["rows"] if r["finding"] == "1.8.3-R"]
-    assert {r["quantity"] for r in rows} == {"R", "drive_power", "work-energy balance"}
+    assert {r["quantity"] for r in rows} == {"R", "a_E_x", "drive_power", "work-energy balance"}
     assert all(r["status"] == "finding" for r in rows)
     # The missing term m L psi' Omega cos(psi) is a large part of R over the random states.
     assert all(r["error"] > 0.1 for r in rows if r["quantity"] == "R")
 
 
 def test_a_finding_that_stops_reproducing_fails(monkeypatch):
-    """Strict findings: correct the book's term and its registered finding must turn into a failure."""
-    monkeypatch.setattr(spring_pendulum.Book, "reactions", spring_pendulum.Reference.reactions)
-    monkeypatch.setattr(spring_pendulum.Book, "_motion", spring_pendulum.Reference._motion, raising=False)
+    """Strict findings: correct the book's term and its registered finding must turn into a failure
+    (at the book's own parameters; with overrides the row passes with a note)."""
+    fixed = {k: v.replace("L*psi_rate*Omega*cos(psi)", "2*L*psi_rate*Omega*cos(psi)")
+             for k, v in spring_pendulum.Book.PRINTED.items()}
+    monkeypatch.setattr(spring_pendulum.Book, "PRINTED", fixed)
     case = dyncheck.load_case("spring_pendulum")
     rows, _ = pointwise(case)
     rows = apply_findings(case, rows)
@@ -80,3 +82,11 @@ def test_the_programs_are_checked_against_their_own_equations_and_figures(result
 def test_a_case_without_a_program_says_so():
     with pytest.raises(ValueError, match="the book prints no program for 1.8.1"):
         dyncheck.load_case("rotating_pendulum").model("program")
+
+
+def test_an_override_that_hides_a_finding_passes_with_a_note():
+    """Without the spin (Omega = 0) the missing Coriolis term vanishes: the book's R is then right."""
+    case = dyncheck.load_case("spring_pendulum", alpha_rate=0.0, beta_rate=0.0)
+    rows = apply_findings(case, pointwise(case)[0])
+    hidden = [r for r in rows if r["finding"] == "1.8.3-R" and r["quantity"] == "R"]
+    assert hidden and all(r["status"] == "pass" and "does not show" in r["detail"] for r in hidden)
