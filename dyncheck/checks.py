@@ -67,7 +67,8 @@ def quantity_scales(case, a, b):
     for name, spec in case.scene["points"].items():
         parts = [f"{name}_{axis}" for axis in "xyz"]
         scale = max(np.max(np.linalg.norm(np.column_stack([s[p] for p in parts]), axis=1)) for s in (a, b))
-        if spec.get("kind", "acceleration") == "acceleration":  # a base at rest: judged against g
+        if spec.get("kind", "acceleration").endswith("acceleration") and "angular" not in spec.get("kind", ""):
+            # a base at rest: judged against g
             scale = max(scale, case.params.get("g", 0.0))
         scales.update(dict.fromkeys(parts, scale))
     return scales
@@ -308,10 +309,11 @@ def program_checks(case):
 
 
 def finding_effect(res, finding):
-    """What a finding changes in the book's own run: its reactions in newtons, its energy balance in joules."""
+    """What a finding changes in the book's own results: for an error of its equations, its reactions
+    in newtons and its energy balance in joules along its run; otherwise the case file's `effect`."""
     case, runs = res["case"], res["runs"]
     if "book" not in finding["sources"] or not isinstance(runs.get("book"), tuple):
-        return ""
+        return " ".join(finding.get("effect", "").split())
     book, tight = runs["book"][0], runs["reference"][1]
     parts = [f"the book's {q} is off by up to {(book[q] - tight[q]).abs().max():.3g} N"
              f" (|{q}| up to {tight[q].abs().max():.3g} N)"
@@ -367,8 +369,8 @@ def findings_of(res):
                     "sources": finding["sources"], "error": max(errors, default=None),
                     "explanation": " ".join(finding["explanation"].split()),
                     "where": finding["where"],
-                    "established": f"reference, MuJoCo and Pinocchio agree to {max(engines, default=0):.1e} "
-                                   f"at {states} random states; {', '.join(finding['sources'])} differs",
+                    "established": f"reference, MuJoCo and Pinocchio agree with each other to "
+                                   f"{max(engines, default=0):.1e} at {states} random states",
                     "effect": finding_effect(res, finding),
                     "localised": localise_finding(res["case"], finding, res["sample"])})
     return out

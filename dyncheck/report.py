@@ -362,9 +362,9 @@ def write_case_page(res, tmp):
         for f in findings:
             spec = next(x for x in case.findings if x["id"] == f["id"])
             lines += [f"### {f['id']}: {f['title']}", "",
-                      f"*Where:* {spec['where']}.  *Largest relative error it causes here:* {f['error']:.3g}"
-                      f" (quantities {', '.join(f['quantity'])}; sources {', '.join(f['sources'])}"
-                      " against reference, MuJoCo and Pinocchio, which agree to the tolerance)."
+                      f"*Where:* {spec['where']}.  *Largest relative error:* {f['error']:.3g}"
+                      f" (quantities {', '.join(f['quantity'])}; comparisons: {', '.join(f['sources'])};"
+                      f" {f['established']})."
                       + (f"  {f['effect']}" if f["effect"] else ""), "",
                       f"*Localised automatically* (edits of the printed expression searched until one agrees"
                       f" with the engines): {f['localised']}.", "", f["explanation"], ""]

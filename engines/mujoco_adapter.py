@@ -154,7 +154,8 @@ class MujocoModel:
 
     def point_accelerations(self, t, q, v):
         """The named bodies' kinematics, in their own or the world frame: the absolute acceleration
-        of the body's origin, or the body's angular velocity or angular acceleration."""
+        of the body's origin or of its centre of mass, or the body's angular velocity or angular
+        acceleration."""
         self._inverse(t, q, v)
         mujoco.mj_rnePostConstraint(self.m, self.d)
         out = {}
@@ -164,7 +165,8 @@ class MujocoModel:
                 mujoco.mj_objectVelocity(self.m, self.d, mujoco.mjtObj.mjOBJ_XBODY, body, res, 0)
                 vector = res[:3]
             else:
-                mujoco.mj_objectAcceleration(self.m, self.d, mujoco.mjtObj.mjOBJ_XBODY, body, res, 0)
+                at = mujoco.mjtObj.mjOBJ_BODY if kind == "com acceleration" else mujoco.mjtObj.mjOBJ_XBODY
+                mujoco.mj_objectAcceleration(self.m, self.d, at, body, res, 0)
                 # MuJoCo's cacc is offset by -gravity (the world's cacc), in its linear part only.
                 vector = res[:3] if kind == "angular acceleration" else res[3:] + self.m.opt.gravity
             out[name] = self.d.xmat[body].reshape(3, 3).T @ vector if frame == "body" else vector

@@ -172,7 +172,8 @@ class PinocchioModel:
 
     def point_accelerations(self, t, q, v):
         """The named links' kinematics, in their own or the world frame: the absolute (classical)
-        acceleration of the link's origin, or its angular velocity or angular acceleration."""
+        acceleration of the link's origin or of its centre of mass, or its angular velocity or
+        angular acceleration."""
         config, velocity, acc, _ = self._inverse(t, q, v)
         pin.forwardKinematics(self.m, self.d, config, velocity, acc)
         out = {}
@@ -183,6 +184,12 @@ class PinocchioModel:
                 vector = pin.getFrameVelocity(self.m, self.d, frame_id, reference).angular
             elif kind == "angular acceleration":
                 vector = pin.getFrameAcceleration(self.m, self.d, frame_id, reference).angular
+            elif kind == "com acceleration":  # of the link's subtree: the case names leaf links
+                pin.centerOfMass(self.m, self.d, config, velocity, acc, True)
+                joint = self.m.frames[frame_id].parentJoint
+                vector = self.d.acom[joint]  # Pinocchio gives a subtree's in its joint's frame
+                if frame == "world":
+                    vector = self.d.oMi[joint].rotation @ vector
             else:
                 vector = pin.getFrameClassicalAcceleration(self.m, self.d, frame_id, reference).linear
             out[name] = vector.copy()

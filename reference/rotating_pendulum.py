@@ -54,7 +54,7 @@ so this is what the prescribed base puts in (gravity is in the energy).
 
 import numpy as np
 
-from reference.spinning_base import base_terms, book_height, book_velocities, particle_motion
+from reference.spinning_base import base_terms, book_height, book_velocities, chain, particle_motion
 
 COORDS = ("psi",)
 REACTIONS = ("R", "T")
@@ -105,8 +105,28 @@ class Book:
     coords = COORDS
     reaction_names = REACTIONS
 
+    # The intermediate results 1.8.1 prints, in B3: (c) w3, (e) w3', (f) a_D and (g) a_E, with the
+    # book's own psi''.  The strings are the code (evaluated with `symbols`).
+    PRINTED = {"omega3": "array([psi_rate, Omega*sin(psi), Omega*cos(psi)])",
+               "omega3_dot": "array([psi_acc, Omega*psi_rate*cos(psi), -Omega*psi_rate*sin(psi)])",
+               "a_D": "array([-b*alpha_rate**2*sin(beta), -K*cos(psi), K*sin(psi)])",
+               "a_E": "array([-b*alpha_rate**2*sin(beta) - 2*l*psi_rate*Omega*cos(psi),"
+                      " -K*cos(psi) - l*Omega**2*sin(psi)*cos(psi) + l*psi_acc,"
+                      " K*sin(psi) + l*(psi_rate**2 + Omega**2*sin(psi)**2)])"}
+
     def __init__(self, params):
         self.p = dict(params)
+
+    def symbols(self, t, q, v):
+        p = self.p
+        beta, omega, k = base_terms(p, t)
+        return {"b": p["b"], "l": p["l"], "alpha_rate": p["alpha_rate"], "beta": beta, "Omega": omega, "K": k,
+                "psi": q[0], "psi_rate": v[0], "psi_acc": self.accelerations(t, q, v)[0],
+                "sin": np.sin, "cos": np.cos, "array": np.array}
+
+    def point_accelerations(self, t, q, v):
+        names = self.symbols(t, q, v)
+        return {key: eval(text, {"__builtins__": {}}, names) for key, text in self.PRINTED.items()}
 
     def accelerations(self, t, q, v):
         p = self.p
@@ -155,6 +175,13 @@ class Reference:
 
     def accelerations(self, t, q, v):
         return np.array([self._motion(t, q, v)[0]])
+
+    def point_accelerations(self, t, q, v):
+        """B3 w3, w3', a_D and a_E from the chain of frames (a_D: the chain with DE of length 0)."""
+        p = self.p
+        psi_acc = self._motion(t, q, v)[0]
+        _, _, a_e, _, w, w_dot = chain(p, t, q[0], v[0], psi_acc, p["l"])
+        return {"omega3": w, "omega3_dot": w_dot, "a_D": chain(p, t, q[0], v[0], psi_acc, 0.0)[2], "a_E": a_e}
 
     def reactions(self, t, q, v):
         force = self._motion(t, q, v)[3]
