@@ -32,7 +32,9 @@ class PinocchioModel:
         self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
         for location, value in writes:
             self._write(location, value)
-        self.d = self.m.createData()
+        self.point_specs = {name: (self._point_frame(spec), spec["frame"], spec.get("kind", "acceleration"))
+                            for name, spec in scene["points"].items()}
+        self.d = self.m.createData()  # after the frames the points add
         self.coords = tuple(scene["coords"])
         self.reaction_names = tuple(scene["reactions"])
         self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
@@ -44,8 +46,6 @@ class PinocchioModel:
             self.applied[iv:iv + len(force)] = force
         self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
-        self.point_specs = {name: (self._body_frame(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
-                            for name, spec in scene["points"].items()}
         self.springs = [(self._joint(j).idx_q, self._joint(j).idx_v, k) for j, k in self.stiffness.items()]
 
     # -- names -------------------------------------------------------------
@@ -58,6 +58,17 @@ class PinocchioModel:
         if not self.m.existBodyName(body):
             raise ValueError(f"{self.path}: no link named '{body}'")
         return self.m.getBodyId(body)
+
+    def _point_frame(self, spec):
+        """The frame whose kinematics a point reads: the link's own, or one added at its centre of mass."""
+        frame_id = self._body_frame(spec["body"])
+        if spec.get("kind") != "com acceleration":
+            return frame_id
+        frame = self.m.frames[frame_id]
+        lever = self.m.inertias[frame.parentJoint].lever  # in the joint's frame
+        at_com = pin.SE3(frame.placement.rotation, lever)  # the link's axes, at its centre of mass
+        return self.m.addFrame(pin.Frame(spec["body"] + "_com", frame.parentJoint, frame_id, at_com,
+                                         pin.FrameType.OP_FRAME))
 
     def _body_joint(self, body):
         """Id of the joint that moves link `body` (URDF link frames are those joints' frames here)."""
@@ -184,13 +195,7 @@ class PinocchioModel:
                 vector = pin.getFrameVelocity(self.m, self.d, frame_id, reference).angular
             elif kind == "angular acceleration":
                 vector = pin.getFrameAcceleration(self.m, self.d, frame_id, reference).angular
-            elif kind == "com acceleration":  # of the link's subtree: the case names leaf links
-                pin.centerOfMass(self.m, self.d, config, velocity, acc, True)
-                joint = self.m.frames[frame_id].parentJoint
-                vector = self.d.acom[joint]  # Pinocchio gives a subtree's in its joint's frame
-                if frame == "world":
-                    vector = self.d.oMi[joint].rotation @ vector
-            else:
+            else:  # the origin of the link's frame, or of the frame added at its centre of mass
                 vector = pin.getFrameClassicalAcceleration(self.m, self.d, frame_id, reference).linear
             out[name] = vector.copy()
         return out

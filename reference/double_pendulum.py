@@ -33,7 +33,8 @@ import math
 import time
 
 import numpy as np
-import pandas as pd
+
+from reference import printed
 
 COORDS = ("theta1", "theta2")
 REACTIONS = ("T1", "T2")
@@ -70,6 +71,20 @@ class Reference:
 
     def accelerations(self, t, q, v):
         return self._solve(q, v)[2:]
+
+    # The accelerations of the masses as 1.9.2 prints them: B1 a_B (mass 1, in B1) and B2 a_A
+    # (mass 2, in B2), with this source's own theta''.  The strings are the code (see `symbols`).
+    PRINTED = {"a_B": "array([l1*dd1, l1*d1**2, 0.0])",
+               "a_A": "array([l1*(dd1*cos(t2) + d1**2*sin(t2)) + l2*(dd1 + dd2),"
+                      " l1*(-dd1*sin(t2) + d1**2*cos(t2)) + l2*(d1 + d2)**2, 0.0])"}
+
+    def symbols(self, t, q, v):
+        dd1, dd2 = self.accelerations(t, q, v)
+        return {"l1": self.p["l1"], "l2": self.p["l2"], "t2": q[1], "d1": v[0], "d2": v[1], "dd1": dd1,
+                "dd2": dd2, "sin": np.sin, "cos": np.cos, "array": np.array}
+
+    def point_accelerations(self, t, q, v):
+        return printed.evaluate(self.PRINTED, self.symbols(t, q, v), ("a_B", "a_A"))
 
     def reactions(self, t, q, v):
         T1, T2, _, _ = self._solve(q, v)
@@ -235,6 +250,8 @@ class Program:
 
     def run(self, q0, v0):
         """The listing's run from (q0, v0), indexed by its t: one row per line it writes."""
+        import pandas as pd  # for the run's table only: the equations need numpy alone
+
         start = time.perf_counter()
         t1, t2 = (float(x) for x in q0)
         dt1, dt2 = (float(x) for x in v0)

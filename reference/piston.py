@@ -100,6 +100,8 @@ which is also what the B1 form of (1.10) printed at the end of 1.6 gives directl
 
 import numpy as np
 
+from reference import printed
+
 COORDS = ()
 REACTIONS = ("F1", "F2", "F3")
 
@@ -157,8 +159,7 @@ class Book:
 
     def point_accelerations(self, t, q, v):
         """Absolute acceleration of the mass, components in B1, by the book's two routes."""
-        names = self.symbols(t)
-        return {name: eval(expression, {"__builtins__": {}}, names) for name, expression in self.PRINTED.items()}
+        return printed.evaluate(self.PRINTED, self.symbols(t))
 
     def _force(self, t):
         """Force of the arm on the mass in B1: m a - m g, gravity (0, 0, -g)."""

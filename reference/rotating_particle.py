@@ -34,8 +34,9 @@ engines hold the rod by a joint driven at psi_rate, which must be 0 here (ValueE
 
 import numpy as np
 
+from reference import printed, rotating_pendulum
 from reference.rotating_pendulum import book_energy
-from reference.spinning_base import base_terms, book_velocities, particle_motion
+from reference.spinning_base import base_terms, book_velocities, chain, particle_motion
 
 COORDS = ()
 REACTIONS = ("R1", "R2", "T")
@@ -84,6 +85,18 @@ class Book(_FixedParticle):
     at psi' = 0.
     """
 
+    # The intermediate results: 1.8.1's printed w3, w3', a_D and a_E at psi' = psi'' = 0.
+    PRINTED = rotating_pendulum.Book.PRINTED
+
+    def symbols(self, t, q, v):
+        beta, omega, k = base_terms(self.p, t)
+        return {"b": self.p["b"], "l": self.p["l"], "alpha_rate": self.p["alpha_rate"], "beta": beta,
+                "Omega": omega, "K": k, "psi": self.p["psi"], "psi_rate": 0.0, "psi_acc": 0.0,
+                "sin": np.sin, "cos": np.cos, "array": np.array}
+
+    def point_accelerations(self, t, q, v):
+        return printed.evaluate(self.PRINTED, self.symbols(t, q, v))
+
     def reactions(self, t, q, v):
         p = self.p
         psi = p["psi"]
@@ -100,6 +113,12 @@ class Reference(_FixedParticle):
     def _motion(self, t):
         position, v_e, a_e, gravity = particle_motion(self.p, t, self.p["psi"], 0.0, 0.0, self.p["l"])
         return position, v_e, self.p["m"] * (a_e - gravity)
+
+    def point_accelerations(self, t, q, v):
+        """B3 w3, w3', a_D and a_E from the chain of frames at psi' = psi'' = 0."""
+        p = self.p
+        _, _, a_e, _, w, w_dot = chain(p, t, p["psi"], 0.0, 0.0, p["l"])
+        return {"omega3": w, "omega3_dot": w_dot, "a_D": chain(p, t, p["psi"], 0.0, 0.0, 0.0)[2], "a_E": a_e}
 
     def reactions(self, t, q, v):
         force = self._motion(t)[2]

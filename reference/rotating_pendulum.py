@@ -54,6 +54,8 @@ so this is what the prescribed base puts in (gravity is in the energy).
 
 import numpy as np
 
+from reference import printed
+
 from reference.spinning_base import base_terms, book_height, book_velocities, chain, particle_motion
 
 COORDS = ("psi",)
@@ -125,8 +127,7 @@ class Book:
                 "sin": np.sin, "cos": np.cos, "array": np.array}
 
     def point_accelerations(self, t, q, v):
-        names = self.symbols(t, q, v)
-        return {key: eval(text, {"__builtins__": {}}, names) for key, text in self.PRINTED.items()}
+        return printed.evaluate(self.PRINTED, self.symbols(t, q, v))
 
     def accelerations(self, t, q, v):
         p = self.p

@@ -245,6 +245,8 @@ import time
 
 import numpy as np
 
+from reference import printed
+
 COORDS = ("precession", "nutation", "spin")
 REACTIONS = ("Rx", "Ry", "Rz")
 
@@ -311,12 +313,16 @@ class Book:
                 "ds": v[2], "ddp": ddp, "ddn": ddn, "dds": dds, "sin": np.sin, "cos": np.cos, "array": np.array,
                 "TxT": self._tx_t, "TzT": self._tz_t}
 
+    # (7), the acceleration of the centre of mass in B2 (lost signs restored from Newton's rows (10)).
+    PRINTED["a_CM"] = ("TzT(p) @ TxT(n) @ array([h*(2*dn*dp*cos(n) + ddp*sin(n)), h*(dp**2*cos(n)*sin(n) - ddn),"
+                       " -h*(dp**2*sin(n)**2 + dn**2)])")
+
     def point_accelerations(self, t, q, v):
         names = self.symbols(t, np.asarray(q, float), np.asarray(v, float))
-        return {key: eval(self.PRINTED[key], {"__builtins__": {}}, names) for key in ("omega", "omega_dot")}
+        return printed.evaluate(self.PRINTED, names, ("omega", "omega_dot", "a_CM"))
 
     def reactions(self, t, q, v):
-        r = eval(self.PRINTED["R"], {"__builtins__": {}}, self.symbols(t, np.asarray(q, float), np.asarray(v, float)))
+        r = printed.evaluate(self.PRINTED, self.symbols(t, np.asarray(q, float), np.asarray(v, float)), ("R",))["R"]
         return {"Rx": float(r[0]), "Ry": float(r[1]), "Rz": float(r[2])}
 
     def energy(self, t, q, v):

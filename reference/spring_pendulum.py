@@ -41,6 +41,8 @@ import time
 
 import numpy as np
 
+from reference import printed
+
 from reference.spinning_base import base_terms, book_height, book_velocities, chain, particle_motion
 
 COORDS = ("psi", "l")
@@ -91,11 +93,10 @@ class Book:
 
     def point_accelerations(self, t, q, v):
         names = self.symbols(t, q, v)
-        return {key: eval(self.PRINTED[key], {"__builtins__": {}}, names)
-                for key in ("omega3", "omega3_dot", "a_D", "a_E")}
+        return printed.evaluate(self.PRINTED, names, ("omega3", "omega3_dot", "a_D", "a_E"))
 
     def reactions(self, t, q, v):
-        return {"R": eval(self.PRINTED["R"], {"__builtins__": {}}, self.symbols(t, q, v))}
+        return printed.evaluate(self.PRINTED, self.symbols(t, q, v), ("R",))
 
     def energy(self, t, q, v):
         p = self.p
