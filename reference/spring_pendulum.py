@@ -43,7 +43,7 @@ import numpy as np
 
 from reference import printed
 
-from reference.spinning_base import base_terms, book_height, book_velocities, chain, particle_motion
+from reference.spinning_base import T_z, base_terms, book_height, book_velocities, chain, particle_motion
 
 COORDS = ("psi", "l")
 REACTIONS = ("R",)
@@ -73,9 +73,12 @@ class Book:
 
     # R = m a_E,x with the printed a_E,x (one L psi' Omega cos(psi) term).  The string is the code
     # (evaluated with `symbols`), so that dyncheck can search edits of it.
-    # The intermediate results the book prints, in B3: (c) w3, (e) w3', (f) a_D and the sum a_E of
-    # terms (I)-(V), with the book's own psi'' and l''.
+    # The intermediate results the book prints: (c) w1 in B1, w2 in B2, w3 in B3, (e) w3', (f) a_C in
+    # B2, a_D and the sum a_E of terms (I)-(V) in B3, with the book's own psi'' and l''.
     PRINTED = {"R": "-m*(b*alpha_rate**2*sin(beta) + L*psi_rate*Omega*cos(psi) + 2*l_rate*Omega*sin(psi))",
+               "omega1": "array([0.0, 0.0, alpha_rate])",
+               "omega2": "array([0.0, 0.0, Omega])",
+               "a_C": "array([-b*alpha_rate**2*sin(beta), -b*alpha_rate**2*cos(beta), 0.0])",
                "omega3": "array([psi_rate, Omega*sin(psi), Omega*cos(psi)])",
                "omega3_dot": "array([psi_acc, Omega*psi_rate*cos(psi), -Omega*psi_rate*sin(psi)])",
                "a_D": "array([-b*alpha_rate**2*sin(beta), -K*cos(psi), K*sin(psi)])",
@@ -93,7 +96,7 @@ class Book:
 
     def point_accelerations(self, t, q, v):
         names = self.symbols(t, q, v)
-        return printed.evaluate(self.PRINTED, names, ("omega3", "omega3_dot", "a_D", "a_E"))
+        return printed.evaluate(self.PRINTED, names, ("omega1", "omega2", "a_C", "omega3", "omega3_dot", "a_D", "a_E"))
 
     def reactions(self, t, q, v):
         return printed.evaluate(self.PRINTED, self.symbols(t, q, v), ("R",))
@@ -151,7 +154,12 @@ class Reference:
         (psi_acc, l_acc), _, _, force = self._motion(t, q, v)
         *_, gravity, w, w_dot = chain(p, t, q[0], v[0], psi_acc, p["l0"] + q[1], v[1], l_acc)
         a_d = chain(p, t, q[0], v[0], psi_acc, 0.0)[2]
-        return {"omega3": w, "omega3_dot": w_dot, "a_D": a_d, "a_E": force / p["m"] + gravity}
+        beta, omega, _ = base_terms(p, t)
+        # C sits on the arm at B's radius b: the arm's centripetal acceleration (0, -b alpha'^2, 0) in
+        # B1, turned into B2 by T_z(beta); the frames turn about Z at alpha' and alpha' + beta'.
+        a_c = T_z(beta) @ np.array([0.0, -p["b"] * p["alpha_rate"] ** 2, 0.0])
+        return {"omega1": np.array([0.0, 0.0, p["alpha_rate"]]), "omega2": np.array([0.0, 0.0, omega]),
+                "a_C": a_c, "omega3": w, "omega3_dot": w_dot, "a_D": a_d, "a_E": force / p["m"] + gravity}
 
     def reactions(self, t, q, v):
         return {"R": self._motion(t, q, v)[3][0]}
