@@ -56,7 +56,7 @@ import numpy as np
 
 from reference import printed
 
-from reference.spinning_base import base_terms, book_height, book_velocities, chain, particle_motion
+from reference.spinning_base import base_terms, book_height, book_velocities, chain, last_state, particle_motion
 
 COORDS = ("psi",)
 REACTIONS = ("R", "T")
@@ -164,6 +164,7 @@ class Reference:
     def __init__(self, params):
         self.p = dict(params)
 
+    @last_state
     def _motion(self, t, q, v):
         """Position, velocity, acceleration of E and the rod's force on it, psi'' solved from Y3."""
         p = self.p

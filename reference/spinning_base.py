@@ -7,6 +7,8 @@ B2 r_CD = (0, r, h), B3 r_DE = (0, 0, -L), L the length DE (l in 1.8.1-2, l0 + l
 The arm and the disk turn at constant rates, Omega = alpha' + beta'; gravity is -Z.
 """
 
+import functools
+
 import numpy as np
 
 I3, K3 = np.eye(3)[0], np.eye(3)[2]
@@ -87,3 +89,15 @@ def chain(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0)
         position = position + rotation.T @ r
     gravity = rotation @ np.array([0.0, 0.0, -p["g"]])
     return position, v, a, gravity, w, w_dot
+
+
+def last_state(method):
+    """Remember a model method's result for the last (t, q, v): an integrator asks a model for its
+    accelerations and then its drive power at the same state, and both come from one calculation."""
+    @functools.wraps(method)
+    def remembered(self, t, q, v):
+        key = (t, tuple(q), tuple(v))
+        if getattr(self, "_last", (None,))[0] != key:
+            self._last = (key, method(self, t, q, v))
+        return self._last[1]
+    return remembered

@@ -43,7 +43,7 @@ import numpy as np
 
 from reference import printed
 
-from reference.spinning_base import T_z, base_terms, book_height, book_velocities, chain, particle_motion
+from reference.spinning_base import T_z, base_terms, book_height, book_velocities, chain, last_state, particle_motion
 
 COORDS = ("psi", "l")
 REACTIONS = ("R",)
@@ -132,6 +132,7 @@ class Reference:
     def __init__(self, params):
         self.p = dict(params)
 
+    @last_state
     def _motion(self, t, q, v):
         """psi'', l'', and the particle's position, velocity and the arm's force on it."""
         p = self.p
