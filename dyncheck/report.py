@@ -261,6 +261,21 @@ def markdown_table(frame):
     return frame.to_markdown(index=False)
 
 
+def summary_table(rows):
+    """One line per (check, comparison): how many quantities, their statuses, the worst error/tolerance."""
+    frame = pd.DataFrame(rows)
+    out = []
+    for (check, sources), group in frame.groupby(["check", "sources"], sort=False):
+        judged = group.dropna(subset=["error", "tolerance"])
+        with np.errstate(divide="ignore", invalid="ignore"):  # a zero tolerance: any error is infinitely over
+            ratios = np.where(judged["error"] > 0, judged["error"] / judged["tolerance"], 0.0)
+        worst = judged.iloc[int(np.argmax(ratios))] if len(judged) else None
+        out.append({"check": check, "comparison": sources, "quantities": len(group),
+                    "status": ", ".join(f"{n} {s}" for s, n in group["status"].value_counts().items()),
+                    "worst": "-" if worst is None else f"{worst['quantity']}: {worst['error']:.2e} / {worst['tolerance']:.2e}"})
+    return pd.DataFrame(out)
+
+
 def scene_table(case):
     """The joints of the engine models: what is free, what is prescribed, what is applied."""
     scene = case.scene
@@ -354,7 +369,15 @@ def write_case_page(res, tmp):
         " trajectories to the largest magnitude of the coordinate over the run, energy to the largest"
         " |E| or |W|.  `finding` marks a disagreement explained by a registered error of the book.",
         "",
+        "In short, the worst row of each comparison (error over its tolerance):",
+        "",
+        markdown_table(summary_table(rows)),
+        "",
+        f"<details><summary>All {len(rows)} checks</summary>",
+        "",
         markdown_table(table),
+        "",
+        "</details>",
         "",
     ]
     if findings:
