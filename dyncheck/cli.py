@@ -21,6 +21,9 @@ def main(argv=None):
     commands.add_parser("list", help="list the cases")
     run = commands.add_parser("run", help="run the checks and print a table")
     report = commands.add_parser("report", help="run the checks and write Markdown reports with figures")
+    bench = commands.add_parser("bench", help="throughput of each source and the harness's overhead")
+    bench.add_argument("cases", nargs="*", metavar="CASE", help="cases to measure (default: all)")
+    bench.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help=argparse.SUPPRESS)
     for sub in (run, report):
         sub.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
         sub.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -36,6 +39,11 @@ def main(argv=None):
     except ValueError as error:
         print(f"dyncheck: error: {error}", file=sys.stderr)
         return 2
+    if args.command == "bench":
+        from dyncheck.bench import bench_case
+        table = pd.concat([bench_case(case) for case in cases], ignore_index=True)
+        print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+        return 0
     results = [run_case(case) for case in cases]
     if args.command == "run":
         print_results(results)

@@ -89,3 +89,9 @@ def test_a_scene_that_disagrees_with_its_case_exits_2(monkeypatch, tmp_path, cap
     monkeypatch.setattr(case_module, "CASES_DIR", tmp_path / "cases")
     assert cli.main(["run", "double_pendulum"]) == 2
     assert "scene.xml of case 'double_pendulum': body 'link2' mass[0] is 0.5" in capsys.readouterr().err
+
+
+def test_bench_prints_throughput_and_ratios(capsys):
+    assert cli.main(["bench", "double_pendulum"]) == 0
+    out = capsys.readouterr().out
+    assert "mj_step(nstep), RK4" in out and "pin.aba loop" in out and "ratio to bare" in out
