@@ -147,7 +147,9 @@ class PinocchioModel:
         acc = np.zeros(self.m.nv)
         for joint, (_, _, driven_acc) in self.driven:
             acc[joint.idx_v] = driven_acc
-        if self.free:
+        if len(self.free) == self.m.nv:  # nothing prescribed: Pinocchio's ABA solves it directly
+            acc = pin.aba(self.m, self.d, config, velocity, self._passive(config) + self.applied).copy()
+        elif self.free:
             bias = pin.rnea(self.m, self.d, config, velocity, acc)
             mass = pin.crba(self.m, self.d, config)
             mass = np.triu(mass) + np.triu(mass, 1).T
