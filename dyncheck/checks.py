@@ -230,7 +230,7 @@ def run_case(case, progress=None):
     rows, sample = pointwise(case)
     runs = run_sources(case)
     rows += trajectory(case, runs) + energy(case, runs)
-    program_rows, program_runs = program_checks(case)
+    program_rows, program_runs = program_checks(case, sample)
     rows += program_rows + data_checks(case)
     apply_findings(case, rows)
     for r in rows:
@@ -241,7 +241,7 @@ def run_case(case, progress=None):
 
 # -- the book's programs ------------------------------------------------------------
 
-def program_checks(case):
+def program_checks(case, sample):
     """The book's printed program against its derived equations, the engines and its own figures.
 
     (1) its formulas at the random states, against `reference`; (2) its run against the book's
@@ -253,23 +253,17 @@ def program_checks(case):
     if not case.has_program:
         return [], {}
     program = case.model("program")
-    states = case.sample_states()
+    states, right = sample["states"], sample["values"]["reference"]  # the pointwise check's
     tolerance = case.tolerance["pointwise"]["value"]
     reference = case.model("reference")
     rows = []
-    mine = {"acc": np.array([program.accelerations(t, q, v) for t, q, v in states]),
-            "reactions": [program.reactions(t, q, v) for t, q, v in states]}
-    right = {"acc": np.array([reference.accelerations(t, q, v) for t, q, v in states]),
-             "reactions": [reference.reactions(t, q, v) for t, q, v in states]}
-    for i, coord in enumerate(case.coords):
-        rows.append(row("program", f"{coord}_acc", "program vs reference",
-                        relative_error(mine["acc"][:, i], right["acc"][:, i]), tolerance,
-                        f"{len(states)} random states"))
-    for name in program.reaction_names:
-        rows.append(row("program", name, "program vs reference",
-                        relative_error(np.array([r[name] for r in mine["reactions"]]),
-                                       np.array([r[name] for r in right["reactions"]])), tolerance,
-                        f"{len(states)} random states"))
+    acc = np.array([program.accelerations(t, q, v) for t, q, v in states])
+    reactions = [program.reactions(t, q, v) for t, q, v in states]
+    mine = {f"{coord}_acc": acc[:, i] for i, coord in enumerate(case.coords)}
+    mine.update({name: np.array([r[name] for r in reactions]) for name in program.reaction_names})
+    for quantity, values in mine.items():
+        rows.append(row("program", quantity, "program vs reference", relative_error(values, right[quantity]),
+                        tolerance, f"{len(states)} random states"))
 
     q0, v0, _ = case.initial
     listing = program.run(q0, v0)

@@ -244,23 +244,15 @@ class Program:
                    + r * (alfad + betad)**2) * math.sin(psi)
                 + (lo + l) * (psid**2 + (alfad + betad)**2 * math.sin(psi)**2))
 
-    def _reaction(self, beta, psi, l, psid, ld):
-        """The loop's Reaction(i) (minus before 2*ld)."""
+    def _reaction(self, beta, psi, l, psid, ld, ld_sign=-1.0):
+        """The loop's Reaction(i), with a minus before 2*ld; Reaction(1) before the loop has a plus
+        (ld_sign = +1)."""
         p = self.p
         m, b, lo = p["m"], p["b"], p["l0"]
         alfad, betad = p["alpha_rate"], p["beta_rate"]
         return m * (b * alfad**2 * math.sin(beta)
                     + (lo + l) * psid * (alfad + betad) * math.cos(psi)
-                    - 2 * ld * (alfad + betad) * math.sin(psi))
-
-    def _reaction_first(self, beta, psi, l, psid, ld):
-        """Reaction(1), before the loop (plus before 2*ld)."""
-        p = self.p
-        m, b, lo = p["m"], p["b"], p["l0"]
-        alfad, betad = p["alpha_rate"], p["beta_rate"]
-        return m * (b * alfad**2 * math.sin(beta)
-                    + (lo + l) * psid * (alfad + betad) * math.cos(psi)
-                    + 2 * ld * (alfad + betad) * math.sin(psi))
+                    + ld_sign * 2 * ld * (alfad + betad) * math.sin(psi))
 
     def _roe(self, alfa, beta, psi, l):
         """roe = Iroa + Talfa'*B1rab + Talfa'*Tbeta'*(B2rbc+B2rcd) + Talfa'*Tbeta'*Tpsi'*B3rde."""
@@ -331,7 +323,7 @@ class Program:
         out_psi, out_l, out_psid, out_ld = [psi], [l], [psid], [ld]
         x, y, z = self._roe(alfa, beta, psi, l)
         out_x, out_y, out_z = [x], [y], [z]
-        out_R = [self._reaction_first(beta, psi, l, psid, ld)]  # Reaction(1)
+        out_R = [self._reaction(beta, psi, l, psid, ld, ld_sign=1.0)]  # Reaction(1)
         t_int = []
         try:
             for i in range(2, n_int + 1):
