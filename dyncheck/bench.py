@@ -1,11 +1,48 @@
-"""Throughput of each source and the harness's overhead over the bare engine loop, measured side by side.
+"""`dyncheck bench`: throughput of each source on a case's scene, and the harness's overhead over the
+bare engine doing the same work, timed side by side in the same run.
 
-Each ratio compares two timings taken in the same run on the same machine: the harness's way of
-doing a thing against the engine doing the same thing with nothing around it.  Times are the
-median of `repeat` runs.
+Each row: source, what, count (steps, states or right-hand-side evaluations), the median wall time of
+`repeat` runs, the rate per second, and the ratio of its time per item (seconds / count) to that of
+the row named in `against` (its bare loop; a bare row itself has ratio 1).  The rows of a comparison
+are timed in turns, so that a change of the machine's load falls on both alike.
+
+MuJoCo, the scene as `MujocoModel.step` steps it (armature back, RK4 at the case's step, the same
+constant generalized forces) from the case's initial state:
+  - "mj_step(nstep), RK4": one call stepping `steps` steps: the bare loop.
+  - "rollout, RK4": `mujoco.rollout` of the same steps.
+  - "harness step": `MujocoModel.step`, which is rollout plus a copy of the model, the book's
+    coordinates of every step (vectorised, the top's Euler angles and rates too) and the drift of
+    the driven rates; against mj_step, and against rollout, the engine call it makes.
+  - batched: rollout of 64 starts (the case's, its coordinates shifted by k mrad or mm) in one call,
+    on one thread and on two, against 64 calls of one start each.
+  - where something does work: `drive_powers` over the states of a run (the work integral of a
+    MuJoCo run needs the power at every step) against `drive_power` state by state.
+Pinocchio:
+  - "harness accelerations" at the pointwise check's states, against "pin.<engine> loop": the
+    engine step alone (`PinocchioModel._engine`: the generalized forces, then ABA when nothing is
+    prescribed, else RNEA with the prescribed accelerations and, if anything is free, CRBA's free
+    block solved; the work any Pinocchio user does for the scene) on the same states already in
+    Pinocchio's configuration.  This misses 1.2: the engine step takes only 2-20 us on these
+    few-joint scenes, and the book's coordinates cost a few us more (cos and sin of each
+    angle, the prescribed motions at t, the scalar writes); the top's Euler angles cost ~25 us
+    (its quaternion and angular velocity, and the Euler-angle accelerations back, in numpy on
+    3-vectors) against ~2 us of ABA.
+  - "DOP853, harness simulate": `simulate(pinocchio, "DOP853")`, whose right-hand side asks the
+    harness for the accelerations and the drive power (one engine step per state, remembered),
+    against "DOP853, bare pin.<engine> rhs": `solve_ivp` with the same method, tolerances, span
+    and output times over a right-hand side written for Pinocchio alone, in its own state: the
+    joints' positions and rates, made a configuration by `pin.integrate` from the neutral one.
+    This is the overhead that matters for a run, and it is at most about 1.2 except for the top,
+    whose bare state is Pinocchio's quaternion and angular velocity (q' = q (w, 0) / 2) while
+    the harness integrates the book's Euler angles and converts both ways at each evaluation:
+    its steps differ (the ratio is per evaluation) and the conversions cost about what the
+    solver and ABA do together.
+Reference and book: the accelerations state by state; and where a source's accelerations, as
+written, take many states as columns (closed forms in numpy), one call over 10000 states against
+the loop.  The numerical Newton-Euler references (the 1.8 chain of frames, the double pendulum's
+linear solve) take one state at a time: vectorising them would mean writing their equations twice.
 """
 
-import copy
 import statistics
 import time
 
@@ -14,58 +51,188 @@ import mujoco.rollout
 import numpy as np
 import pandas as pd
 import pinocchio as pin
+from scipy.integrate import solve_ivp
+
+from dyncheck.simulate import simulate
+
+BATCH = 64  # initial conditions in the batched rollouts
+SPAN = 0.5  # s of integration in the scipy pair
 
 
-def _median_time(run, repeat):
-    times = []
-    for _ in range(repeat):
+def _timed(run):
+    """`run` made to return its wall time."""
+    def timed():
         start = time.perf_counter()
         run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+        return time.perf_counter() - start
+    return timed
+
+
+def _measure(source, entries, repeat):
+    """Rows (source, what, count, median seconds, against) of entries (what, count, run, against); each
+    run returns its wall time.  The runs take turns, so that a change of the machine's load falls on
+    a row and its bare row alike."""
+    times = [[] for _ in entries]
+    for _ in range(repeat):
+        for (_, _, run, _), out in zip(entries, times):
+            out.append(run())
+    return [(source, what, count, statistics.median(t), against)
+            for (what, count, _, against), t in zip(entries, times)]
 
 
 def bench_case(case, steps=2000, repeat=5):
-    """Rows: source, what, count, median seconds, rate per second, and the ratio to its bare loop."""
-    q0, v0, _ = case.initial
-    dt = case.integration["mujoco_step"]
-    sample = case.sample_states()
-    rows = []
-
-    mj = case.model("mujoco")
-    m = copy.copy(mj.m)
-    m.dof_armature[:] = mj.armature
-    m.opt.timestep, m.opt.integrator = dt, mujoco.mjtIntegrator.mjINT_RK4
-    d = mujoco.MjData(m)
-    mj._set_state(0.0, q0, v0, d)
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    state0 = np.empty(mujoco.mj_stateSize(m, spec))
-    mujoco.mj_getState(m, d, state0, spec)
-
-    def bare_step():
-        mujoco.mj_setState(m, d, state0, spec)
-        mujoco.mj_step(m, d, nstep=steps)
-
-    bare = _median_time(bare_step, repeat)
-    rollout = _median_time(lambda: mujoco.rollout.rollout(m, d, state0[None], nstep=steps), repeat)
-    harness = _median_time(lambda: mj.step(q0, v0, steps * dt, dt, "RK4"), repeat)
-    rows += [("mujoco", "mj_step(nstep), RK4", steps, bare, 1.0),
-             ("mujoco", "mujoco.rollout, RK4", steps, rollout, rollout / bare),
-             ("mujoco", "harness MujocoModel.step (rollout + book coordinates)", steps, harness, harness / bare)]
-
-    pn = case.model("pinocchio")
-    configs = [(pn._configuration(t, q), pn._velocity(t, q, v)) for t, q, v in sample]
-    zeros = np.zeros(pn.m.nv)
-    bare_aba = _median_time(lambda: [pin.aba(pn.m, pn.d, c, w, zeros) for c, w in configs], repeat)
-    harness_acc = _median_time(lambda: [pn.accelerations(t, q, v) for t, q, v in sample], repeat)
-    rows += [("pinocchio", "pin.aba loop", len(sample), bare_aba, 1.0),
-             ("pinocchio", "harness PinocchioModel.accelerations", len(sample), harness_acc, harness_acc / bare_aba)]
-
-    for source in ("reference", "book"):
-        model = case.model(source)
-        elapsed = _median_time(lambda: [model.accelerations(t, q, v) for t, q, v in sample], repeat)
-        rows.append((source, "accelerations loop", len(sample), elapsed, float("nan")))
-    frame = pd.DataFrame(rows, columns=["source", "what", "count", "median s", "ratio to bare"])
+    """Rows: source, what, count, median seconds, per second, the ratio per item to the bare row
+    `against` (1 for a bare row itself)."""
+    rows = _mujoco_rows(case, steps, repeat) + _pinocchio_rows(case, repeat) + _equation_rows(case, repeat)
+    frame = pd.DataFrame(rows, columns=["source", "what", "count", "median s", "against"])
     frame.insert(0, "case", case.name)
     frame["per second"] = frame["count"] / frame["median s"]
-    return frame
+    cost = {(s, w): t / n for s, w, n, t in zip(frame["source"], frame["what"], frame["count"], frame["median s"])}
+    bare = set(zip(frame["source"], frame["against"]))
+    frame["ratio to bare"] = [cost[s, w] / cost[s, a] if a else (1.0 if (s, w) in bare else np.nan)
+                              for s, w, a in zip(frame["source"], frame["what"], frame["against"])]
+    return frame[["case", "source", "what", "count", "median s", "per second", "ratio to bare", "against"]]
+
+
+def _mujoco_rows(case, steps, repeat):
+    mj = case.model("mujoco")
+    q0, v0, _ = case.initial
+    dt = case.integration["mujoco_step"]
+    m, d, state0, forces = mj.stepping(q0, v0, dt, "RK4")
+    spec, control = mujoco.mjtState.mjSTATE_FULLPHYSICS, mujoco.mjtState.mjSTATE_QFRC_APPLIED
+
+    def bare():
+        mujoco.mj_setState(m, d, state0, spec)
+        d.qfrc_applied[:] = forces
+        mujoco.mj_step(m, d, nstep=steps)
+
+    def rollout(states, nstep, data=d):
+        mujoco.rollout.rollout(m, data, states, forces[None, None], nstep=nstep, control_spec=control)
+
+    step, roll, harness = "mj_step(nstep), RK4", "rollout, RK4", "harness step"
+    rows = _measure("mujoco", [(step, steps, _timed(bare), ""),
+                               (roll, steps, _timed(lambda: rollout(state0[None], steps)), step),
+                               (harness, steps, _timed(lambda: mj.step(q0, v0, steps * dt, dt, "RK4")), step)],
+                    repeat)
+    rows.append(rows[-1][:-1] + (roll,))  # the harness step against rollout too
+
+    starts = np.array([mj.stepping(q0 + 1e-3 * k, v0, dt, "RK4")[2] for k in range(BATCH)])
+    nstep, pair = steps // 8, [mujoco.MjData(m) for _ in range(2)]
+    loop = f"{BATCH} rollouts of 1 start"
+    rows += _measure("mujoco", [
+        (loop, BATCH * nstep, _timed(lambda: [rollout(s[None], nstep) for s in starts]), ""),
+        (f"rollout of {BATCH} starts", BATCH * nstep, _timed(lambda: rollout(starts, nstep)), loop),
+        (f"rollout of {BATCH} starts, 2 threads", BATCH * nstep, _timed(lambda: rollout(starts, nstep, pair)), loop)],
+        repeat)
+
+    if case.driven:
+        run = mj.step(q0, v0, steps * dt, dt, "RK4")
+        states = list(zip(run["t"], run["q"], run["v"]))
+        single = "harness drive_power per state"
+        rows += _measure("mujoco", [
+            (single, len(states), _timed(lambda: [mj.drive_power(*s) for s in states]), ""),
+            ("harness drive_powers, one call", len(states),
+             _timed(lambda: mj.drive_powers(run["t"], run["q"], run["v"])), single)], repeat)
+    return rows
+
+
+def _pinocchio_rows(case, repeat):
+    pn = case.model("pinocchio")
+    sample = case.sample_states() * 10
+    engine_states = [pn._state(t, q, v) for t, q, v in sample]
+    engine = "aba" if len(pn.free) == pn.m.nv else "rnea+crba" if len(pn.free) else "rnea"  # as _engine does
+    bare = f"pin.{engine} loop"
+    rows = _measure("pinocchio", [
+        (bare, len(sample), _timed(lambda: [pn._engine(*s) for s in engine_states]), ""),
+        ("harness accelerations", len(sample), _timed(lambda: [pn.accelerations(t, q, v) for t, q, v in sample]),
+         bare)], repeat)
+
+    q0, v0, t_end = case.initial
+    span, setting = min(SPAN, t_end), case.integration
+    grid = np.linspace(0.0, span, int(round(span / setting["output_step"])) + 1)
+    rhs, y0 = _bare_rhs(case, pn)
+    evaluations = {}
+
+    def bare_run():
+        start = time.perf_counter()
+        solution = solve_ivp(rhs, (0.0, span), y0, method="DOP853", t_eval=grid, rtol=setting["rtol"],
+                             atol=setting["rtol"])
+        evaluations["bare"] = solution.nfev
+        return time.perf_counter() - start
+
+    def harness_run():
+        run = simulate(pn, (q0, v0), span, "DOP853", rtol=setting["rtol"], output_step=setting["output_step"],
+                       work=case.driven)
+        evaluations["harness"] = run.attrs["evaluations"]
+        return run.attrs["wall"]  # the integration, not the reactions and energy at the output times
+
+    bare = f"DOP853, bare pin.{engine} rhs"
+    timed = _measure("pinocchio", [(bare, 0, bare_run, ""), ("DOP853, harness simulate", 0, harness_run, bare)],
+                     repeat)
+    return rows + [row[:2] + (evaluations[key],) + row[3:] for row, key in zip(timed, ("bare", "harness"))]
+
+
+def _bare_rhs(case, pn):
+    """A right-hand side written for Pinocchio alone (see the module's docstring), and its initial state;
+    like the harness's, its last component is the drive power (0 where nothing does work)."""
+    m, n = pn.m, len(case.coords)
+    q0, v0, _ = case.initial
+    if any(kind == "euler" for kind, _, _ in pn.layout):  # the top: Pinocchio's quaternion (x, y, z, w), and w
+        assert len(pn.layout) == 1 and not pn.driven, "a bare right-hand side for a lone ball joint only"
+
+        def rhs(t, y):
+            config, w = y[:4], y[4:7]
+            (qx, qy, qz, qw), (wx, wy, wz) = config, w
+            turning = 0.5 * np.array([qw * wx + qy * wz - qz * wy, qw * wy + qz * wx - qx * wz,
+                                      qw * wz + qx * wy - qy * wx, -(qx * wx + qy * wy + qz * wz)])
+            return np.concatenate([turning, pn._engine(config, w)[0], [pn.applied @ w if case.driven else 0.0]])
+
+        return rhs, np.concatenate([*pn._state(0.0, q0, v0), [0.0]])
+
+    # the book's coordinates of these scenes are the free joints' positions
+    coord = np.array([idx[0] for _, _, idx in pn.layout], dtype=int)
+    coord_v = np.array([joint.idx_v for _, joint, _ in pn.layout], dtype=int)
+    driven_v = np.array([joint.idx_v for joint, _ in pn.driven], dtype=int)
+    start, rate, acc = np.array([motion for _, motion in pn.driven]).reshape(-1, 3).T
+
+    def rhs(t, y):
+        position, velocity = np.empty(m.nv), np.empty(m.nv)
+        position[coord_v], velocity[coord_v] = y[coord], y[n + coord]
+        position[driven_v], velocity[driven_v] = start + rate * t + 0.5 * acc * t**2, rate + acc * t
+        accelerations, tau = pn._engine(pin.integrate(m, pn.neutral, position), velocity)
+        power = tau[driven_v] @ velocity[driven_v] + pn.applied @ velocity if case.driven else 0.0
+        out = np.empty(2 * n + 1)
+        out[:n], out[n + coord], out[-1] = y[n:2 * n], accelerations[coord_v], power
+        return out
+
+    return rhs, np.concatenate([q0, v0, [0.0]])
+
+
+def _equation_rows(case, repeat):
+    """The reference and the book: state by state, and many states as columns where the code allows."""
+    sample = case.sample_states()
+    many = sample * 100
+    columns = (np.array([t for t, _, _ in many]), np.array([q for _, q, _ in many]).T,
+               np.array([v for _, _, v in many]).T)
+    rows = []
+    for source in ("reference", "book"):
+        model = case.model(source)
+        loop = "accelerations per state"
+        entries = [(loop, len(sample), _timed(lambda: [model.accelerations(t, q, v) for t, q, v in sample]), "")]
+        if case.coords and _takes_columns(model, many, columns):
+            entries.append((f"accelerations, {len(many)} in one call", len(many),
+                            _timed(lambda: model.accelerations(*columns)), loop))
+        rows += _measure(source, entries, repeat)
+    return rows
+
+
+def _takes_columns(model, states, columns):
+    """Whether `model.accelerations` of states given as columns equals its state-by-state values."""
+    try:
+        with np.errstate(all="raise"):
+            at_once = np.asarray(model.accelerations(*columns), dtype=float)
+    except (ValueError, TypeError, IndexError, FloatingPointError):
+        return False
+    one_by_one = np.array([model.accelerations(t, q, v) for t, q, v in states[:100]]).T
+    return at_once.shape == (len(one_by_one), len(states)) and np.allclose(
+        at_once[:, :100], one_by_one, rtol=1e-12, atol=1e-12 * np.max(np.abs(one_by_one)))

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from dyncheck import schema
+
 CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 SOURCES = ("reference", "book", "mujoco", "pinocchio")
 # Scene values are parsed from decimal text by each loader; they must equal case.toml's to
@@ -21,8 +23,9 @@ def case_names():
 
 def load_case(name, **overrides):
     """The case `name` with parameters overridden by name; ValueError names what is wrong."""
-    if name not in case_names():
-        raise ValueError(f"unknown case '{name}'; known cases: {', '.join(case_names())}")
+    known = case_names()
+    if name not in known:
+        raise ValueError(f"unknown case '{name}'{schema.suggest(name, known)}; known cases: {', '.join(known)}")
     return Case(CASES_DIR / name, overrides)
 
 
@@ -30,11 +33,8 @@ class Case:
     def __init__(self, folder, overrides=None):
         self.folder = Path(folder)
         self.file = self.folder / "case.toml"
-        try:
-            with open(self.file, "rb") as f:
-                self.spec = tomllib.load(f)
-        except tomllib.TOMLDecodeError as error:
-            raise ValueError(f"{self.file}: not valid TOML: {error}") from error
+        self.spec = self._read()
+        schema.validate(self.spec, self.file)
         self.name = self.spec["name"]
         self.section = self.spec["section"]
         self.title = self.spec["title"]
@@ -45,34 +45,51 @@ class Case:
         self.overrides = {}
         for key, value in (overrides or {}).items():
             if key not in self.defaults:
-                raise ValueError(f"{self.file}: case '{self.name}' has no parameter '{key}'; "
-                                 f"its parameters are {', '.join(self.defaults)}")
+                raise ValueError(f"{self.file}: case '{self.name}' has no parameter '{key}'"
+                                 f"{schema.suggest(key, self.defaults)}; its parameters are {', '.join(self.defaults)}")
             try:
-                value = float(value)
+                number = float(value)
             except (TypeError, ValueError):
-                raise ValueError(f"parameter {key} of case '{self.name}': '{value}' is not a number") from None
-            if not math.isfinite(value):
-                raise ValueError(f"parameter {key} of case '{self.name}': {value} is not finite")
-            self.overrides[key] = value
+                raise ValueError(f"{self.file}: override {key} = {value!r} is not a number") from None
+            if not math.isfinite(number):
+                raise ValueError(f"{self.file}: override {key} = {number!r} is not finite")
+            self.overrides[key] = number
         self.params = {**self.defaults, **self.overrides}
+        schema.check_params(self.spec, self.params, self.overrides, self.file)
+        schema.check_values(self.spec, self.file, self.value)
         self.findings = self.spec.get("findings", [])
         self._models = {}
 
+    def _read(self):
+        try:
+            with open(self.file, "rb") as f:
+                return tomllib.load(f)
+        except FileNotFoundError:
+            raise ValueError(f"{self.file}: no such file") from None
+        except OSError as error:
+            raise ValueError(f"{self.file}: cannot read it: {error.strerror}") from None
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+            raise ValueError(f"{self.file}: not valid TOML: {error}") from None
+        except RecursionError:  # tomllib recurses once per level of nested arrays and tables
+            raise ValueError(f"{self.file}: not valid TOML: nested too deeply") from None
+
     # -- numbers that may be expressions of the parameters --------------------
-    def value(self, x):
-        """A number from case.toml: a float, or an expression of the parameters and pi."""
+    def value(self, x, field=None):
+        """A number from case.toml: a float, or an expression of the parameters and pi; `field`, where
+        it is in the file, for the message."""
         try:
             if isinstance(x, str):
                 return float(eval(x, {"__builtins__": {}}, {**self.params, "pi": math.pi}))
             return float(x)
         except Exception as error:  # any mistake in the expression is the case file's
-            raise ValueError(f"{self.file}: cannot evaluate {x!r}: {error}") from None
+            raise ValueError(f"{self.file}: cannot evaluate {x!r}: {error}"
+                             + (f" (at {field})" if field else "")) from None
 
     @cached_property
     def initial(self):
         ic = self.spec["initial"]
         return (np.array([self.value(x) for x in ic["q"]]), np.array([self.value(x) for x in ic["v"]]),
-                float(ic["t_end"]))
+                self.value(ic["t_end"]))
 
     def sample_states(self):
         """The pointwise check's seeded random states: a list of (t, q, v)."""
@@ -138,6 +155,8 @@ class Case:
         else:
             from engines.pinocchio_adapter import PinocchioModel as Model
             path = self.folder / "scene.urdf"
+        if not path.is_file():
+            raise ValueError(f"{path}: no such scene file (case '{self.name}' needs it for {source})")
         bindings = self.spec["scene"].get("bindings", {})
         # The scene file must already hold the defaults; write what it cannot hold, and overrides.
         # A location that `depends` on other parameters (an inertia about the origin depends on the

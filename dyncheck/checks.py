@@ -1,6 +1,7 @@
 """Checks: each yields rows (check, quantity, sources, error, tolerance, status, finding)."""
 
 import itertools
+import math
 import time
 
 import numpy as np
@@ -10,6 +11,7 @@ from dyncheck.expressions import evaluate as evaluate_expression
 from dyncheck.expressions import namespace
 from dyncheck.localise import localise
 from dyncheck.simulate import Unstable, simulate
+from dyncheck.stability import agreement_horizon
 
 EPS = np.finfo(float).eps
 ROUNDING_FLOOR = 1e3 * EPS  # rounding over a run: a thousand ulps of the quantity's scale
@@ -22,9 +24,11 @@ def row(check, quantity, sources, error, tolerance, detail=""):
             "finding": None, "detail": detail}
 
 
-def unstable_row(check, quantity, sources, failure):
+def unstable_row(check, quantity, sources, failure, status="unstable"):
+    """A check that has no error to show: an integration blew up (`failure` says when, which method,
+    which step), or (status "fail") the check could not be made, and `failure` says why."""
     return {"check": check, "quantity": quantity, "sources": sources, "error": None, "tolerance": None,
-            "status": "unstable", "finding": None, "detail": str(failure)}
+            "status": status, "finding": None, "detail": str(failure)}
 
 
 # -- pointwise ------------------------------------------------------------------
@@ -56,10 +60,16 @@ def relative_error(x, y, scale=None):
 
 def quantity_scales(case, a, b):
     """Scales for quantities that may vanish identically, so that they are not judged by rounding
-    noise: a point's kinematics component-wise relative to the vector's largest magnitude (for an
-    acceleration at least g); the drive power (zero when nothing moves the base) relative to at
-    least the energy per second."""
+    noise: the reactions relative to the largest of them (at least the weight); a point's kinematics component-wise
+    relative to the vector's largest magnitude (for an acceleration at least g); the drive power
+    (zero when nothing moves the base) relative to at least the energy per second."""
     scales = {}
+    # The reactions are components of one force: each is judged against the largest of them and at
+    # least the case's force scale (the weight), so that a component that vanishes identically (the
+    # piston's F2 at constant rates, R without spin) is not judged by rounding noise relative to zero.
+    forces = max([case.value(case.tolerance["pointwise"]["force_scale"])]
+                 + [np.max(np.abs(s[name])) for s in (a, b) for name in case.reaction_names if name in s])
+    scales.update(dict.fromkeys([name for name in case.reaction_names if name in a], forces))
     if "drive_power" in a:
         energy = max(np.max(np.abs(a["energy"])), np.max(np.abs(b["energy"])))
         scales["drive_power"] = max(np.max(np.abs(a["drive_power"])), np.max(np.abs(b["drive_power"])),
@@ -90,6 +100,46 @@ def pointwise(case):
             rows.append(row("pointwise", quantity, f"{a} vs {b}", error, tolerance,
                             f"{len(states)} random states"))
     return rows, {"states": states, "values": values}
+
+
+# -- random parameters ------------------------------------------------------------
+
+ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
+
+
+def parameter_sets(case):
+    """Seeded random parameter sets over [sample.params.ranges]; the user's overrides stay fixed."""
+    spec = case.spec["sample"].get("params")
+    if not spec:
+        return []
+    rng = np.random.default_rng(spec["seed"])
+    ranges = {name: (case.value(lo), case.value(hi)) for name, (lo, hi) in spec["ranges"].items()
+              if name not in case.overrides}
+    return [{**case.overrides, **{name: float(rng.uniform(lo, hi)) for name, (lo, hi) in ranges.items()}}
+            for _ in range(spec["sets"])]
+
+
+def random_parameters(case):
+    """Reference and both engines at each random parameter set, at that set's first `states` random
+    states: one row per comparison, the worst quantity over every set."""
+    sets = parameter_sets(case)
+    if not sets:
+        return []
+    count = case.spec["sample"]["params"]["states"]
+    worst = {}  # comparison -> (error, quantity, set)
+    for params in sets:
+        other = type(case)(case.folder, params)
+        states = other.sample_states()[:count]
+        values = {source: evaluate(other, source, states) for source in ENGINES}
+        for a, b in itertools.combinations(ENGINES, 2):
+            for quantity, error in compare(other, values[a], values[b]).items():
+                if error >= worst.get((a, b), (-1.0,))[0]:
+                    worst[(a, b)] = (error, quantity, params)
+    seed = case.spec["sample"]["params"]["seed"]
+    return [row("random parameters", quantity, f"{a} vs {b}", error, case.tolerance["pointwise"]["value"],
+                f"{len(sets)} parameter sets (seed {seed}) x {count} states; worst at "
+                + ", ".join(f"{k} = {v:.4g}" for k, v in params.items()))
+            for (a, b), (error, quantity, params) in worst.items()]
 
 
 # -- trajectories -----------------------------------------------------------------
@@ -133,9 +183,15 @@ def state_columns(case):
 
 
 def trajectory(case, runs):
-    """Each source's trajectory against the tight reference solution."""
-    tight = runs["reference"][1]
-    tight_error = error_estimate(*runs["reference"]) / 100  # 100x tighter rtol, order 8: >= 100x better
+    """Each source's trajectory against the tight reference solution, up to the agreement horizon
+    (where the motion's sensitivity would make a comparison test chaos rather than the equations)."""
+    if isinstance(runs["reference"], Unstable):  # nothing to compare with
+        return [unstable_row("trajectory", c, f"{source} vs tight reference", runs["reference"])
+                for source in ("book", "pinocchio", "mujoco") for c in state_columns(case)]
+    horizon, why = agreement_horizon(case)
+    within = slice(None, horizon)
+    tight = runs["reference"][1].loc[within]
+    tight_error = error_estimate(*runs["reference"]).loc[within] / 100  # 100x tighter rtol, order 8: >= 100x better
     safety = case.tolerance["trajectory"]["safety"]
     rows = []
     for source in ("book", "pinocchio", "mujoco"):
@@ -143,16 +199,17 @@ def trajectory(case, runs):
         if isinstance(runs[source], Unstable):
             rows += [unstable_row("trajectory", c, label, runs[source]) for c in state_columns(case)]
             continue
-        run, twin = runs[source]
+        attrs = runs[source][0].attrs
+        run, twin = (r.loc[within] for r in runs[source])
         estimate = error_estimate(run, twin)
-        method = run.attrs["method"] + (f" dt={run.attrs['dt']:g}" if run.attrs["dt"] else
-                                        f" rtol={run.attrs['rtol']:g}")
+        method = attrs["method"] + (f" dt={attrs['dt']:g}" if attrs["dt"] else f" rtol={attrs['rtol']:g}")
         for column in state_columns(case):
-            scale = tight[column].abs().max()
+            scale = tight[column].abs().max() or 1.0  # a coordinate at rest: its error in SI units
             error = (run[column] - tight[column]).abs().max() / scale
             allowed = safety * (estimate[column].max() + tight_error[column].max()) / scale + ROUNDING_FLOOR
             rows.append(row("trajectory", column, label, error, allowed,
-                            f"{method}, max over {case.initial[2]:g} s"))
+                            f"{method}, max over {min(horizon, case.initial[2]):g} s"
+                            + (f"; {why['sentence']}" if math.isfinite(horizon) else "")))
     if not isinstance(runs["mujoco"], Unstable) and case.scene["driven"]:
         # The armature holds the driven rates while MuJoCo steps; the issue asks ~1e-12.
         rows.append(row("trajectory", "driven rate", "mujoco vs prescribed",
@@ -176,7 +233,7 @@ def energy(case, runs):
             rows.append(unstable_row("energy", quantity, label, runs[source]))
             continue
         run, twin = runs[source]
-        scale = max(run["energy"].abs().max(), run["work"].abs().max())
+        scale = max(run["energy"].abs().max(), run["work"].abs().max()) or 1.0  # at rest: in joules
         residual = energy_residual(run)
         estimate = (residual - energy_residual(twin)).abs().max()
         if run.attrs["method"] == "mujoco:RK4":
@@ -228,8 +285,14 @@ def run_case(case, progress=None):
     """All checks of a case: rows and the data behind them (for the report)."""
     start = time.perf_counter()
     rows, sample = pointwise(case)
+    rows += random_parameters(case)
     runs = run_sources(case)
     rows += trajectory(case, runs) + energy(case, runs)
+    from dyncheck.work_precision import convergence  # it builds on this module's rows
+    try:
+        rows += convergence(case)
+    except ValueError as error:  # e.g. overrides that leave nothing to converge (no motion, omega = 0)
+        rows.append(unstable_row("convergence", "every method", "reference", f"not measured: {error}", "fail"))
     program_rows, program_runs = program_checks(case, sample)
     rows += program_rows + data_checks(case)
     apply_findings(case, rows)
@@ -255,7 +318,6 @@ def program_checks(case, sample):
     program = case.model("program")
     states, right = sample["states"], sample["values"]["reference"]  # the pointwise check's
     tolerance = case.tolerance["pointwise"]["value"]
-    reference = case.model("reference")
     rows = []
     acc = np.array([program.accelerations(t, q, v) for t, q, v in states])
     reactions = [program.reactions(t, q, v) for t, q, v in states]
@@ -264,7 +326,18 @@ def program_checks(case, sample):
     for quantity, values in mine.items():
         rows.append(row("program", quantity, "program vs reference", relative_error(values, right[quantity]),
                         tolerance, f"{len(states)} random states"))
+    try:
+        run_rows, runs = program_run_checks(case, program)
+    except (Unstable, FloatingPointError) as failure:  # the listing's integrator, or its twins, blew up
+        return rows + [unstable_row("program", column, "program run", failure) for column in state_columns(case)], {}
+    return rows + run_rows, runs
 
+
+def program_run_checks(case, program):
+    """The program's run against the book's equations run the same way, the tight reference solution
+    and the book's figures (see program_checks)."""
+    rows = []
+    reference = case.model("reference")
     q0, v0, _ = case.initial
     listing = program.run(q0, v0)
     every = max(1, int(round(case.integration["output_step"] / program.dt)))
@@ -282,7 +355,7 @@ def program_checks(case, sample):
     label = f"{program.integrator}, dt = {program.dt:.4g} s, {t_end:.4g} s"
     for column in state_columns(case):
         x = listing[column].to_numpy()
-        scale = np.max(np.abs(tight[column]))
+        scale = np.max(np.abs(tight[column])) or 1.0  # a coordinate at rest: its error in SI units
         rounding = np.max(np.abs(twin_runs["same"][column] - twin_runs["nudged"][column])) / scale
         rows.append(row("program", column, "program vs book equations, same integrator",
                         np.max(np.abs(x - twin_runs["same"][column].to_numpy())) / scale,
@@ -306,7 +379,7 @@ def finding_effect(res, finding):
     """What a finding changes in the book's own results: for an error of its equations, its reactions
     in newtons and its energy balance in joules along its run; otherwise the case file's `effect`."""
     case, runs = res["case"], res["runs"]
-    if "book" not in finding["sources"] or not isinstance(runs.get("book"), tuple):
+    if "book" not in finding["sources"] or not all(isinstance(runs.get(s), tuple) for s in ("book", "reference")):
         return " ".join(finding.get("effect", "").split())
     book, tight = runs["book"][0], runs["reference"][1]
     parts = [f"the book's {q} is off by up to {(book[q] - tight[q]).abs().max():.3g} N"

@@ -6,10 +6,13 @@ import sys
 import time
 from pathlib import Path
 
+import mujoco
 import pandas as pd
+from tqdm import tqdm
 
 from dyncheck.case import SOURCES, case_names, load_case
 from dyncheck.checks import findings_of, run_case
+from dyncheck.schema import suggest
 
 OK_STATUSES = ("pass", "finding")
 TABLE_COLUMNS = ["check", "quantity", "sources", "error", "tolerance", "status"]
@@ -31,20 +34,25 @@ def main(argv=None):
     run.add_argument("--json", type=Path, metavar="PATH", help="also write the results as JSON")
     report.add_argument("--out", type=Path, default=Path("reports"), metavar="DIR",
                         help="where to write the reports (default: reports)")
+    report.add_argument("--no-studies", action="store_true",
+                        help="leave out the work-precision and stability studies (minutes) from the pages")
     args = parser.parse_args(argv)
+    # MuJoCo prints a line for each run that blows up, and the studies blow runs up on purpose: each
+    # is reported instead as an unstable row, from the warnings MuJoCo counts in its data.
+    mujoco.set_mju_user_warning(lambda message: None)
     try:
         if args.command == "list":
             return list_cases()
         cases = select_cases(args.cases, args.set)
-    except ValueError as error:
-        print(f"dyncheck: error: {error}", file=sys.stderr)
+    except ValueError as error:  # on one line: the engines' parse errors span several
+        print(f"dyncheck: error: {' '.join(str(error).split())}", file=sys.stderr)
         return 2
     if args.command == "bench":
         from dyncheck.bench import bench_case
         table = pd.concat([bench_case(case) for case in cases], ignore_index=True)
         print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
         return 0
-    results = [run_case(case) for case in cases]
+    results = [run_case(case) for case in tqdm(cases, desc="checks", unit="case", disable=None, leave=False)]
     if args.command == "run":
         print_results(results)
         if args.json:
@@ -52,10 +60,23 @@ def main(argv=None):
     else:
         from dyncheck.report import write_reports
         start = time.perf_counter()
+        for res in results:
+            res["studies"] = None if args.no_studies else study_case(res["case"])
         written = write_reports(results, args.out)
-        print(f"wrote {len(written)} files to {args.out}/ in {time.perf_counter() - start:.1f} s")
+        print(f"studies and pages: wrote {len(written)} files to {args.out}/ in {time.perf_counter() - start:.1f} s")
         print_results(results, table=False)
     return 0 if all(r["status"] in OK_STATUSES for res in results for r in res["rows"]) else 1
+
+
+def study_case(case):
+    """The case's work-precision sweep and stability studies, with a progress bar (they take minutes)."""
+    from dyncheck import stability, work_precision
+    with tqdm(desc=f"studies of {case.name}", unit="run", disable=None, leave=False) as bar:
+        def progress(text):
+            bar.set_postfix_str(text[-60:], refresh=False)
+            bar.update()
+        return {"work_precision": work_precision.sweep(case, progress),
+                "stability": stability.studies(case, progress)}
 
 
 def list_cases():
@@ -80,14 +101,12 @@ def parse_overrides(pairs):
 
 def select_cases(names, set_pairs):
     names = names or case_names()
-    unknown = [n for n in names if n not in case_names()]
-    if unknown:
-        raise ValueError(f"unknown case '{unknown[0]}'; known cases: {', '.join(case_names())}")
+    defaults = {name: load_case(name).defaults for name in names}  # an unknown case name is named here
     overrides = parse_overrides(set_pairs)
-    defaults = {name: load_case(name).defaults for name in names}
     for key in overrides:
         if not any(key in d for d in defaults.values()):
-            raise ValueError(f"--set {key}: no selected case has a parameter '{key}' "
+            known = sorted({p for d in defaults.values() for p in d})
+            raise ValueError(f"--set {key}: no selected case has a parameter '{key}'{suggest(key, known)} "
                              f"(cases: {', '.join(names)})")
     cases = [load_case(name, **{k: v for k, v in overrides.items() if k in defaults[name]}) for name in names]
     for case in cases:  # load every model now: a scene that disagrees with its case is bad input

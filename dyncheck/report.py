@@ -16,9 +16,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from dyncheck.checks import energy_residual, findings_of, state_columns  # noqa: E402
+from dyncheck.checks import ENGINES, energy_residual, findings_of, state_columns  # noqa: E402
 from dyncheck.cli import OK_STATUSES, format_rows, to_json  # noqa: E402
 from dyncheck.expressions import evaluate, namespace  # noqa: E402
+from dyncheck import stability, work_precision  # noqa: E402
 
 STYLE = {  # source -> line style, so that coinciding curves stay visible
     "tight reference": dict(color="black", lw=2.6, alpha=0.35),
@@ -27,7 +28,6 @@ STYLE = {  # source -> line style, so that coinciding curves stay visible
     "mujoco": dict(color="tab:green", lw=1.0, ls="-."),
     "reference": dict(color="tab:orange", lw=1.0, ls=(0, (1, 3))),
 }
-ENGINES = ("reference", "mujoco", "pinocchio")
 
 
 def write_reports(results, out):
@@ -45,7 +45,9 @@ def write_reports(results, out):
         written.append(write_errata(tmp, out))
         for folder in ("figures", "data"):
             (out / folder).mkdir(exist_ok=True)
-        for rel in written:
+        # Figures and data first, the pages that link them after, the index last: an interruption
+        # while moving leaves no page pointing at a figure that is not there.
+        for rel in sorted(written, key=lambda rel: (rel.endswith(".md"), rel == "index.md")):
             os.replace(tmp / rel, out / rel)
     return written
 
@@ -54,7 +56,7 @@ def write_summary(res, tmp):
     """data/<case>.json: the case's results (the schema of `dyncheck run --json`) for the index."""
     rows = res["rows"]
     summary = {**to_json([res])["cases"][0], "title": res["case"].title, "status": status_of(rows),
-               "worst_engine_error": worst_engine_error(rows)}
+               "worst_engine_error": worst_engine_error(rows), "random": random_tried(res)}
     rel = f"data/{res['case'].name}.json"
     (tmp / rel).write_text(json.dumps(summary, indent=1) + "\n")
     return rel
@@ -257,6 +259,26 @@ def worst_engine_error(rows):
     return max(errors, default=float("nan"))
 
 
+def random_tried(res):
+    """What the random pointwise checks tried: states at the case's parameters, parameter sets and
+    states at each, their seeds, and whether reference and both engines agreed at all of them."""
+    case, rows = res["case"], res["rows"]
+    sample, params = case.spec["sample"], case.spec["sample"].get("params", {})
+    engine_rows = [r for r in rows if r["check"] in ("pointwise", "random parameters")
+                   and all(s in ENGINES for s in r["sources"].split(" vs "))]
+    return {"states": sample["count"], "seed": sample["seed"], "parameter_sets": params.get("sets", 0),
+            "states_per_set": params.get("states", 0), "parameter_seed": params.get("seed"),
+            "agreed": all(r["status"] == "pass" for r in engine_rows)}
+
+
+def random_sentence(tried):
+    text = f"{tried['states']} random states at these parameters (seed {tried['seed']})"
+    if tried["parameter_sets"]:
+        text += (f" and {tried['parameter_sets']} random parameter sets (seed {tried['parameter_seed']}) over the"
+                 f" ranges of the case file, {tried['states_per_set']} states each")
+    return text
+
+
 def markdown_table(frame):
     return frame.to_markdown(index=False)
 
@@ -308,8 +330,12 @@ def write_case_page(res, tmp):
         del plots["coordinates"], plots["errors"]
     if res["program"] and case.spec.get("program", {}).get("plots"):
         plots["program"] = lambda path: figure_program(res, path)
-    extras = case.spec["report"].get("figures", {})
-    spaces = report_namespaces(res) if extras or case.spec["report"].get("values") else {}
+    along_runs = isinstance(res["runs"]["reference"], tuple)
+    if not along_runs:  # the reference run blew up (see the unstable rows): nothing to draw along it
+        plots = {kind: draw for kind, draw in plots.items() if kind in ("pointwise", "program")}
+    extras = case.spec["report"].get("figures", {}) if along_runs else {}
+    values = case.spec["report"].get("values") if along_runs else None
+    spaces = report_namespaces(res) if extras or values else {}
     for key, item in extras.items():
         plots[key] = lambda path, item=item: figure_extra(res, spaces, item, path)
     figures = {}
@@ -345,7 +371,7 @@ def write_case_page(res, tmp):
         "",
         " ".join(case.spec["summary"].split()),
         "",
-        f"![scene]({figures['scene']})",
+        f"![scene]({figures['scene']})" if "scene" in figures else "",
         "",
         "## Parameters",
         "",
@@ -362,8 +388,10 @@ def write_case_page(res, tmp):
         scene_table(case),
         "",
         *(["## Results", "", "Computed along each source's run of the book's initial conditions.", "",
-           values_table(res, spaces), ""] if case.spec["report"].get("values") else []),
+           values_table(res, spaces), ""] if values else []),
         "## Checks",
+        "",
+        f"Random states tried: {random_sentence(random_tried(res))}.",
         "",
         "Errors are relative: pointwise to the largest magnitude of the quantity over the random states,"
         " trajectories to the largest magnitude of the coordinate over the run, energy to the largest"
@@ -391,7 +419,8 @@ def write_case_page(res, tmp):
                       + (f"  {f['effect']}" if f["effect"] else ""), "",
                       f"*Localised automatically* (edits of the printed expression searched until one agrees"
                       f" with the engines): {f['localised']}.", "", f["explanation"], ""]
-    lines += [
+    sections, study_files = study_sections(res, tmp)
+    lines += sections + [
         "## Figures",
         "",
         *[f"![{kind}]({path})\n" for kind, path in figures.items() if kind != "scene"],
@@ -405,7 +434,64 @@ def write_case_page(res, tmp):
               f"All checks of this case took {res['wall']:.1f} s.", ""]
     page = f"{name}.md"
     (tmp / page).write_text("\n".join(lines))
-    return [page] + list(figures.values())
+    return [page] + list(figures.values()) + study_files
+
+
+def study_sections(res, tmp):
+    """The page's speed-against-accuracy, convergence and stability sections, and the files they use.
+    res["studies"] is None when `dyncheck report --no-studies` left them out."""
+    case, studies = res["case"], res.get("studies")
+    convergence = [r for r in res["rows"] if r["check"] == "convergence"]
+    lines, files = ["## Speed against accuracy", ""], []
+    if studies is None:
+        lines += ["Not run this time (`dyncheck report --no-studies`).", ""]
+    elif studies["work_precision"].empty:
+        lines += [work_precision.NO_SWEEP, ""]
+    else:
+        frame = studies["work_precision"]
+        csv, chart = f"data/{case.name}_work_precision.csv", f"figures/{case.name}_work_precision.png"
+        work_precision.write_csv(frame, tmp / csv)
+        work_precision.figure(frame, case, tmp / chart)
+        files += [csv, chart]
+        reference = frame.attrs["reference"]
+        unstable = frame[frame["status"] == "unstable"]
+        best = work_precision.cheapest(frame)
+        best["level"] = best["level"].map(lambda x: f"{x:.0e}")
+        for column in ("wall", "runner_up_wall", "error"):
+            best[column] = best[column].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")
+        lines += [f"Every method from the book's initial conditions over {reference['t_end']:g} s, against the"
+                  f" reference solution: {reference['label']}.  Error is the largest deviation of any"
+                  " coordinate or rate, relative to its largest magnitude; the rows behind the chart are in"
+                  f" [{csv}]({csv}).  {work_precision.COST_NOTE}", "",
+                  f"![work-precision]({chart})", "",
+                  "Which method is cheapest at each accuracy level (relative trajectory error):", "",
+                  markdown_table(best.rename(columns={"wall": "wall [s]", "runner_up": "runner-up",
+                                                      "runner_up_wall": "runner-up wall [s]"})), ""]
+        if len(unstable):
+            lines += ["Unstable (blew up; not drawn): " + "; ".join(
+                f"{work_precision.point_label(r)}: {r['detail']}" for _, r in unstable.iterrows()) + ".", ""]
+    lines += ["## Convergence", ""]
+    if convergence:
+        lines += ["Observed order of each fixed-step method, from runs at h, h/2, h/4 (checks; tolerance from"
+                  " the next term of the error expansion, see the case file):", "",
+                  markdown_table(pd.DataFrame([{"method": r["quantity"], "source": r["sources"],
+                                                "|observed - expected|": f"{r['error']:.3f}" if r["error"] is not None else "-",
+                                                "tolerance": f"{r['tolerance']:.3f}" if r["tolerance"] is not None else "-",
+                                                "status": r["status"], "detail": r["detail"]} for r in convergence])), ""]
+    else:
+        lines += [work_precision.NO_SWEEP if not case.coords else "No fixed-step method is checked for this case.", ""]
+    if studies and studies["stability"]:
+        lines += ["## Stability: where methods fail", ""]
+        for result in studies["stability"]:
+            chart = f"figures/{case.name}_{result['study']}.png"
+            stability.figure(result, tmp / chart)
+            files.append(chart)
+            lines += [f"### {result['title']}", "", *[f"- {sentence}" for sentence in result["findings"]], "",
+                      f"![{result['study']}]({chart})", "",
+                      f"*How:* {result['why']} (this study took {result['wall']:.0f} s.)", "",
+                      f"<details><summary>The numbers ({len(result['table'])} rows)</summary>", "",
+                      markdown_table(result["table"]), "", "</details>", ""]
+    return lines, files
 
 
 def _state(coords, q, v):
@@ -457,20 +543,28 @@ def write_errata(tmp, out):
 
 def write_index(tmp, out):
     """index.md over every case with results in `out` (kept) or `tmp` (this run's)."""
+    cases = summaries(tmp, out)
     rows = []
-    for case in summaries(tmp, out):
+    for case in cases:
         counts = pd.Series([c["status"] for c in case["checks"]]).value_counts()
         rows.append({
             "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"], "title": case["title"],
             "status": case["status"], "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
             "worst engine error": f"{case['worst_engine_error']:.1e}",
             "findings": ", ".join(f"{f['id']} ({f['error']:.2g})" for f in case["findings"]) or "none"})
+    tried = [c["random"] for c in cases]
+    states = sum(t["states"] + t["parameter_sets"] * t["states_per_set"] for t in tried)
+    disagreed = [c["case"] for c in cases if not c["random"]["agreed"]]
     lines = ["# dyncheck reports", "",
              "The worked examples of I. F. Santos, *Dynamics of Machines*, ch. 1, checked against MuJoCo"
              " and Pinocchio.  *Worst engine error* is the largest pointwise relative error among"
              " `reference`, MuJoCo and Pinocchio (accelerations, reactions, energy, drive power);"
              " a finding is an error of the book, with the largest relative error it causes: all of them"
              " are in the [errata](errata.md).", "",
-             markdown_table(pd.DataFrame(rows)), ""]
+             markdown_table(pd.DataFrame(rows)), "",
+             f"The last run tried {sum(t['parameter_sets'] for t in tried)} random parameter sets besides the book's"
+             f" and {states} random states in all ({len(cases)} cases; seeds on each case page): reference, MuJoCo"
+             " and Pinocchio " + (f"disagreed in {', '.join(disagreed)}." if disagreed else
+                                  "agreed at every one of them within the pointwise tolerance."), ""]
     (tmp / "index.md").write_text("\n".join(lines))
     return "index.md"

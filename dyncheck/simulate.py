@@ -121,14 +121,17 @@ def _mujoco(model, q0, v0, grid, method, dt, work):
     # to their initial values, silently for a rollout: a clock that stops advancing by dt marks it.
     finite = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(v), axis=1)
     advancing = np.concatenate([[True], np.abs(np.diff(t) - dt) < dt / 2])
+    warned = "; ".join(f"MuJoCo warning {name} ({number} time{'s' if number > 1 else ''}, last with info {info})"
+                       for name, (number, info) in run["warnings"].items())
     if not (finite & advancing).all():
         step = int(np.argmin(finite & advancing))
-        raise Unstable(method, step * dt, step, "non-finite or huge state; MuJoCo reset the simulation"
+        raise Unstable(method, step * dt, step, (warned or "non-finite or huge state") + "; MuJoCo reset the simulation"
                        if finite[step] else "state is not finite")
+    if warned:  # a warning without a reset: the run is not to be trusted either
+        raise Unstable(method, grid[-1], run["steps"], warned)
     # Work of the prescribed motions: drive power at every step, Simpson's rule (error ~ dt^4).
     if work:
-        power = np.array([model.drive_power(ti, qi, vi) for ti, qi, vi in zip(t, q, v)])
-        work = cumulative_simpson(power, x=t, initial=0.0)
+        work = cumulative_simpson(model.drive_powers(t, q, v), x=t, initial=0.0)
     else:
         work = np.zeros(len(t))
     every = int(round((grid[1] - grid[0]) / dt))

@@ -7,59 +7,67 @@ in its own (spinning) frame, w = J(angles) angles' with
     w = T_z(spin) (nutation', precession' sin(nutation), precession' cos(nutation) + spin'),
 
 the book's B2 vector turned into the spinning frame.  J is singular where sin(nutation) = 0.
+
+Every function takes one state, angles of shape (3,), or many, shape (N, 3), and answers in kind:
+the conversions of a whole trajectory are one call each.
 """
 
 import numpy as np
 
 
+def _components(x):
+    """The three components of one state, as scalars, or of many, as columns."""
+    return np.asarray(x).T
+
+
+def _stack(a, b, c):
+    """The inverse of `_components`."""
+    return np.array([a, b, c]).T
+
+
 def quaternion(angles):
-    """(w, x, y, z) of Rz(precession) Rx(nutation) Rz(spin)."""
-    phi, theta, spin = angles
-    qz1 = np.array([np.cos(phi / 2), 0.0, 0.0, np.sin(phi / 2)])
-    qx = np.array([np.cos(theta / 2), np.sin(theta / 2), 0.0, 0.0])
-    qz2 = np.array([np.cos(spin / 2), 0.0, 0.0, np.sin(spin / 2)])
-    return _multiply(_multiply(qz1, qx), qz2)
+    """(w, x, y, z) of Rz(precession) Rx(nutation) Rz(spin): the product qz qx qz multiplied out."""
+    half = np.asarray(angles) / 2
+    (sa, sb, sc), (ca, cb, cc) = _components(np.sin(half)), _components(np.cos(half))
+    return np.array([ca * cb * cc - sa * cb * sc,
+                     ca * sb * cc + sa * sb * sc,
+                     sa * sb * cc - ca * sb * sc,
+                     ca * cb * sc + sa * cb * cc]).T
 
 
-def _multiply(a, b):
-    w1, x1, y1, z1 = a
-    w2, x2, y2, z2 = b
-    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-                     w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
-
-
-def jacobian(angles):
-    """J with w_local = J angles'; columns: precession, nutation, spin."""
-    _, theta, spin = angles
-    st, ct, ss, cs = np.sin(theta), np.cos(theta), np.sin(spin), np.cos(spin)
-    return np.array([[ss * st, cs, 0.0],
-                     [cs * st, -ss, 0.0],
-                     [ct, 0.0, 1.0]])
+def _trig(angles):
+    """sin and cos of nutation and spin."""
+    (_, st, ss), (_, ct, cs) = _components(np.sin(angles)), _components(np.cos(angles))
+    return st, ct, ss, cs
 
 
 def angular_velocity(angles, rates):
-    return jacobian(angles) @ rates
+    """w = J(angles) angles'."""
+    st, ct, ss, cs = _trig(angles)
+    dphi, dtheta, dspin = _components(rates)
+    return _stack(ss * st * dphi + cs * dtheta, cs * st * dphi - ss * dtheta, ct * dphi + dspin)
+
+
+def euler_rates(angles, w):
+    """angles' = J(angles)^-1 w: the rows of J^-1 multiplied out."""
+    st, ct, ss, cs = _trig(angles)
+    w0, w1, w2 = _components(w)
+    dphi = (ss * w0 + cs * w1) / st
+    return _stack(dphi, cs * w0 - ss * w1, w2 - ct * dphi)
 
 
 def bias(angles, rates):
-    """J' angles': the part of w_local' that the Euler-angle accelerations do not give."""
-    _, theta, spin = angles
-    dphi, dtheta, dspin = rates
-    st, ct, ss, cs = np.sin(theta), np.cos(theta), np.sin(spin), np.cos(spin)
-    return np.array([-ss * dspin * dtheta + (cs * dspin * st + ss * ct * dtheta) * dphi,
-                     -cs * dspin * dtheta + (-ss * dspin * st + cs * ct * dtheta) * dphi,
-                     -st * dtheta * dphi])
+    """J' angles': the part of w' that the Euler-angle accelerations do not give."""
+    st, ct, ss, cs = _trig(angles)
+    dphi, dtheta, dspin = _components(rates)
+    return _stack(-ss * dspin * dtheta + (cs * dspin * st + ss * ct * dtheta) * dphi,
+                  -cs * dspin * dtheta + (-ss * dspin * st + cs * ct * dtheta) * dphi,
+                  -st * dtheta * dphi)
 
 
-def angular_acceleration(angles, rates, accelerations):
-    return jacobian(angles) @ accelerations + bias(angles, rates)
-
-
-def euler_accelerations(angles, rates, angular_acc):
-    """Euler-angle accelerations from the body's local angular acceleration."""
-    return np.linalg.solve(jacobian(angles), angular_acc - bias(angles, rates))
+def euler_accelerations(angles, angle_rates, angular_acc):
+    """Euler-angle accelerations from the body's local angular acceleration: J angles'' = w' - J' angles'."""
+    return euler_rates(angles, np.asarray(angular_acc) - bias(angles, angle_rates))
 
 
 def angles(quaternions, start):

@@ -47,7 +47,7 @@ class MujocoModel:
         self.coords = tuple(scene["coords"])
         self.reaction_names = tuple(scene["reactions"])
         self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
-        self.free = [dof for _, (_, dof), idx in self.layout for dof in range(dof, dof + len(idx))]
+        self.free = np.array([dof for _, (_, dof), idx in self.layout for dof in range(dof, dof + len(idx))], dtype=int)
         self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
         for (_, dof), _ in self.driven:  # the evaluation model imposes these exactly: no armature
             self.m.dof_armature[dof] = 0.0
@@ -55,6 +55,11 @@ class MujocoModel:
         for joint, force in scene["applied"].items():
             dof = self._joint(joint)[1]
             self.applied[dof:dof + len(force)] = force
+        self.d.qfrc_applied[:] = self.applied
+        self._driven_dofs = np.array([dof for (_, dof), _ in self.driven], dtype=int)
+        self._driven_motion = np.array([motion for _, motion in self.driven]).reshape(-1, 3).T  # q0, rate, acc
+        self._driven_qacc = np.zeros(self.m.nv)
+        self._driven_qacc[self._driven_dofs] = self._driven_motion[2]
         self.reaction_specs = {name: (self._sensor(spec["sensor"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
         self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
@@ -99,41 +104,55 @@ class MujocoModel:
         return float(np.atleast_1d(array)[index])
 
     # -- state -------------------------------------------------------------
+    def _engine_states(self, t, q, v):
+        """MuJoCo's qpos and qvel of the book's state (t, q, v), or of many: t of shape (N,), q and v (N, n).
+        A loop over the few joints: on one state, scalar writes cost less than index arrays."""
+        qpos, qvel = np.empty(q.shape[:-1] + (self.m.nq,)), np.zeros(v.shape[:-1] + (self.m.nv,))
+        qpos[...] = self.m.qpos0
+        for kind, (qadr, dof), idx in self.layout:
+            if kind == "scalar":
+                qpos[..., qadr], qvel[..., dof] = q[..., idx[0]], v[..., idx[0]]
+            else:
+                qpos[..., qadr:qadr + 4] = euler.quaternion(q[..., idx])
+                qvel[..., dof:dof + 3] = euler.angular_velocity(q[..., idx], v[..., idx])
+        for (qadr, dof), (q0, rate, acc) in self.driven:
+            qpos[..., qadr] = q0 + rate * t + 0.5 * acc * t**2
+            qvel[..., dof] = rate + acc * t
+        return qpos, qvel
+
     def _set_state(self, t, q, v, d=None):
         d = self.d if d is None else d
         d.time = t
-        for kind, (qadr, dof), idx in self.layout:
-            if kind == "scalar":
-                d.qpos[qadr], d.qvel[dof] = q[idx[0]], v[idx[0]]
-            else:
-                d.qpos[qadr:qadr + 4] = euler.quaternion(q[idx])
-                d.qvel[dof:dof + 3] = euler.angular_velocity(q[idx], v[idx])
-        for (qadr, dof), (q0, rate, acc) in self.driven:
-            d.qpos[qadr] = q0 + rate * t + 0.5 * acc * t**2
-            d.qvel[dof] = rate + acc * t
+        d.qpos[:], d.qvel[:] = self._engine_states(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
         d.qfrc_applied[:] = self.applied
 
-    def _full_qacc(self, t, q, v):
-        """Accelerations of every dof: driven ones imposed, free ones solved from M_ff."""
-        self._set_state(t, q, v)
-        mujoco.mj_forward(self.m, self.d)
-        qacc = np.zeros(self.m.nv)
-        for (_, dof), (_, _, acc) in self.driven:
-            qacc[dof] = acc
-        if self.free:
-            mass = np.zeros((self.m.nv, self.m.nv))
-            mujoco.mj_fullM(self.m, self.d, mass)
-            force = self.d.qfrc_smooth - mass @ qacc
-            qacc[self.free] = np.linalg.solve(mass[np.ix_(self.free, self.free)], force[self.free])
-        return qacc
+    def _solve(self, t, q, v):
+        """Accelerations of every dof at the book's state, or at many (as in `_engine_states`): driven
+        ones imposed, free ones solved from M_ff; with qvel, the mass matrix and the smooth forces.
+        Leaves self.d at the (last) state."""
+        qpos, qvel = self._engine_states(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
+        nv, states = self.m.nv, qvel.shape[:-1]
+        mass, smooth = np.zeros(states + (nv, nv)), np.empty(states + (nv,))
+        for i in np.ndindex(states):
+            self.d.qpos[:], self.d.qvel[:] = qpos[i], qvel[i]
+            mujoco.mj_forward(self.m, self.d)
+            mujoco.mj_fullM(self.m, self.d, mass[i])
+            smooth[i] = self.d.qfrc_smooth
+        qacc = np.empty(states + (nv,))
+        qacc[...] = self._driven_qacc
+        if len(self.free):
+            force = smooth - (mass @ qacc[..., None])[..., 0]
+            free_block = mass[..., self.free[:, None], self.free]
+            qacc[..., self.free] = np.linalg.solve(free_block, force[..., self.free, None])[..., 0]
+        return qvel, mass, smooth, qacc
 
     def _inverse(self, t, q, v):
-        self.d.qacc[:] = self._full_qacc(t, q, v)
+        self.d.qacc[:] = self._solve(t, q, v)[3]
         mujoco.mj_inverse(self.m, self.d)
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        qacc = self._full_qacc(t, q, v)
+        qacc = self._solve(t, q, v)[3]
         out = np.zeros(len(self.coords))
         for kind, (_, dof), idx in self.layout:
             if kind == "scalar":
@@ -181,9 +200,15 @@ class MujocoModel:
 
     def drive_power(self, t, q, v):
         """Power of the prescribed motions (inverse-dynamics forces) and of the applied forces."""
-        self._inverse(t, q, v)
-        driven = sum(self.d.qfrc_inverse[dof] * self.d.qvel[dof] for (_, dof), _ in self.driven)
-        return float(driven + self.applied @ self.d.qvel)
+        return float(self.drive_powers(t, q, v))
+
+    def drive_powers(self, t, q, v):
+        """`drive_power` at many states at once: t of shape (N,), q and v (N, n) -> (N,)."""
+        qvel, mass, smooth, qacc = self._solve(t, q, v)
+        # mj_inverse's force, M qacc + bias - passive = M qacc - smooth + applied, from what _solve has
+        inverse = (mass @ qacc[..., None])[..., 0] - smooth + self.applied
+        dofs = self._driven_dofs
+        return np.sum(inverse[..., dofs] * qvel[..., dofs], axis=-1) + qvel @ self.applied
 
     def points(self, t, q):
         """World positions of the traced bodies' centres of mass, and the chain of body origins."""
@@ -192,8 +217,11 @@ class MujocoModel:
         return self.d.xipos[self.paths].copy(), self.d.xpos[1:].copy(), self.m.body_parentid[1:].copy()
 
     # -- time stepping with MuJoCo's own integrators -------------------------
-    def step(self, q0, v0, t_end, dt, integrator):
-        """mj_step with `integrator` from (q0, v0); times, book q and v of every step, and the cost."""
+    def stepping(self, q0, v0, dt, integrator):
+        """The scene as MuJoCo steps it from (q0, v0): the model with its armature back and `integrator`
+        at step dt, its data, the full physics state, and the constant generalized forces of every
+        step: the applied ones, and armature x acceleration on each driven joint, which gives the
+        armature the prescribed (constant) acceleration."""
         m = copy.copy(self.m)
         m.dof_armature[:] = self.armature
         m.opt.timestep = dt
@@ -203,12 +231,14 @@ class MujocoModel:
         spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
         state0 = np.empty(mujoco.mj_stateSize(m, spec))
         mujoco.mj_getState(m, d, state0, spec)
-        nstep = int(round(t_end / dt))
-        # Constant generalized forces every step: the applied ones, and armature x acceleration
-        # on each driven joint, which gives the armature the prescribed (constant) acceleration.
         forces = self.applied.copy()
-        for (_, dof), (_, _, acc) in self.driven:
-            forces[dof] += self.armature[dof] * acc
+        forces[self._driven_dofs] += self.armature[self._driven_dofs] * self._driven_motion[2]
+        return m, d, state0, forces
+
+    def step(self, q0, v0, t_end, dt, integrator):
+        """mj_step with `integrator` from (q0, v0); times, book q and v of every step, and the cost."""
+        m, d, state0, forces = self.stepping(q0, v0, dt, integrator)
+        nstep = int(round(t_end / dt))
         start = time.perf_counter()
         states, _ = mujoco.rollout.rollout(m, d, state0[None], forces[None, None], nstep=nstep,
                                            control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
@@ -220,10 +250,14 @@ class MujocoModel:
         q, v = self._book_states(qpos, qvel, q0)
         # How well the armatures held the prescribed rates, relative to the largest prescribed
         # rate (a joint may be held at rate 0).
-        drift = [np.max(np.abs(qvel[:, dof] - (rate + acc * times))) for (_, dof), (_, rate, acc) in self.driven]
-        scale = max((np.max(np.abs(rate + acc * times)) for _, (_, rate, acc) in self.driven), default=0.0)
-        driven_error = float(max(drift) / scale) if drift and scale > 0 else float(max(drift, default=0.0))
-        return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep,
+        prescribed = self._driven_motion[1] + self._driven_motion[2] * times[:, None]
+        drift = np.max(np.abs(qvel[:, self._driven_dofs] - prescribed), initial=0.0)
+        scale = np.max(np.abs(prescribed), initial=0.0)
+        driven_error = float(drift / scale if scale > 0 else drift)
+        # MuJoCo counts its warnings (a NaN or huge state, which it answers by resetting) in the data
+        # the rollout stepped.
+        warnings = {mujoco.mjtWarning(i).name: (w.number, w.lastinfo) for i, w in enumerate(d.warning) if w.number}
+        return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep, "warnings": warnings,
                 "evaluations": nstep * (4 if integrator == "RK4" else 1), "driven_rate_error": driven_error}
 
     def _book_states(self, qpos, qvel, q0):
@@ -235,8 +269,7 @@ class MujocoModel:
                 continue
             with np.errstate(all="ignore"):  # a blown-up run is reported by the caller
                 q[:, idx] = euler.angles(qpos[:, qadr:qadr + 4], q0[idx])
-                for row in range(len(q)):
-                    v[row, idx] = np.linalg.solve(euler.jacobian(q[row, idx]), qvel[row, dof:dof + 3])
+                v[:, idx] = euler.euler_rates(q[:, idx], qvel[:, dof:dof + 3])
         return q, v
 
 

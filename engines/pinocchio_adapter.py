@@ -6,6 +6,8 @@ URDF has no springs and no gravity, so joint stiffness and gravity come from
 the case's bindings (`write`), and `read` reports them back from this adapter.
 """
 
+import functools
+
 import numpy as np
 import pinocchio as pin
 
@@ -38,7 +40,8 @@ class PinocchioModel:
         self.coords = tuple(scene["coords"])
         self.reaction_names = tuple(scene["reactions"])
         self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
-        self.free = [i for _, joint, idx in self.layout for i in range(joint.idx_v, joint.idx_v + len(idx))]
+        self.free = np.array([i for _, joint, idx in self.layout for i in range(joint.idx_v, joint.idx_v + len(idx))],
+                             dtype=int)
         self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
         self.applied = np.zeros(self.m.nv)
         for joint, force in scene["applied"].items():
@@ -47,6 +50,16 @@ class PinocchioModel:
         self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
         self.springs = [(self._joint(j).idx_q, self._joint(j).idx_v, k) for j, k in self.stiffness.items()]
+        # (nq, idx_q, idx_v) of the joints, read once: each of Pinocchio's attributes is a call.
+        self._coord_joints = [(kind, (joint.nq, joint.idx_q, joint.idx_v), idx) for kind, joint, idx in self.layout]
+        self._driven_joints = [((joint.nq, joint.idx_q, joint.idx_v), motion) for joint, motion in self.driven]
+        self._driven_acc = np.zeros(self.m.nv)
+        for (_, _, iv), (_, _, acc) in self._driven_joints:
+            self._driven_acc[iv] = acc
+        self.neutral = pin.neutral(self.m)
+        # CRBA fills the upper triangle of M: M[i, j] for i > j is read at [j, i].
+        every = np.arange(self.m.nv)
+        self._free_columns = np.minimum.outer(every, self.free), np.maximum.outer(every, self.free)
 
     # -- names -------------------------------------------------------------
     def _joint(self, name):
@@ -112,68 +125,64 @@ class PinocchioModel:
         return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
 
     # -- state -------------------------------------------------------------
-    def _configuration(self, t, q):
-        config = pin.neutral(self.m)
-        values = [(joint, q[idx[0]] if kind == "scalar" else q[idx]) for kind, joint, idx in self.layout]
-        values += [(j, q0 + rate * t + 0.5 * acc * t**2) for j, (q0, rate, acc) in self.driven]
-        for joint, value in values:
-            if joint.nq == 4:  # spherical: quaternion (x, y, z, w)
-                config[joint.idx_q:joint.idx_q + 4] = np.roll(euler.quaternion(value), -1)
-            elif joint.nq == 2:  # continuous joint: (cos, sin)
-                config[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
+    def _state(self, t, q, v):
+        """Pinocchio's configuration and velocity at the book's state (t, q, v).  A loop over the few
+        joints: on one state, scalar writes cost less than index arrays."""
+        config, velocity = self.neutral.copy(), np.zeros(self.m.nv)
+        one_dof = [(joint, q[idx[0]], v[idx[0]]) for kind, joint, idx in self._coord_joints if kind == "scalar"]
+        one_dof += [(joint, q0 + rate * t + 0.5 * acc * t**2, rate + acc * t)
+                    for joint, (q0, rate, acc) in self._driven_joints]
+        for (nq, iq, iv), position, rate in one_dof:
+            if nq == 2:  # continuous joint: (cos, sin)
+                config[iq], config[iq + 1] = np.cos(position), np.sin(position)
             else:
-                config[joint.idx_q] = value
-        return config
+                config[iq] = position
+            velocity[iv] = rate
+        for kind, (_, iq, iv), idx in self._coord_joints:
+            if kind == "euler":  # spherical: quaternion (x, y, z, w), the body's angular velocity
+                config[iq:iq + 4] = euler.quaternion(q[idx])[[1, 2, 3, 0]]
+                velocity[iv:iv + 3] = euler.angular_velocity(q[idx], v[idx])
+        return config, velocity
 
-    def _velocity(self, t, q, v):
-        velocity = np.zeros(self.m.nv)
-        for kind, joint, idx in self.layout:
-            if kind == "scalar":
-                velocity[joint.idx_v] = v[idx[0]]
-            else:
-                velocity[joint.idx_v:joint.idx_v + 3] = euler.angular_velocity(q[idx], v[idx])
-        for joint, (_, rate, acc) in self.driven:
-            velocity[joint.idx_v] = rate + acc * t
-        return velocity
-
-    def _passive(self, config):
-        tau = np.zeros(self.m.nv)
+    def _engine(self, config, velocity):
+        """Pinocchio alone, on its own configuration and velocity: every dof's acceleration, and the
+        inverse-dynamics forces M acc + nle that give it."""
+        force = self.applied.copy()
         for iq, iv, k in self.springs:
-            tau[iv] = -k * config[iq]
-        return tau
-
-    def _full_acceleration(self, t, q, v):
-        config, velocity = self._configuration(t, q), self._velocity(t, q, v)
-        acc = np.zeros(self.m.nv)
-        for joint, (_, _, driven_acc) in self.driven:
-            acc[joint.idx_v] = driven_acc
+            force[iv] -= k * config[iq]
         if len(self.free) == self.m.nv:  # nothing prescribed: Pinocchio's ABA solves it directly
-            acc = pin.aba(self.m, self.d, config, velocity, self._passive(config) + self.applied).copy()
-        elif self.free:
-            bias = pin.rnea(self.m, self.d, config, velocity, acc)
-            mass = pin.crba(self.m, self.d, config)
-            mass = np.triu(mass) + np.triu(mass, 1).T
-            force = self._passive(config) + self.applied - bias
-            acc[self.free] = np.linalg.solve(mass[np.ix_(self.free, self.free)], force[self.free])
-        return config, velocity, acc
+            return pin.aba(self.m, self.d, config, velocity, force).copy(), force
+        acc = self._driven_acc.copy()
+        tau = pin.rnea(self.m, self.d, config, velocity, acc).copy()  # the free joints' bias
+        if len(self.free):
+            columns = pin.crba(self.m, self.d, config)[self._free_columns]  # M[:, free]
+            acc[self.free] = np.linalg.solve(columns[self.free], force[self.free] - tau[self.free])
+            tau += columns @ acc[self.free]
+        return acc, tau
+
+    def _dynamics(self, t, q, v):
+        """Configuration, velocity, acceleration and inverse-dynamics forces at the book's state."""
+        return self._dynamics_at(t, tuple(q), tuple(v))
+
+    @functools.lru_cache(maxsize=1)  # an integrator asks for the accelerations, then the drive power, of one state
+    def _dynamics_at(self, t, q, v):
+        config, velocity = self._state(t, np.array(q), np.array(v))
+        return (config, velocity, *self._engine(config, velocity))
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        acc = self._full_acceleration(t, q, v)[2]
+        acc = self._dynamics(t, q, v)[2]
         out = np.zeros(len(self.coords))
-        for kind, joint, idx in self.layout:
+        for kind, (_, _, iv), idx in self._coord_joints:
             if kind == "scalar":
-                out[idx[0]] = acc[joint.idx_v]
+                out[idx[0]] = acc[iv]
             else:
-                out[idx] = euler.euler_accelerations(q[idx], v[idx], acc[joint.idx_v:joint.idx_v + 3])
+                out[idx] = euler.euler_accelerations(q[idx], v[idx], acc[iv:iv + 3])
         return out
 
-    def _inverse(self, t, q, v):
-        config, velocity, acc = self._full_acceleration(t, q, v)
-        return config, velocity, acc, pin.rnea(self.m, self.d, config, velocity, acc)
-
     def reactions(self, t, q, v):
-        config, *_ = self._inverse(t, q, v)  # fills data.f: force of each joint's parent on its subtree
+        config, velocity, acc, _ = self._dynamics(t, q, v)
+        pin.rnea(self.m, self.d, config, velocity, acc)  # fills data.f: force of each joint's parent on its subtree
         pin.forwardKinematics(self.m, self.d, config)  # rnea leaves data.oMi stale (Pinocchio 4.1)
         out = {}
         for name, (joint, axis, frame) in self.reaction_specs.items():
@@ -187,7 +196,7 @@ class PinocchioModel:
         """The named links' kinematics, in their own or the world frame: the absolute (classical)
         acceleration of the link's origin or of its centre of mass, or its angular velocity or
         angular acceleration."""
-        config, velocity, acc, _ = self._inverse(t, q, v)
+        config, velocity, acc, _ = self._dynamics(t, q, v)
         pin.forwardKinematics(self.m, self.d, config, velocity, acc)
         out = {}
         for name, (frame_id, frame, kind) in self.point_specs.items():
@@ -203,7 +212,7 @@ class PinocchioModel:
         return out
 
     def energy(self, t, q, v):
-        config, velocity = self._configuration(t, q), self._velocity(t, q, v)
+        config, velocity = self._state(t, q, v)
         kinetic = pin.computeKineticEnergy(self.m, self.d, config, velocity)
         potential = pin.computePotentialEnergy(self.m, self.d, config)
         springs = sum(0.5 * k * config[iq] ** 2 for iq, _, k in self.springs)
@@ -211,6 +220,6 @@ class PinocchioModel:
 
     def drive_power(self, t, q, v):
         """Power of the prescribed motions (inverse-dynamics torques) and of the applied forces."""
-        _, velocity, _, tau = self._inverse(t, q, v)
-        driven = sum(tau[j.idx_v] * velocity[j.idx_v] for j, _ in self.driven)
+        _, velocity, _, tau = self._dynamics(t, q, v)
+        driven = sum(tau[iv] * velocity[iv] for (_, _, iv), _ in self._driven_joints)
         return float(driven + self.applied @ velocity)

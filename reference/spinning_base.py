@@ -11,7 +11,10 @@ import functools
 
 import numpy as np
 
-I3, K3 = np.eye(3)[0], np.eye(3)[2]
+# Vectors and matrices of the chain are tuples of floats: on 3-vectors numpy's overhead per
+# operation is most of the time, and the integrators evaluate the chain at every step.
+I3, K3, ZERO = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+IDENTITY = (I3, (0.0, 1.0, 0.0), K3)
 
 
 def base_terms(p, t):
@@ -47,8 +50,27 @@ def T_x(angle):
 
 
 def cross(a, b):
-    """a x b for 3-vectors (np.cross costs ten times more on vectors this small)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    """a x b."""
+    return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+
+
+def _add(*vectors):
+    """The sum of 3-vectors, left to right."""
+    (x, y, z), *rest = vectors
+    for a in rest:
+        x, y, z = x + a[0], y + a[1], z + a[2]
+    return x, y, z
+
+
+def _scale(k, a):
+    return k * a[0], k * a[1], k * a[2]
+
+
+def _apply(matrix, x):
+    """matrix @ x, the matrix given by rows."""
+    (m0, m1, m2), (x0, x1, x2) = matrix, x
+    return (m0[0] * x0 + m0[1] * x1 + m0[2] * x2, m1[0] * x0 + m1[1] * x1 + m1[2] * x2,
+            m2[0] * x0 + m2[1] * x1 + m2[2] * x2)
 
 
 def particle_motion(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0):
@@ -73,22 +95,26 @@ def chain(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0)
     """
     alpha = p["alpha0"] + p["alpha_rate"] * t
     beta = p["beta0"] + p["beta_rate"] * t
-    chain = [(T_z(alpha), p["alpha_rate"], 0.0, K3, np.array([0.0, p["b"], 0.0]), 0.0, 0.0),
-             (T_z(beta), p["beta_rate"], 0.0, K3, np.array([0.0, p["r"], p["c"] + p["h"]]), 0.0, 0.0),
-             (T_x(psi), psi_rate, psi_acc, I3, np.array([0.0, 0.0, -length]), length_rate, length_acc)]
-    position, rotation = np.array([0.0, 0.0, p["a"]]), np.eye(3)  # at A; rotation: frame from I
-    v, a, w, w_dot = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    # floats: arithmetic on numpy's scalars is slower
+    psi_rate, psi_acc, length, length_rate, length_acc = (float(x) for x in (psi_rate, psi_acc, length,
+                                                                             length_rate, length_acc))
+    chain = [(T_z(alpha), p["alpha_rate"], 0.0, K3, (0.0, p["b"], 0.0), 0.0, 0.0),
+             (T_z(beta), p["beta_rate"], 0.0, K3, (0.0, p["r"], p["c"] + p["h"]), 0.0, 0.0),
+             (T_x(psi), psi_rate, psi_acc, I3, (0.0, 0.0, -length), length_rate, length_acc)]
+    position, to_inertial = (0.0, 0.0, p["a"]), IDENTITY  # at A; to_inertial: I components from the frame's
+    v = a = w = w_dot = ZERO
     for turn, rate, acc, axis, r, r_rate, r_acc in chain:
-        w_in, w_dot_in = turn @ w, turn @ w_dot
-        w = w_in + rate * axis
-        w_dot = w_dot_in + cross(w_in, rate * axis) + acc * axis
-        v_rel, a_rel = -r_rate * K3, -r_acc * K3
-        v = turn @ v + cross(w, r) + v_rel
-        a = turn @ a + cross(w, cross(w, r)) + cross(w_dot, r) + 2 * cross(w, v_rel) + a_rel
-        rotation = turn @ rotation
-        position = position + rotation.T @ r
-    gravity = rotation @ np.array([0.0, 0.0, -p["g"]])
-    return position, v, a, gravity, w, w_dot
+        turn = turn.tolist()
+        w_in, w_dot_in = _apply(turn, w), _apply(turn, w_dot)
+        w = _add(w_in, _scale(rate, axis))
+        w_dot = _add(w_dot_in, cross(w_in, _scale(rate, axis)), _scale(acc, axis))
+        v_rel, a_rel = _scale(-r_rate, K3), _scale(-r_acc, K3)
+        v = _add(_apply(turn, v), cross(w, r), v_rel)
+        a = _add(_apply(turn, a), cross(w, cross(w, r)), cross(w_dot, r), _scale(2, cross(w, v_rel)), a_rel)
+        to_inertial = tuple(_apply(turn, row) for row in to_inertial)  # (I from child) = (I from parent) turn^T
+        position = _add(position, _apply(to_inertial, r))
+    gravity = _scale(-p["g"], to_inertial[2])  # (0, 0, -g) in the last frame: -g times its components of K
+    return tuple(np.array(x) for x in (position, v, a, gravity, w, w_dot))
 
 
 def last_state(method):

@@ -90,3 +90,44 @@ def test_an_override_that_hides_a_finding_passes_with_a_note():
     rows = apply_findings(case, pointwise(case)[0])
     hidden = [r for r in rows if r["finding"] == "1.8.3-R" and r["quantity"] == "R"]
     assert hidden and all(r["status"] == "pass" and "does not show" in r["detail"] for r in hidden)
+
+
+def test_two_runs_give_identical_json(results):
+    """Determinism: the same inputs give the same JSON (it holds no timing); seeds are in the case file."""
+    import json
+
+    from dyncheck.checks import run_case
+    from dyncheck.cli import to_json
+    again = run_case(dyncheck.load_case("double_pendulum"))
+    assert json.dumps(to_json([again])) == json.dumps(to_json([results["double_pendulum"]]))
+
+
+def test_random_parameter_sets_agree_and_say_what_was_tried(results):
+    rows = [r for r in results["spring_pendulum"]["rows"] if r["check"] == "random parameters"]
+    assert {r["sources"] for r in rows} == {"reference vs mujoco", "reference vs pinocchio", "mujoco vs pinocchio"}
+    assert all(r["status"] == "pass" and "20 parameter sets (seed 31) x 20 states" in r["detail"] for r in rows)
+
+
+def test_a_listing_that_blows_up_gives_unstable_rows_not_a_crash():
+    """At k = 1e5 N/m the Matlab listing's explicit Euler at 5e-5 s grows by exp(omega^2 dt t / 2): it
+    blows up within the run, and its run checks say when and at which step."""
+    from dyncheck.checks import program_checks
+    case = dyncheck.load_case("spring_pendulum", k=1e5)
+    rows, runs = program_checks(case, pointwise(case)[1])
+    rows = apply_findings(case, rows)
+    unstable = [r for r in rows if r["status"] == "unstable"]
+    assert runs == {} and {r["quantity"] for r in unstable} == {"psi", "psi_rate", "l", "l_rate"}
+    assert all("unstable: state not finite at t = " in r["detail"] and "(step " in r["detail"] for r in unstable)
+    # its formulas are still checked, with the listing's registered slips
+    assert {r["status"] for r in rows if r not in unstable} == {"pass", "finding"}
+
+
+def test_a_scene_at_rest_is_judged_in_si_units_and_an_unmeasurable_order_says_so():
+    """Without gravity the double pendulum released from rest stays put: every trajectory and energy
+    row passes (errors in SI units, not 0/0), and the convergence order, which cannot be measured
+    (omega = 0), is a failing row that says why rather than a crash."""
+    from dyncheck.checks import run_case
+    rows = run_case(dyncheck.load_case("double_pendulum", g=0.0))["rows"]
+    bad = [r for r in rows if r["status"] != "pass"]
+    assert [(r["check"], r["status"]) for r in bad] == [("convergence", "fail")]
+    assert "not measured" in bad[0]["detail"] and "omega" in bad[0]["detail"]

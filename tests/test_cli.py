@@ -2,16 +2,20 @@
 
 import json
 
+import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import cli
+from dyncheck import cli, stability, work_precision
 
 
 @pytest.fixture
 def canned(monkeypatch, results):
-    """`run_case` answering from the session's results, so CLI tests cost no simulation."""
+    """`run_case` answering from the session's results, and no studies (minutes; their page is
+    tested below), so CLI tests cost no simulation."""
     monkeypatch.setattr(cli, "run_case", lambda case: {**results[case.name], "case": case})
+    monkeypatch.setattr(cli, "study_case", lambda case: {
+        "work_precision": pd.DataFrame(columns=work_precision.COLUMNS), "stability": []})
 
 
 def test_list_names_both_cases(capsys):
@@ -95,3 +99,41 @@ def test_bench_prints_throughput_and_ratios(capsys):
     assert cli.main(["bench", "double_pendulum"]) == 0
     out = capsys.readouterr().out
     assert "mj_step(nstep), RK4" in out and "pin.aba loop" in out and "ratio to bare" in out
+
+
+def test_a_failed_report_leaves_the_previous_one_intact(canned, monkeypatch, tmp_path):
+    from dyncheck import report
+    assert cli.main(["report", "double_pendulum", "--out", str(tmp_path)]) == 0
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+
+    def broken(res, path):
+        path.write_text("half a figure")
+        raise RuntimeError("disk full")
+    monkeypatch.setattr(report, "figure_energy", broken)
+    with pytest.raises(RuntimeError, match="disk full"):
+        cli.main(["report", "double_pendulum", "--out", str(tmp_path)])
+    after = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    assert after == before  # nothing half-written, no temporary folder left behind
+
+
+def test_the_page_shows_the_studies(monkeypatch, results, tmp_path):
+    """Work-precision chart, CSV, cheapest table, convergence table and a stability study on the page
+    (a small sweep and a short study: the real ones take minutes)."""
+    def small_studies(case):
+        case.spec["work_precision"].update(t_end=0.5, output_step=0.01, repeat=1, solution={"rtol": 1e-11, "max_step": 0.01},
+                                           sweep={"reference": {"DOP853": [1e-5, 1e-8], "RK4": [1e-2]},
+                                                  "mujoco": {"mujoco:RK4": [1e-2, 5e-3]}})
+        drift = {**stability._settings(case, "energy_drift"), "methods": ["explicit Euler", "semi-implicit Euler"],
+                 "dt": 0.02, "horizon": 2.0, "output_step": 0.02}
+        return {"work_precision": work_precision.sweep(case), "stability": [stability.energy_drift(case, drift)]}
+    monkeypatch.setattr(cli, "run_case", lambda case: {**results[case.name], "case": case})
+    monkeypatch.setattr(cli, "study_case", small_studies)
+    assert cli.main(["report", "double_pendulum", "--out", str(tmp_path)]) == 0
+    page = (tmp_path / "double_pendulum.md").read_text()
+    for heading in ("## Speed against accuracy", "## Convergence", "## Stability: where methods fail"):
+        assert heading in page
+    assert "Which method is cheapest" in page and "observed order" in page and "unstable at t = " in page
+    rows = pd.read_csv(tmp_path / "data" / "double_pendulum_work_precision.csv", comment="#")
+    assert set(rows["method"]) == {"DOP853", "RK4", "mujoco:RK4"} and (rows["error"] > 0).all()
+    for link in [line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")]:
+        assert (tmp_path / link).stat().st_size > 10_000, link

@@ -22,22 +22,27 @@ def assert_engines_agree(case, count=10):
             assert error <= TOL, (case, engine, quantity, error)
 
 
-@settings(max_examples=8, deadline=None)
-@given(k=st.floats(50.0, 5000.0), m=st.floats(0.05, 2.0), b=st.floats(0.1, 1.0), r=st.floats(0.02, 0.3),
-       h=st.floats(0.0, 0.3), l0=st.floats(0.05, 0.3), g=st.floats(1.0, 20.0),
-       alpha_rate=st.floats(-10.0, 10.0), beta_rate=st.floats(-30.0, 30.0))
-def test_spring_pendulum_engines_follow_overrides(**params):
-    assert_engines_agree(dyncheck.load_case("spring_pendulum", **params))
+def parameter_ranges(name):
+    """The case's physically valid parameter ranges ([sample.params.ranges]), as numbers."""
+    case = dyncheck.load_case(name)
+    return {k: (case.value(lo), case.value(hi)) for k, (lo, hi) in case.spec["sample"]["params"]["ranges"].items()}
 
 
-# Domains where MuJoCo's placeholder inertia (1e-14 kg m^2, its minimum) stays below 1e-10 of the
-# smallest m l^2, as the tolerance's error budget in case.toml assumes; outside it MuJoCo models a
-# measurably different body (1.2e-9 at m2 l2^2 = 8.6e-6 kg m^2, found by hypothesis).
-@settings(max_examples=8, deadline=None)
-@given(m1=st.floats(0.05, 2.0), m2=st.floats(0.05, 2.0), l1=st.floats(0.05, 1.0), l2=st.floats(0.05, 1.0),
-       g=st.floats(1.0, 20.0))
-def test_double_pendulum_engines_follow_overrides(**params):
-    assert_engines_agree(dyncheck.load_case("double_pendulum", **params))
+@pytest.mark.parametrize("name", dyncheck.case_names())
+def test_engines_follow_random_valid_parameters(name):
+    """Property: at any parameters in the case's valid ranges, reference and both engines agree.
+    The ranges keep m l^2 >= 1e-4 kg m^2: below it MuJoCo's placeholder inertia (1e-14 kg m^2) makes
+    a measurably different body (1.2e-9 at m2 l2^2 = 8.6e-6, found by hypothesis)."""
+    ranges = parameter_ranges(name)
+
+    @settings(max_examples=6, deadline=None)
+    @given(st.fixed_dictionaries({k: st.floats(lo, hi) for k, (lo, hi) in ranges.items()}))
+    def agree(params):
+        case = dyncheck.load_case(name, **params)
+        assert case.overrides == params
+        assert_engines_agree(case)
+
+    agree()
 
 
 def test_an_override_reaches_every_source():
@@ -103,22 +108,3 @@ def test_a_bad_expression_in_a_case_file_is_named(tmp_path):
     (folder / "case.toml").write_text(text)
     with pytest.raises(ValueError, match=r"case.toml: cannot evaluate 'pi/sixth': name 'sixth' is not defined"):
         Case(folder).initial
-
-
-# Overrides that move every kind of parameter of each case away from the book's numbers.
-OVERRIDES = {
-    "spring_pendulum": dict(k=150.0, b=0.3, l0=0.2, g=3.0, alpha_rate=1.0, beta_rate=-5.0, beta0=0.4),
-    "double_pendulum": dict(m1=0.3, m2=0.1, l1=0.2, l2=0.05, g=5.0),
-    "rotating_pendulum": dict(l=0.3, m=0.5, alpha_rate=1.0, beta_rate=3.14, h=0.1, r=0.2, g=9.0),
-    "rotating_particle": dict(psi=2.5, l=0.25, alpha_rate=-2.0, beta_rate=0.5, b=0.7),
-    "piston": dict(m=0.5, L0=0.3, theta_rate=-2.0, theta_acc=1.0, L_rate=-0.05, L_acc=0.2, g=1.6),
-    "spinning_top": dict(m=0.6, h=0.05, Ixx=0.003, Izz=0.002, Mz=-0.01, g=9.0),
-}
-
-
-@pytest.mark.parametrize("name", sorted(OVERRIDES))
-def test_every_case_agrees_with_overridden_parameters(name):
-    assert set(OVERRIDES) == set(dyncheck.case_names())
-    case = dyncheck.load_case(name, **OVERRIDES[name])
-    assert case.overrides == OVERRIDES[name]
-    assert_engines_agree(case, count=20)

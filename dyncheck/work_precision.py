@@ -1,0 +1,386 @@
+"""Work-precision and convergence: what each integrator and engine pays for its accuracy.
+
+`sweep(case)` runs every method over a tolerance or step sweep against one named reference
+solution and returns tidy rows; `figure` draws them log-log, `cheapest` says which method reaches
+each accuracy level first.  `convergence(case)` gives the observed order of every fixed-step
+method as check rows.  Both read the case file's [work_precision] table.
+"""
+
+import math
+import time
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from scipy.integrate import solve_ivp  # noqa: E402
+
+from dyncheck.checks import ROUNDING_FLOOR, energy_residual, row, state_columns, unstable_row  # noqa: E402
+from dyncheck.simulate import FIXED_METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable, simulate  # noqa: E402
+
+COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "evaluations",
+           "steps", "status", "resolved", "detail"]
+NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no free coordinate), so it "
+            "has no work-precision chart and no convergence check.")
+COST_NOTE = ("Wall time is the integration alone, median of repeated runs.  MuJoCo steps in C (its rollout); "
+             "every other method steps in Python around its right-hand side, so across engines wall time "
+             "measures the harness as much as the method: the evaluations (right) compare the methods.")
+# A point whose error is within this factor of the reference solution's verified accuracy cannot be
+# told apart from the reference's own error: it is drawn hollow and never counts as reaching a level.
+RESOLUTION = 10.0
+LEVELS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
+EXPECTED_ORDER = {"explicit Euler": 1, "semi-implicit Euler": 1, "RK4": 4,
+                  "mujoco:Euler": 1, "mujoco:implicitfast": 1, "mujoco:RK4": 4}
+SWEEP_METHODS = {"reference": SCIPY_METHODS + FIXED_METHODS, "pinocchio": SCIPY_METHODS, "mujoco": MUJOCO_METHODS}
+KEYS = ("t_end", "output_step", "repeat", "repeat_under", "why", "solution", "sweep", "convergence")
+CONVERGENCE_KEYS = ("omega", "omega_t", "omega_h", "why")
+
+
+# -- the case file's [work_precision] table ---------------------------------------------------------
+
+def settings(case):
+    """The case's [work_precision] table, checked (ValueError names the file and the field); None
+    for a case without one (nothing to integrate)."""
+    spec = case.spec.get("work_precision")
+    if spec is None:
+        return None
+
+    def fail(field, why):
+        raise ValueError(f"{case.file}: work_precision.{field} {why}")
+
+    def positive(field, x):
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not x > 0:
+            fail(field, f"= {x!r} must be a positive number")
+        return float(x)
+
+    def multiple(field, step, of):
+        if abs(of / step - round(of / step)) > 1e-9 * of / step:
+            fail(field, f"= {step:g} must divide {of:g} s (outputs and horizons fall on steps)")
+
+    for table, keys, field in ((spec, KEYS, ""), (spec.get("convergence", {}), CONVERGENCE_KEYS, "convergence.")):
+        for key in set(keys) ^ set(table):
+            fail(field + key, "is missing" if key in keys else f"is not a known key; expected {', '.join(keys)}")
+    out = {key: positive(key, spec[key]) for key in ("t_end", "output_step", "repeat_under")}
+    if not isinstance(spec["repeat"], int) or spec["repeat"] < 1:
+        fail("repeat", f"= {spec['repeat']!r} must be a positive integer")
+    out["repeat"] = spec["repeat"]
+    multiple("output_step", out["output_step"], out["t_end"])
+    out["solution"] = {key: positive(f"solution.{key}", spec["solution"].get(key)) for key in ("rtol", "max_step")}
+    out["sweep"] = {}
+    for source, methods in spec["sweep"].items():
+        if source not in SWEEP_METHODS:
+            fail(f"sweep.{source}", f"is not a source of the sweep ({', '.join(SWEEP_METHODS)})")
+        for method, values in methods.items():
+            field = f"sweep.{source}.{method}"
+            if method not in SWEEP_METHODS[source]:
+                fail(field, f"is not a method of the sweep; {source} runs {', '.join(SWEEP_METHODS[source])}")
+            values = [positive(field, x) for x in values]
+            if method not in SCIPY_METHODS:
+                for dt in values:
+                    multiple(field, dt, out["output_step"])
+            out["sweep"].setdefault(source, {})[method] = values
+    # The convergence runs are set in units of the scene's fastest frequency omega (an expression of
+    # the parameters), so that they stay in the asymptotic range, and as cheap, when a parameter is
+    # overridden: step h = omega_h / omega, horizon the whole number of steps nearest omega_t / omega.
+    conv = spec["convergence"]
+    omega = positive("convergence.omega", case.value(conv["omega"], "work_precision.convergence.omega"))
+    omega_t = positive("convergence.omega_t", conv["omega_t"])
+    out["convergence"] = {"omega": omega, "steps": {}}
+    for method, omega_h in conv["omega_h"].items():
+        if method not in EXPECTED_ORDER:
+            fail(f"convergence.omega_h.{method}", f"is not a fixed-step method ({', '.join(EXPECTED_ORDER)})")
+        h = positive(f"convergence.omega_h.{method}", omega_h) / omega
+        out["convergence"]["steps"][method] = (h, max(1, round(omega_t / omega_h)) * h)
+    return out
+
+
+def plan(case):
+    """The sweep's points: (source, method, "rtol" | "dt", value), in the order sweep() runs them."""
+    wp = settings(case)
+    if wp is None:
+        return []
+    return [(source, method, "rtol" if method in SCIPY_METHODS else "dt", value)
+            for source, methods in wp["sweep"].items() for method, values in methods.items() for value in values]
+
+
+# -- the reference solution ----------------------------------------------------------------------
+
+def _dop853(case, t_end, output_step, rtol, max_step):
+    """`reference` by DOP853 at rtol = atol with its step capped at `max_step`: q, v, energy and work
+    on the output grid.  Not simulate(): uncapped, DOP853 at 1e-13 takes a few long steps whose error
+    its estimate misses (measured 1e-12 to 3e-11 against Radau at 1e-13; capped at about half its mean
+    step, 5e-14 to 1e-12), and simulate has no cap."""
+    model = case.model("reference")
+    q0, v0, _ = case.initial
+    n = len(q0)
+    grid = np.linspace(0.0, t_end, int(round(t_end / output_step)) + 1)
+
+    def rhs(t, y):
+        q, v = y[:n], y[n:2 * n]
+        power = model.drive_power(t, q, v) if case.driven else 0.0
+        return np.concatenate([v, model.accelerations(t, q, v), [power]])
+
+    sol = solve_ivp(rhs, (0.0, t_end), np.concatenate([q0, v0, [0.0]]), method="DOP853", t_eval=grid,
+                    rtol=rtol, atol=rtol, max_step=max_step)
+    if sol.status != 0:
+        raise RuntimeError(f"case {case.name}: the reference solution failed: {sol.message}")
+    columns = {}
+    for i, name in enumerate(case.coords):
+        columns[name], columns[name + "_rate"] = sol.y[i], sol.y[n + i]
+    columns["energy"] = [model.energy(t, y[:n], y[n:2 * n]) for t, y in zip(sol.t, sol.y.T)]
+    columns["work"] = sol.y[-1]
+    return pd.DataFrame(columns, index=pd.Index(sol.t, name="t"))
+
+
+def trajectory_error(run, reference, columns):
+    """Largest state error over the run, each coordinate relative to its largest magnitude in the
+    reference (as dyncheck.checks.trajectory)."""
+    return max(float((run[c] - reference[c]).abs().max() / reference[c].abs().max()) for c in columns)
+
+
+def reference_solution(case):
+    """The sweep's reference solution, its label and its verified accuracy.
+
+    The solution is DOP853 at the case's rtol with its step capped at `max_step`; the verification
+    is the same at twice the cap, 2^8 times the local error of an 8th-order method, so their
+    distance is the verification's own error and bounds the solution's (the case file records a
+    one-off comparison with Radau at the same tolerance, a method of another family), but not below
+    the rounding floor of a run."""
+    wp = settings(case)
+    rtol, max_step = wp["solution"]["rtol"], wp["solution"]["max_step"]
+    solution = _dop853(case, wp["t_end"], wp["output_step"], rtol, max_step)
+    verification = _dop853(case, wp["t_end"], wp["output_step"], rtol, 2 * max_step)
+    distance = trajectory_error(verification, solution, state_columns(case))
+    # Below a thousand ulps the distance is luck: rounding along the run is that large.
+    accuracy = max(distance, ROUNDING_FLOOR)
+    label = (f"reference by DOP853, rtol = atol = {rtol:g}, steps <= {max_step:g} s; verified to {accuracy:.1e} "
+             f"by the same with steps <= {2 * max_step:g} s" + ("" if distance >= ROUNDING_FLOOR else
+                                                              f" ({distance:.1e} away; rounding floor)"))
+    return solution, label, accuracy
+
+
+# -- the sweep -------------------------------------------------------------------------------------
+
+def _progress(progress, text):
+    if progress is None:
+        return
+    if hasattr(progress, "update"):  # a tqdm bar
+        progress.set_postfix_str(text, refresh=False)
+        progress.update(1)
+    else:
+        progress(text)
+
+
+def sweep(case, progress=None):
+    """Every method of the case's sweep against the reference solution: a DataFrame of COLUMNS, one row
+    per point of plan(case), with the reference solution's label and accuracy in .attrs["reference"].
+
+    error: max over time and state coordinates of |x - x_ref| / max |x_ref| (per coordinate);
+    energy_error: max |E(t) - E(0) - W(t)| / max(|E_ref|, |W_ref|), the energy drift of a closed scene
+    or the work-energy balance of a driven one; wall: median of `repeat` runs (one run when a run takes
+    longer than `repeat_under` seconds in all); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
+    steps: fixed steps (NaN for scipy, which does not report them).  A run that blows up is a row
+    with status "unstable", NaN errors and the time and step in `detail`.  resolved: whether the error
+    is above RESOLUTION times the reference's verified accuracy.  An empty frame for a case with
+    nothing to integrate (NO_SWEEP)."""
+    wp = settings(case)
+    if wp is None:
+        return pd.DataFrame(columns=COLUMNS)
+    reference, label, accuracy = reference_solution(case)
+    columns = state_columns(case)
+    scale = max(reference["energy"].abs().max(), reference["work"].abs().max())
+    q0, v0, _ = case.initial
+    rows = []
+    for source, method, setting, value in plan(case):
+        point = {"case": case.name, "source": source, "method": method, "setting": setting, "value": value}
+        model = case.model(source)
+        walls, took = [], 0.0
+        try:
+            # Repeat only runs that are quick in all (integration, energy and work on the grid, for
+            # MuJoCo the drive power at every step): timer noise matters there, and it bounds the cost.
+            while len(walls) < wp["repeat"] and took < wp["repeat_under"]:
+                start = time.perf_counter()
+                run = simulate(model, (q0, v0), wp["t_end"], method, output_step=wp["output_step"],
+                               work=case.driven, **{setting: value})
+                took = time.perf_counter() - start
+                walls.append(run.attrs["wall"])
+        except Unstable as failure:
+            rows.append({**point, "error": np.nan, "energy_error": np.nan, "wall": np.nan, "evaluations": np.nan,
+                         "steps": failure.step, "status": "unstable", "resolved": False,
+                         "detail": f"unstable at t = {failure.t:.4g} s, step {failure.step}: {failure.why}"})
+            _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: unstable")
+            continue
+        error = trajectory_error(run, reference, columns)
+        rows.append({**point, "error": error, "energy_error": float(energy_residual(run).abs().max() / scale),
+                     "wall": float(np.median(walls)), "evaluations": run.attrs["evaluations"],
+                     "steps": run.attrs.get("steps", np.nan), "status": "ok",
+                     "resolved": bool(error > RESOLUTION * accuracy), "detail": ""})
+        _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: {error:.1e}")
+    frame = pd.DataFrame(rows, columns=COLUMNS)
+    frame.attrs["reference"] = {"label": label, "accuracy": accuracy, "t_end": wp["t_end"]}
+    return frame
+
+
+def write_csv(frame, path):
+    """The tidy rows, with the reference solution named in a comment line above the header."""
+    with open(path, "w") as f:
+        if "reference" in frame.attrs:
+            f.write(f"# {frame.attrs['reference']['label']}\n")
+        frame.to_csv(f, index=False)
+
+
+# -- which method is cheapest ----------------------------------------------------------------------
+
+def point_label(r):
+    """E.g. "reference DOP853, rtol = 1e-08", "mujoco:RK4, dt = 0.005 s"."""
+    name = r["method"] if r["method"].startswith(r["source"] + ":") else f"{r['source']} {r['method']}"
+    return f"{name}, {r['setting']} = {r['value']:g}" + (" s" if r["setting"] == "dt" else "")
+
+
+def cheapest(frame, levels=LEVELS):
+    """For each accuracy level (relative trajectory error), the point that reaches it at the least wall
+    time and the runner-up from another (source, method): a DataFrame with level, cheapest, wall,
+    error, runner_up, runner_up_wall.  Only resolved points count; a level below RESOLUTION times the
+    reference's accuracy cannot be decided and says so, a level nobody reaches says "none reached"."""
+    floor = RESOLUTION * frame.attrs.get("reference", {}).get("accuracy", 0.0)
+    ok = frame[(frame["status"] == "ok") & frame["resolved"]]
+    out = []
+    for level in levels:
+        entry = {"level": level, "cheapest": "none reached", "wall": np.nan, "error": np.nan,
+                 "runner_up": "", "runner_up_wall": np.nan}
+        if level < floor:
+            entry["cheapest"] = f"not resolvable: below {floor:.1g}, {RESOLUTION:g}x the reference's accuracy"
+        else:
+            # each (source, method)'s fastest point that reaches the level, fastest first
+            reached = ok[ok["error"] <= level].sort_values("wall").drop_duplicates(["source", "method"])
+            if len(reached):
+                best = reached.iloc[0]
+                entry.update(cheapest=point_label(best), wall=best["wall"], error=best["error"])
+            if len(reached) > 1:
+                entry.update(runner_up=point_label(reached.iloc[1]), runner_up_wall=reached.iloc[1]["wall"])
+        out.append(entry)
+    return pd.DataFrame(out)
+
+
+# -- the chart ---------------------------------------------------------------------------------
+
+# Colour: the integration scheme (MuJoCo's Euler is the semi-implicit Euler, its RK4 the classical
+# RK4: same colour); marker and line: the source that evaluates the dynamics.
+COLOURS = {"explicit Euler": "tab:red", "semi-implicit Euler": "tab:orange", "mujoco:Euler": "tab:orange",
+           "mujoco:implicitfast": "tab:pink", "RK4": "tab:brown", "mujoco:RK4": "tab:brown",
+           "RK45": "tab:blue", "DOP853": "tab:purple", "Radau": "tab:green", "LSODA": "tab:olive"}
+SOURCE_STYLE = {"reference": dict(marker="o", ls="-"), "pinocchio": dict(marker="s", ls="--"),
+                "mujoco": dict(marker="^", ls=":")}
+
+
+def figure(frame, case, path):
+    """Error against cost, log-log: trajectory error (top) and energy error (bottom) against median
+    wall time (left) and right-hand-side evaluations (right); hollow markers for points the reference
+    cannot resolve; the unresolvable band shaded."""
+    ref = frame.attrs.get("reference", {})
+    floor = RESOLUTION * ref.get("accuracy", 0.0)
+    ok = frame[frame["status"] == "ok"]
+    fig, axes = plt.subplots(2, 2, figsize=(10.5, 8.5), sharex="col", sharey="row")
+    drawn = {}  # label -> errors by step or tolerance, to name a line that hides another
+    for (source, method), points in ok.groupby(["source", "method"], sort=False):
+        points = points.sort_values("value", ascending=False)  # along the sweep: loose to tight
+        style = dict(color=COLOURS[method], ms=5, lw=1.1, **SOURCE_STYLE[source])
+        label = f"{method} ({source})" if source != "reference" or method in SCIPY_METHODS else method
+        errors = points.set_index("value")["error"]
+        same = [other for other, e in drawn.items() if e.index.equals(errors.index) and np.array_equal(e, errors)]
+        drawn[label] = errors
+        label += f", same as {same[0]}" if same else ""
+        for row_axes, y in zip(axes, ("error", "energy_error")):
+            for ax, x in zip(row_axes, ("wall", "evaluations")):
+                ax.plot(points[x], points[y], mfc="none", label=label if ax is axes[0, 0] else None, **style)
+                solid = points[points["resolved"]]
+                ax.plot(solid[x], solid[y], ls="none", marker=style["marker"], color=style["color"], ms=5)
+    for ax in axes.flat:
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.grid(True, which="major", alpha=0.3)
+    for ax in axes[0]:
+        ax.axhspan(1e-300, floor, color="0.85", zorder=0)
+        ax.axhline(floor, color="0.5", lw=0.8)
+    top = max(ok["error"].max(), ok["energy_error"].max()) if len(ok) else 1.0
+    low = min(floor / 10, ok["error"].min()) if len(ok) else 1e-14
+    axes[0, 0].set_ylim(max(low, 1e-16) / 2, min(top, 1e3) * 3)
+    axes[0, 0].set_ylabel("trajectory error\nmax |x - x_ref| / max |x_ref|")
+    axes[1, 0].set_ylabel("energy error\nmax |E - E(0) - W| / max(|E|, |W|)")
+    axes[1, 0].set_xlabel("wall time [s], median")
+    axes[1, 1].set_xlabel("right-hand-side evaluations")
+    axes[0, 0].text(0.02, 0.02, f"shaded: within {RESOLUTION:g}x of the reference's accuracy (hollow points)",
+                    transform=axes[0, 0].transAxes, fontsize=7, color="0.3")
+    fig.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False,
+               title="colour: method; marker and line: source\n\u25cb \u2014 reference, \u25a1 - - pinocchio, \u25b3 \u00b7\u00b7\u00b7 mujoco",
+               title_fontsize=8)
+    unstable = frame[frame["status"] == "unstable"]
+    notes = "; ".join(f"{point_label(r)} ({r['detail'].split(':')[0]})" for _, r in unstable.iterrows())
+    fig.suptitle(f"{case.name}: error against cost over {ref.get('t_end', 0):g} s\n{ref.get('label', '')}",
+                 fontsize=10)
+    if notes:
+        fig.text(0.01, 0.005, "unstable (not drawn): " + notes, fontsize=7, wrap=True)
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
+    fig.savefig(path, dpi=110, bbox_inches="tight")  # takes in the legend outside the panels
+    plt.close(fig)
+    return path
+
+
+# -- convergence ----------------------------------------------------------------------------------
+
+def convergence(case):
+    """The observed order of every fixed-step method of the case file's [work_precision.convergence]:
+    check rows (check "convergence", quantity the method, error |observed - expected order|).
+
+    Observed order: runs at h, h/2, h/4 from the book's initial conditions over a short horizon T,
+    p = log2(D1 / D2) with D1 = |x_h - x_h/2|, D2 = |x_h/2 - x_h/4|, each the largest difference
+    over the trajectory (at 50 or more of the coarsest run's steps) and the state coordinates,
+    relative to the coordinate's largest magnitude.  Over the trajectory, not at the final state: the error of one
+    instant can pass near zero and bend the ratio (measured: RK4 on the double pendulum shows 5.05
+    at the final state and 3.89 over the trajectory, 4.00 and 3.94 at halved steps).
+
+    Tolerance, from the error expansion x_h - x = h^p e_p + h^(p+1) e_(p+1) + ...:
+    D1 / D2 = 2^p (1 + c rho h) / (1 + c rho h / 2), c = (1 - 2^-(p+1)) / (1 - 2^-p) <= 1.5, with
+    rho = |e_(p+1) / e_p|, so the observed order is off by about c rho h / (2 ln 2) <= 1.1 rho h.
+    The next term carries one more factor of the fastest frequency omega of the scene than the
+    leading one, and where the error accumulates over the horizon (the Eulers' growing amplitude)
+    one more factor omega T, so rho <= omega (1 + omega T) and the allowed deviation is
+    omega h (1 + omega T), omega from the case file (measured over the four cases: 0.02 to 0.45 of
+    it, halving with h as the expansion says).  Steps are chosen to keep it at most 0.25: an order
+    off by one fails fourfold.  Differences at rounding level would make p meaningless, so a setup
+    whose D2 is under ROUNDING_FLOOR raises instead of reporting."""
+    wp = settings(case)
+    if wp is None:
+        return []
+    conv = wp["convergence"]
+    omega = conv["omega"]
+    q0, v0, _ = case.initial
+    columns = state_columns(case)
+    rows = []
+    for method, (h, t_end) in conv["steps"].items():
+        source = "mujoco" if method in MUJOCO_METHODS else "reference"
+        model = case.model(source)
+        # Compare at least 50 instants on the coarsest run's steps, not every one of them: simulate
+        # evaluates the reactions and the energy at each output, which costs more than the steps.
+        n = round(t_end / h)
+        every = max(k for k in range(1, n // 50 + 1) if n % k == 0)
+        try:
+            runs = [simulate(model, (q0, v0), t_end, method, dt=h / 2**i, output_step=every * h,
+                             work=False)[columns] for i in range(3)]
+        except Unstable as failure:
+            rows.append(unstable_row("convergence", method, source, failure))
+            continue
+        scale = runs[2].abs().max()
+        d1, d2 = ((runs[i] - runs[i + 1]).abs().max().div(scale).max() for i in range(2))
+        if not d2 > ROUNDING_FLOOR:
+            raise ValueError(f"{case.file}: work_precision.convergence.omega_h.{method} gives h = {h:g} s: the runs at "
+                             f"h/2 and h/4 differ by {d2:.1e}, within rounding ({ROUNDING_FLOOR:.1e}); choose a larger step")
+        observed = math.log2(d1 / d2)
+        expected = EXPECTED_ORDER[method]
+        rows.append(row("convergence", method, source, abs(observed - expected), omega * h * (1 + omega * t_end),
+                        f"observed order {observed:.3f} (expected {expected}) from dt = {h:g}, {h / 2:g}, "
+                        f"{h / 4:g} s over {t_end:g} s; differences {d1:.2e}, {d2:.2e}; allowed "
+                        f"omega h (1 + omega T) with omega = {omega:g} rad/s"))
+    return rows

@@ -1,0 +1,255 @@
+"""Case files against their schema: every bad input gives one clear error and exit code 2, never a traceback."""
+
+import copy
+import json
+import re
+import shutil
+import tomllib
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import dyncheck
+from dyncheck import case as case_module
+from dyncheck import cli, schema
+from dyncheck.case import Case
+
+
+def test_every_case_file_validates():
+    for name in dyncheck.case_names():
+        file = case_module.CASES_DIR / name / "case.toml"
+        schema.validate(tomllib.loads(file.read_text()), file)
+        dyncheck.load_case(name)
+
+
+@pytest.fixture
+def cases(monkeypatch, tmp_path):
+    """A copy of the cases folder that the command line reads instead of the real one."""
+    shutil.copytree(case_module.CASES_DIR, tmp_path / "cases")
+    monkeypatch.setattr(case_module, "CASES_DIR", tmp_path / "cases")
+    return tmp_path / "cases"
+
+
+def edit(folder, file, old, new):
+    text = (folder / file).read_text()
+    assert old in text, old
+    (folder / file).write_text(text.replace(old, new, 1))
+
+
+# (case, text in case.toml, its replacement, what the message says after the file's name: a part or parts)
+BAD_CASE_FILES = [
+    ("spring_pendulum", "[tolerance.energy]", "[tollerance.energy]",
+     ("tollerance = {'energy': {'safety': 10.0, 'why': ", "is not a known key (did you mean 'tolerance'?)")),
+    ("spring_pendulum", "rtol = 1e-10", "rtoll = 1e-10",
+     "integration.rtoll = 1e-10 is not a known key (did you mean 'rtol'?)"),
+    ("spring_pendulum", "t_end = 3.0\n", "", "initial.t_end is missing (a number or an expression in quotes, > 0)"),
+    ("spring_pendulum", "count = 100", 'count = "100"', "sample.count = '100' is a string, not an integer"),
+    ("spring_pendulum", 'coords = ["psi", "l"]', 'coords = "psi, l"', "coords = 'psi, l' is a string, not an array"),
+    ("spring_pendulum", 'unit = "kg"', 'unit = "g"', "params.m.unit = 'g' is not the unit of m, 'kg'"),
+    ("spring_pendulum", 'unit = "N/m"', 'unit = "N/mm"', "params.k.unit = 'N/mm' is not the unit of k, 'N/m'"),
+    ("spring_pendulum", "m = { value = 0.2,", "m = { value = 0.0,",
+     "params.m.value = 0.0 must be > 0 (m is a mass, in kg)"),
+    ("spring_pendulum", "m = { value = 0.2,", "m = { value = -1,",
+     "params.m.value = -1.0 must be > 0 (m is a mass, in kg)"),
+    ("spring_pendulum", "k = { value = 2000.0,", "k = { value = 0.0,",
+     "params.k.value = 0.0 must be > 0 (k is a stiffness, in N/m)"),
+    ("rotating_pendulum", "l = { value = 0.1,", "l = { value = -0.1,",
+     "params.l.value = -0.1 must be > 0 (l is a length, in m)"),
+    ("spinning_top", "Izz = { value = 0.002258,", "Izz = { value = 0.0023,",
+     "Ixx = 0.0029393, Izz = 0.0023, m = 0.582, h = 0.0558 break the triangle inequality A + B >= C"),
+    ("spinning_top", "Ixx = { value = 0.0029393,", "Ixx = { value = 0.0018,",
+     "Ixx = 0.0018, m = 0.582, h = 0.0558 give the top a moment of inertia about its centre of mass "
+     "A = Ixx - m h^2 = -1.214e-05 kg m^2, not > 0"),
+    ("spring_pendulum", "rtol = 1e-10", "rtol = inf", "integration.rtol = inf is not finite"),
+    ("spring_pendulum", "output_step = 1e-3", "output_step = 0.0", "integration.output_step = 0.0 must be > 0"),
+    ("spring_pendulum", "output_step = 1e-3", "output_step = 1.5e-4",
+     "integration.output_step = 0.00015 is not a multiple of integration.mujoco_step = 0.0001"),
+    ("spring_pendulum", "tight_rtol = 1e-12", "tight_rtol = 1e-8",
+     "integration.tight_rtol = 1e-08 is not below integration.rtol"),
+    ("spring_pendulum", 'q = ["pi/6", 0.0]', 'q = ["pi/6"]',
+     "initial.q = ['pi/6'] has length 1, not 2 (one per coordinate: psi, l)"),
+    ("spring_pendulum", 'q = ["pi/6", 0.0]', 'q = ["pi/sixth", 0.0]',
+     "cannot evaluate 'pi/sixth': name 'sixth' is not defined (at initial.q[0])"),
+    ("spring_pendulum", 'k = [{ element = "joint"', 'kk = [{ element = "joint"',
+     ("scene.bindings.kk = [{'element': 'joint',", "binds no parameter (did you mean 'k'?)")),
+    ("spring_pendulum", 'axis = 0, frame = "body"', 'axis = 3, frame = "body"',
+     "scene.reactions.R.axis = 3 is not one of 0, 1, 2"),
+    ("spring_pendulum", "\n[params]\n", '\n[params]\nmu = { value = 0.5, unit = "furlong", about = "x" }\n',
+     "params.mu.unit = 'furlong' is not a known unit; expected one of: N m, N/m, kg"),
+    ("spring_pendulum", "\n[params]\n", '\nname = "spring_pendulum"\n[params]\n',
+     "not valid TOML: Cannot overwrite a value"),
+    ("spring_pendulum", "\n[params]\n", "\n[params\n",
+     "not valid TOML: Expected ']' at the end of a table declaration"),
+    ("double_pendulum", "m1 = [0.05, 2.0]", "m1 = [0.0, 2.0]",
+     "sample.params.ranges.m1 = [0.0, 2.0] leaves the physical values: m1 must be > 0 (m1 is a mass, in kg)"),
+]
+
+
+@pytest.mark.parametrize("name, old, new, message", BAD_CASE_FILES)
+def test_a_bad_case_file_exits_2_naming_file_field_and_value(cases, capsys, name, old, new, message):
+    edit(cases / name, "case.toml", old, new)
+    assert cli.main(["run", name]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"dyncheck: error: {cases / name / 'case.toml'}: ") and err.count("\n") == 1, err
+    assert all(part in err for part in ((message,) if isinstance(message, str) else message)), err
+
+
+BAD_COMMAND_LINES = [
+    (["run", "spring_pendulum", "--set", "g=nan"], "spring_pendulum/case.toml: override g = nan is not finite"),
+    (["run", "spring_pendulum", "--set", "m=abc"], "spring_pendulum/case.toml: override m = 'abc' is not a number"),
+    (["run", "spring_pendulum", "--set", "m=0"], "override m = 0.0 must be > 0 (m is a mass, in kg)"),
+    (["run", "spring_pendulum", "--set", "g=-9.81"], "override g = -9.81 must be >= 0 (g is the magnitude of gravity"),
+    (["run", "rotating_pendulum", "--set", "l=-0.1"], "override l = -0.1 must be > 0 (l is a length, in m)"),
+    (["run", "spinning_top", "--set", "Ixx=0.0028"],
+     "Ixx = 0.0028 (override), Izz = 0.002258, m = 0.582, h = 0.0558 break the triangle inequality A + B >= C"),
+    (["run", "spinning_top", "--set", "h=0.08"], "Ixx = 0.0029393, m = 0.582, h = 0.08 (override) give the top"),
+    (["run", "spring_pendulum", "--set", "mm=1"],
+     "--set mm: no selected case has a parameter 'mm' (did you mean 'm'?)"),
+    (["run", "spring_pendulm"], "unknown case 'spring_pendulm' (did you mean 'spring_pendulum'?); known cases: "),
+    (["report", "xyz"], "unknown case 'xyz'; known cases: "),
+]
+
+
+@pytest.mark.parametrize("argv, message", BAD_COMMAND_LINES)
+def test_a_bad_command_line_exits_2(capsys, argv, message):
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dyncheck: error: ") and message in err and err.count("\n") == 1, err
+
+
+def test_the_book_s_unrealisable_inertias_load_and_the_scene_s_margin_is_the_limit():
+    """The printed pair breaks A + B >= C by 3.7e-6 kg m^2 and loads; Izz may grow up to the 1e-5 that
+    scene.xml's armature carries, and MuJoCo compiles it; beyond, the case refuses it, not MuJoCo."""
+    top = dyncheck.load_case("spinning_top")
+    a = top.params["Ixx"] - top.params["m"] * top.params["h"] ** 2
+    dyncheck.load_case("spinning_top", Izz=2 * a + 0.99e-5).model("mujoco")
+    with pytest.raises(ValueError, match="break the triangle inequality"):
+        dyncheck.load_case("spinning_top", Izz=2 * a + 1.01e-5)
+
+
+@pytest.mark.parametrize("scene, text, message", [
+    ("scene.urdf", None, "scene.urdf: no such scene file (case 'double_pendulum' needs it for pinocchio)"),
+    ("scene.xml", None, "scene.xml: no such scene file (case 'double_pendulum' needs it for mujoco)"),
+    ("scene.xml", "<mujoco><worldbody><body", "scene.xml: XML parse error"),
+    ("scene.urdf", "<robot name='x'><link", "scene.urdf: The file"),
+])
+def test_a_scene_file_that_fails_to_load_exits_2(cases, capsys, scene, text, message):
+    path = cases / "double_pendulum" / scene
+    if text is None:
+        path.unlink()
+    else:
+        path.write_text(text)
+    assert cli.main(["run", "double_pendulum"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"dyncheck: error: {path}") and message in err and err.count("\n") == 1, err
+
+
+# -- property: whatever is wrong with a case file, loading it gives a ValueError naming the file ----------
+
+def toml(spec):
+    """spec as TOML text: every table inline (tomllib has no writer)."""
+    key = lambda k: k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k, ensure_ascii=False)
+
+    def value(x):
+        if isinstance(x, bool):
+            return "true" if x else "false"
+        if isinstance(x, (int, float)):
+            return repr(x)  # inf, nan and 1e-05 are TOML too
+        if isinstance(x, str):
+            return json.dumps(x, ensure_ascii=False)
+        if isinstance(x, list):
+            return "[" + ", ".join(map(value, x)) + "]"
+        return "{" + ", ".join(f"{key(k)} = {value(v)}" for k, v in x.items()) + "}"
+    return "".join(f"{key(k)} = {value(v)}\n" for k, v in spec.items())
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    """A copy of every case folder, scene files included, and its parsed case file."""
+    root = tmp_path_factory.mktemp("cases")
+    out = {}
+    for name in dyncheck.case_names():
+        shutil.copytree(case_module.CASES_DIR / name, root / name)
+        out[name] = (root / name, tomllib.loads((root / name / "case.toml").read_text()))
+    return out
+
+
+def test_the_toml_writer_round_trips(folders):
+    for folder, spec in folders.values():
+        (folder / "case.toml").write_text(toml(spec))
+        assert tomllib.loads((folder / "case.toml").read_text()) == spec
+        Case(folder)
+
+
+TEXT = st.text(st.characters(blacklist_categories=("Cs", "Cc")), max_size=8)
+SCALARS = st.one_of(st.booleans(), st.integers(-10, 1000), st.floats(), TEXT)
+VALUES = st.recursive(SCALARS, lambda inner: st.lists(inner, max_size=3)
+                      | st.dictionaries(TEXT.filter(bool), inner, max_size=3), max_leaves=6)
+
+
+def places(x, path=()):
+    """The path of every value inside x, its tables' keys and its arrays' items."""
+    items = x.items() if isinstance(x, dict) else enumerate(x) if isinstance(x, list) else ()
+    for k, item in items:
+        yield path + (k,)
+        yield from places(item, path + (k,))
+
+
+def mutate(spec, data):
+    """spec with one value deleted, replaced by a random one, or its key renamed."""
+    spec = copy.deepcopy(spec)
+    path = data.draw(st.sampled_from(list(places(spec))))
+    parent = spec
+    for k in path[:-1]:
+        parent = parent[k]
+    k = path[-1]
+    action = data.draw(st.sampled_from(["delete", "replace", "rename"]))
+    if action == "delete":
+        del parent[k]
+    elif action == "rename" and isinstance(parent, dict):
+        new = data.draw(st.one_of(TEXT.filter(bool), st.just(k + "s"), st.just(k[:-1] or "_")))
+        parent[new] = parent.pop(k)
+    else:
+        parent[k] = data.draw(VALUES)
+    return spec
+
+
+@settings(max_examples=150, deadline=None)
+@given(name=st.sampled_from(dyncheck.case_names()), data=st.data())
+def test_a_mutated_case_file_loads_or_gives_a_value_error_naming_it(folders, name, data):
+    folder, spec = folders[name]
+    for _ in range(data.draw(st.integers(1, 3))):
+        spec = mutate(spec, data)
+    (folder / "case.toml").write_text(toml(spec))
+    try:
+        case = Case(folder)
+    except ValueError as error:
+        assert str(error).startswith(f"{folder / 'case.toml'}: "), error
+        return
+    # What loads can be used: the numbers the checks read all evaluate.
+    case.initial, case.sample_states(), case.integration, case.scene
+
+
+GARBLE = st.sampled_from(["truncate", "insert", "delete", "bytes"])
+
+
+@settings(max_examples=100, deadline=None)
+@given(name=st.sampled_from(dyncheck.case_names()), how=GARBLE, data=st.data())
+def test_malformed_toml_gives_a_value_error_naming_the_file(folders, name, how, data):
+    folder, _ = folders[name]
+    text = (case_module.CASES_DIR / name / "case.toml").read_bytes()
+    at = data.draw(st.integers(0, len(text)))
+    if how == "truncate":
+        text = text[:at]
+    elif how == "insert":
+        text = text[:at] + data.draw(st.binary(min_size=1, max_size=4)) + text[at:]
+    elif how == "delete":
+        text = text[:at] + text[at + data.draw(st.integers(1, 40)):]
+    else:
+        text = data.draw(st.binary(max_size=200))
+    (folder / "case.toml").write_bytes(text)
+    try:
+        Case(folder)
+    except ValueError as error:
+        assert str(error).startswith(f"{folder / 'case.toml'}: "), error

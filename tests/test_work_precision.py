@@ -1,0 +1,97 @@
+"""Work-precision sweep, cheapest method, and the convergence checks (fast: small configurations)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import dyncheck
+from dyncheck import work_precision
+from dyncheck.simulate import simulate as real_simulate
+
+
+def test_convergence_observes_the_orders():
+    for name in ("double_pendulum", "spinning_top"):
+        rows = work_precision.convergence(dyncheck.load_case(name))
+        assert [r["quantity"] for r in rows] == list(work_precision.EXPECTED_ORDER)
+        assert all(r["check"] == "convergence" and r["status"] == "pass" for r in rows), rows
+        assert all(0 < r["tolerance"] <= 0.25 for r in rows)  # an order off by one must fail
+
+
+def test_convergence_fails_for_a_wrong_order(monkeypatch):
+    case = dyncheck.load_case("spinning_top")
+    # An integrator bug: "RK4" that is really explicit Euler (order 1, expected 4).
+    swapped = lambda model, ic, t_end, method, **kw: real_simulate(
+        model, ic, t_end, "explicit Euler" if method == "RK4" else method, **kw)
+    monkeypatch.setattr(work_precision, "simulate", swapped)
+    rows = {r["quantity"]: r for r in work_precision.convergence(case)}
+    assert rows["RK4"]["status"] == "fail" and rows["RK4"]["error"] > 2.5
+    assert rows["explicit Euler"]["status"] == "pass"
+    # A wrong expectation fails too.
+    monkeypatch.setattr(work_precision, "simulate", real_simulate)
+    monkeypatch.setitem(work_precision.EXPECTED_ORDER, "semi-implicit Euler", 2)
+    rows = {r["quantity"]: r for r in work_precision.convergence(case)}
+    assert rows["semi-implicit Euler"]["status"] == "fail"
+
+
+def test_convergence_refuses_differences_at_rounding_level():
+    case = dyncheck.load_case("spinning_top")
+    # RK4 at omega h = 5e-4: its differences, ~(omega h)^4, drown in rounding.
+    case.spec["work_precision"]["convergence"].update(omega_t=0.1, omega_h={"RK4": 5e-4})
+    with pytest.raises(ValueError, match="within rounding"):
+        work_precision.convergence(case)
+
+
+def tiny(case, sweep):
+    case.spec["work_precision"].update(t_end=1.0, output_step=0.01, repeat=2, sweep=sweep,
+                                       solution={"rtol": 1e-9, "max_step": 0.01})
+    return case
+
+
+def test_sweep_rows_and_an_unstable_point(tmp_path):
+    case = tiny(dyncheck.load_case("spring_pendulum"), {
+        "reference": {"DOP853": [1e-6], "explicit Euler": [1e-3]},  # explicit Euler blows up at 0.8 s
+        "mujoco": {"mujoco:RK4": [5e-3]}})
+    calls = []
+    frame = work_precision.sweep(case, progress=calls.append)
+    assert list(frame.columns) == work_precision.COLUMNS
+    assert len(frame) == len(calls) == 3
+    ok, unstable = frame[frame["status"] == "ok"], frame[frame["status"] == "unstable"]
+    assert list(unstable["method"]) == ["explicit Euler"]
+    assert np.isnan(unstable["error"]).all() and "t = 0.8" in unstable["detail"].iloc[0]
+    assert (ok["error"] > 0).all() and (ok["error"] < 1e-2).all() and (ok["energy_error"] > 0).all()
+    assert (ok["wall"] > 0).all() and (ok["evaluations"] > 0).all()
+    # The reference solution is named and its accuracy verified (tolerance 1e-9 here).
+    assert frame.attrs["reference"]["accuracy"] < 1e-6
+    work_precision.figure(frame, case, tmp_path / "wp.png")
+    work_precision.write_csv(frame, tmp_path / "wp.csv")
+    assert (tmp_path / "wp.png").stat().st_size > 0
+    assert len(pd.read_csv(tmp_path / "wp.csv", comment="#")) == 3
+
+
+def test_nothing_to_integrate():
+    case = dyncheck.load_case("piston")
+    assert work_precision.sweep(case).empty and work_precision.convergence(case) == []
+    assert "prescribed" in work_precision.NO_SWEEP
+
+
+def test_a_step_must_divide_the_output_step():
+    case = dyncheck.load_case("double_pendulum")
+    case.spec["work_precision"]["sweep"]["mujoco"]["mujoco:RK4"] = [3e-3]
+    with pytest.raises(ValueError, match="sweep.mujoco.mujoco:RK4"):
+        work_precision.plan(case)
+
+
+def test_cheapest_picks_the_fastest_point_that_reaches_each_level():
+    rows = [("a", "RK4", 1e-3, 0.10), ("b", "DOP853", 5e-3, 0.05), ("b", "DOP853", 1e-5, 0.20),
+            ("c", "Euler", 1e-9, 0.01)]  # c: within 10x of the reference's accuracy, unresolved
+    frame = pd.DataFrame([{"source": s, "method": m, "setting": "dt", "value": 0.1, "error": e, "wall": w,
+                           "status": "ok", "resolved": e > 1e-8} for s, m, e, w in rows]
+                         + [{"source": "d", "method": "RK45", "setting": "rtol", "value": 1.0, "error": np.nan,
+                             "wall": np.nan, "status": "unstable", "resolved": False}])
+    frame.attrs["reference"] = {"accuracy": 1e-9}
+    table = work_precision.cheapest(frame, levels=(1e-2, 1e-4, 1e-8, 1e-10)).set_index("level")
+    assert table.loc[1e-2, "cheapest"].startswith("b DOP853") and table.loc[1e-2, "wall"] == 0.05
+    assert table.loc[1e-2, "runner_up"].startswith("a RK4") and table.loc[1e-2, "runner_up_wall"] == 0.10
+    assert table.loc[1e-4, "wall"] == 0.20 and table.loc[1e-4, "runner_up"] == ""
+    assert table.loc[1e-8, "cheapest"] == "none reached"
+    assert table.loc[1e-10, "cheapest"].startswith("not resolvable")
