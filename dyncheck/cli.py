@@ -50,6 +50,7 @@ def main(argv=None):
     if args.command == "bench":
         from dyncheck.bench import bench_case
         table = pd.concat([bench_case(case) for case in cases], ignore_index=True)
+        table["ratio to bare"] = table["ratio to bare"].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")  # no bare loop
         print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
         return 0
     results = [run_case(case) for case in tqdm(cases, desc="checks", unit="case", disable=None, leave=False)]

@@ -55,8 +55,12 @@ def write_reports(results, out):
 def write_summary(res, tmp):
     """data/<case>.json: the case's results (the schema of `dyncheck run --json`) for the index."""
     rows = res["rows"]
+    studies = res.get("studies")
+    sweep = studies["work_precision"] if studies else None
     summary = {**to_json([res])["cases"][0], "title": res["case"].title, "status": status_of(rows),
-               "worst_engine_error": worst_engine_error(rows), "random": random_tried(res)}
+               "worst_engine_error": worst_engine_error(rows), "random": random_tried(res),
+               "cheapest": None if sweep is None or sweep.empty else  # for the index: level -> method
+               {f"{r['level']:.0e}": r["cheapest"] for _, r in work_precision.cheapest(sweep).iterrows()}}
     rel = f"data/{res['case'].name}.json"
     (tmp / rel).write_text(json.dumps(summary, indent=1) + "\n")
     return rel
@@ -541,6 +545,17 @@ def write_errata(tmp, out):
     return "errata.md"
 
 
+def speed_table(cases):
+    """Index lines: for each case with a work-precision sweep, the cheapest method at each accuracy."""
+    rows = [{"case": f"[{c['case']}]({c['case']}.md#speed-against-accuracy)", **c["cheapest"]}
+            for c in cases if c.get("cheapest")]
+    if not rows:
+        return []
+    return ["The cheapest method (least wall time) that reaches each relative trajectory error, from each"
+            " case's work-precision sweep (details, charts and the stability studies on the case pages):", "",
+            markdown_table(pd.DataFrame(rows).fillna("-")), ""]
+
+
 def write_index(tmp, out):
     """index.md over every case with results in `out` (kept) or `tmp` (this run's)."""
     cases = summaries(tmp, out)
@@ -562,6 +577,7 @@ def write_index(tmp, out):
              " a finding is an error of the book, with the largest relative error it causes: all of them"
              " are in the [errata](errata.md).", "",
              markdown_table(pd.DataFrame(rows)), "",
+             *speed_table(cases),
              f"The last run tried {sum(t['parameter_sets'] for t in tried)} random parameter sets besides the book's"
              f" and {states} random states in all ({len(cases)} cases; seeds on each case page): reference, MuJoCo"
              " and Pinocchio " + (f"disagreed in {', '.join(disagreed)}." if disagreed else

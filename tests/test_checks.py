@@ -58,6 +58,7 @@ def test_a_blown_up_mujoco_run_is_reported_unstable_with_time_and_step():
     with pytest.raises(Unstable) as error:
         simulate(case.model("mujoco"), case.initial[:2], 1.0, "mujoco:RK4", dt=0.05, output_step=0.05)
     assert error.value.method == "mujoco:RK4" and 0 < error.value.t <= 1.0 and error.value.step > 0
+    assert "MuJoCo warning mjWARN_BADQVEL" in error.value.why and "reset" in error.value.why
 
 
 def test_unknown_method_is_named():

@@ -133,6 +133,8 @@ def test_the_page_shows_the_studies(monkeypatch, results, tmp_path):
     for heading in ("## Speed against accuracy", "## Convergence", "## Stability: where methods fail"):
         assert heading in page
     assert "Which method is cheapest" in page and "observed order" in page and "unstable at t = " in page
+    index = (tmp_path / "index.md").read_text()
+    assert "The cheapest method" in index and "1e-04" in index  # the index's speed table
     rows = pd.read_csv(tmp_path / "data" / "double_pendulum_work_precision.csv", comment="#")
     assert set(rows["method"]) == {"DOP853", "RK4", "mujoco:RK4"} and (rows["error"] > 0).all()
     for link in [line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")]:

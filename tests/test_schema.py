@@ -253,3 +253,17 @@ def test_malformed_toml_gives_a_value_error_naming_the_file(folders, name, how, 
         Case(folder)
     except ValueError as error:
         assert str(error).startswith(f"{folder / 'case.toml'}: "), error
+
+
+@settings(max_examples=80, deadline=None)
+@given(name=st.sampled_from(dyncheck.case_names()), data=st.data())
+def test_random_overrides_load_or_give_a_clean_error(name, data):
+    """Any `--set NAME=VALUE` (odd numbers, huge ones, text) loads every model of the case or gives
+    a ValueError (exit 2) with a message; never another exception."""
+    from dyncheck.cli import select_cases
+    key = data.draw(st.sampled_from(list(dyncheck.load_case(name).defaults) + ["zz"]))
+    value = data.draw(st.one_of(st.floats(), st.floats(-10.0, 10.0), st.text(max_size=6)))
+    try:
+        select_cases([name], [f"{key}={value}"])
+    except ValueError as error:
+        assert str(error).strip()
