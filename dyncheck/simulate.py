@@ -117,18 +117,7 @@ def _fixed(model, q0, v0, grid, method, dt, work):
 def _mujoco(model, q0, v0, grid, method, dt, work):
     run = model.step(q0, v0, grid[-1], dt, method.split(":")[1])
     t, q, v = run["t"], run["q"], run["v"]
-    # MuJoCo answers a blow-up (NaN, Inf or |qvel| > 1e10) by resetting the state and the clock
-    # to their initial values, silently for a rollout: a clock that stops advancing by dt marks it.
-    finite = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(v), axis=1)
-    advancing = np.concatenate([[True], np.abs(np.diff(t) - dt) < dt / 2])
-    warned = "; ".join(f"MuJoCo warning {name} ({number} time{'s' if number > 1 else ''}, last with info {info})"
-                       for name, (number, info) in run["warnings"].items())
-    if not (finite & advancing).all():
-        step = int(np.argmin(finite & advancing))
-        raise Unstable(method, step * dt, step, (warned or "non-finite or huge state") + "; MuJoCo reset the simulation"
-                       if finite[step] else "state is not finite")
-    if warned:  # a warning without a reset: the run is not to be trusted either
-        raise Unstable(method, grid[-1], run["steps"], warned)
+    check_mujoco_run(run, method, dt)
     # Work of the prescribed motions: drive power at every step, Simpson's rule (error ~ dt^4).
     if work:
         work = cumulative_simpson(model.drive_powers(t, q, v), x=t, initial=0.0)
@@ -142,6 +131,36 @@ def _mujoco(model, q0, v0, grid, method, dt, work):
     return grid, q[keep], v[keep], work[keep], {
         "wall": run["wall"], "evaluations": run["evaluations"], "steps": run["steps"],
         "driven_rate_error": run["driven_rate_error"]}
+
+
+def check_mujoco_run(run, method, dt, bound=None):
+    """Raise Unstable at the first step of a MujocoModel.step run that is not finite, that MuJoCo reset,
+    or (with `bound` = (coordinate name, its index, limit)) whose coordinate is beyond the limit; or,
+    for a run with a MuJoCo warning but no reset, at its end."""
+    t, q, v = run["t"], run["q"], run["v"]
+    # MuJoCo answers a blow-up (NaN, Inf or |qvel| > 1e10) by resetting the state and the clock
+    # to their initial values, silently for a rollout: a clock that stops advancing by dt marks it.
+    finite = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(v), axis=1)
+    advancing = np.concatenate([[True], np.abs(np.diff(t) - dt) < dt / 2])
+    inside = np.ones(len(t), dtype=bool)
+    if bound is not None:
+        _, index, limit = bound
+        inside = np.abs(np.where(finite, q[:, index], np.inf)) <= limit
+    warned = "; ".join(f"MuJoCo warning {name} ({number} time{'s' if number > 1 else ''}, last with info {info})"
+                       for name, (number, info) in run["warnings"].items())
+    good = finite & advancing & inside
+    if not good.all():
+        step = int(np.argmin(good))
+        if not finite[step]:
+            why = "state is not finite"
+        elif not advancing[step]:
+            why = (warned or "non-finite or huge state") + "; MuJoCo reset the simulation"
+        else:
+            name, index, limit = bound
+            why = f"|{name}| = {abs(q[step, index]):.3g} beyond {limit:g}"
+        raise Unstable(method, step * dt, step, why)
+    if warned:  # a warning without a reset: the run is not to be trusted either
+        raise Unstable(method, t[-1], run["steps"], warned)
 
 
 def _frame(model, t, q, v, work, attrs):

@@ -41,7 +41,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, fsolve
 
 from dyncheck.case import load_case
-from dyncheck.simulate import FIXED_METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable, simulate
+from dyncheck.simulate import FIXED_METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable, check_mujoco_run, simulate
 
 SHARP = {"semi-implicit Euler": 2.0, "mujoco:Euler": 2.0, "mujoco:implicitfast": 2.0,
          "RK4": 2 * math.sqrt(2.0), "mujoco:RK4": 2 * math.sqrt(2.0)}
@@ -135,25 +135,13 @@ def run_fixed(case, source, method, dt_target, t_end, *, bound=None, index=None,
         if bound is not None:
             model = Guarded(model, index, bound, method, evaluations_per_step(method))
     run = simulate(model, case.initial[:2], t_end, method, dt=dt, output_step=every * dt, work=False)
-    state = run[[c for name in case.coords for c in (name, name + "_rate")]].to_numpy()
-    if not np.all(np.isfinite(state)):
-        raise Unstable(method, t_end, steps, "state is not finite")
-    return run, dt, steps
+    return run, dt, steps  # simulate raises Unstable at a non-finite state or a MuJoCo reset
 
 
 def _mujoco_bound(model, ic, t_end, dt, method, bound, index):
     """Raise Unstable at MuJoCo's first step beyond `bound` on coordinate `index`, non-finite, or reset."""
-    raw = model.step(ic[0], ic[1], t_end, dt, method.split(":")[1])
-    t, q, v = raw["t"], raw["q"], raw["v"]
-    finite = np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(v), axis=1)
-    advancing = np.concatenate([[True], np.abs(np.diff(t) - dt) < dt / 2])
-    inside = np.abs(np.where(finite, q[:, index], np.inf)) <= bound
-    bad = np.nonzero(~(finite & advancing & inside))[0]
-    if bad.size:
-        i = int(bad[0])
-        why = (f"|{model.coords[index]}| = {abs(q[i, index]):.3g} beyond {bound:g}" if finite[i] and advancing[i]
-               else "non-finite or huge state; MuJoCo reset the simulation")
-        raise Unstable(method, i * dt, i, why)
+    run = model.step(ic[0], ic[1], t_end, dt, method.split(":")[1])
+    check_mujoco_run(run, method, dt, (model.coords[index], index, bound))
 
 
 # -- linear stability of one-step schemes -------------------------------------------------------
