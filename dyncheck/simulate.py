@@ -20,10 +20,11 @@ class Unstable(Exception):
         self.method, self.t, self.step, self.why = method, t, step, why
 
 
-def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True):
+def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True, max_step=np.inf):
     """Integrate `model` from ic = (q0, v0) over [0, t_end].
 
-    method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol`),
+    method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol` and steps of at
+    most `max_step`),
     FIXED_METHODS (driven by model.accelerations at step `dt`: the explicit Euler of the book's
     Matlab program, the semi-implicit Euler of its Pascal programs, classical RK4), or
     MUJOCO_METHODS (MuJoCo's own mj_step at step `dt`; the model must be a MujocoModel).
@@ -35,7 +36,7 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
     n_out = int(round(t_end / output_step))
     grid = np.linspace(0.0, t_end, n_out + 1)
     if method in SCIPY_METHODS:
-        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work)
+        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step)
     elif method in FIXED_METHODS:
         t, q, v, w, cost = _fixed(model, q0, v0, grid, method, dt, work)
     elif method in MUJOCO_METHODS:
@@ -45,7 +46,7 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
     return _frame(model, t, q, v, w, {"method": method, "rtol": rtol, "dt": dt, **cost})
 
 
-def _scipy(model, q0, v0, grid, method, rtol, work):
+def _scipy(model, q0, v0, grid, method, rtol, work, max_step):
     n = len(q0)
     evaluations = 0
 
@@ -59,7 +60,7 @@ def _scipy(model, q0, v0, grid, method, rtol, work):
     start = time.perf_counter()
     with np.errstate(all="ignore"):
         sol = solve_ivp(rhs, (grid[0], grid[-1]), np.concatenate([q0, v0, [0.0]]), method=method,
-                        t_eval=grid, rtol=rtol, atol=rtol)
+                        t_eval=grid, rtol=rtol, atol=rtol, max_step=max_step)
     wall = time.perf_counter() - start
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         bad = sol.t[-1] if sol.t.size else grid[0]

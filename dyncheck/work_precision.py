@@ -15,7 +15,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
 
 from dyncheck.checks import ROUNDING_FLOOR, energy_residual, row, state_columns, unstable_row  # noqa: E402
 from dyncheck.simulate import FIXED_METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable, simulate  # noqa: E402
@@ -108,30 +107,11 @@ def plan(case):
 # -- the reference solution ----------------------------------------------------------------------
 
 def _dop853(case, t_end, output_step, rtol, max_step):
-    """`reference` by DOP853 at rtol = atol with its step capped at `max_step`: q, v, energy and work
-    on the output grid.  Not simulate(): uncapped, DOP853 at 1e-13 takes a few long steps whose error
-    its estimate misses (measured 1e-12 to 3e-11 against Radau at 1e-13; capped at about half its mean
-    step, 5e-14 to 1e-12), and simulate has no cap."""
-    model = case.model("reference")
-    q0, v0, _ = case.initial
-    n = len(q0)
-    grid = np.linspace(0.0, t_end, int(round(t_end / output_step)) + 1)
-
-    def rhs(t, y):
-        q, v = y[:n], y[n:2 * n]
-        power = model.drive_power(t, q, v) if case.driven else 0.0
-        return np.concatenate([v, model.accelerations(t, q, v), [power]])
-
-    sol = solve_ivp(rhs, (0.0, t_end), np.concatenate([q0, v0, [0.0]]), method="DOP853", t_eval=grid,
-                    rtol=rtol, atol=rtol, max_step=max_step)
-    if sol.status != 0:
-        raise RuntimeError(f"case {case.name}: the reference solution failed: {sol.message}")
-    columns = {}
-    for i, name in enumerate(case.coords):
-        columns[name], columns[name + "_rate"] = sol.y[i], sol.y[n + i]
-    columns["energy"] = [model.energy(t, y[:n], y[n:2 * n]) for t, y in zip(sol.t, sol.y.T)]
-    columns["work"] = sol.y[-1]
-    return pd.DataFrame(columns, index=pd.Index(sol.t, name="t"))
+    """`reference` by DOP853 at rtol = atol with its step capped at `max_step`.  The cap matters:
+    uncapped, DOP853 at 1e-13 takes a few long steps whose error its estimate misses (measured 1e-12
+    to 3e-11 against Radau at 1e-13; capped at about half its mean step, 5e-14 to 1e-12)."""
+    return simulate(case.model("reference"), case.initial[:2], t_end, "DOP853", rtol=rtol, max_step=max_step,
+                    output_step=output_step, work=case.driven)
 
 
 def trajectory_error(run, reference, columns):
