@@ -1,0 +1,216 @@
+"""What the stability studies share: runs that may blow up, recorded as data; the linear stability
+of one-step schemes; a study's settings and result; the figures' style."""
+
+import math
+import time
+
+import numpy as np
+from scipy.optimize import brentq
+
+from dyncheck.case import load_case
+from dyncheck.simulate import FIXED_METHODS, MUJOCO_METHODS, Unstable, check_mujoco_run, simulate
+
+SHARP = {"semi-implicit Euler": 2.0, "mujoco:Euler": 2.0, "mujoco:implicitfast": 2.0,
+         "RK4": 2 * math.sqrt(2.0), "mujoco:RK4": 2 * math.sqrt(2.0)}
+"""omega h limits of the schemes on an undamped oscillator x'' = -omega^2 x (eigenvalues +-i omega):
+semi-implicit (symplectic) Euler |x| < 2; classical RK4 on the imaginary axis |x| < 2 sqrt(2) = 2.83
+(2.785 is its limit on the negative real axis, for decaying modes); MuJoCo's Euler is the same
+semi-implicit Euler, and its implicitfast treats only velocity-dependent forces implicitly, so an
+undamped spring is explicit to it.  Explicit Euler grows by sqrt(1 + (omega h)^2) every step, for
+any h: it has no limit, only a horizon (see `limit_step`)."""
+
+EPS = np.finfo(float).eps
+
+
+# -- runs that may blow up --------------------------------------------------------------------
+
+def failure(error):
+    """An integration that blew up, as data: {status, t, step, why}."""
+    if isinstance(error, Unstable):
+        return {"status": "unstable", "t": float(error.t), "step": int(error.step), "why": str(error.why)}
+    return {"status": "unstable", "t": None, "step": None, "why": f"{type(error).__name__}: {error}"}
+
+
+def attempt(run):
+    """(result, None) or (None, failure): a blow-up is recorded, never raised."""
+    try:
+        with np.errstate(all="ignore"):
+            return run(), None
+    except (Unstable, ArithmeticError, np.linalg.LinAlgError) as error:
+        return None, failure(error)
+
+
+def describe(fail):
+    """'unstable at t = 0.31 s (step 62): why' for a failure dict."""
+    if fail is None:
+        return "ran"
+    when = f" at t = {fail['t']:.4g} s" if fail.get("t") is not None else ""
+    step = f" (step {fail['step']})" if fail.get("step") is not None else ""
+    return f"{fail['status']}{when}{step}: {fail['why']}"
+
+
+class Guarded:
+    """`model` whose accelerations raise Unstable once coordinate `index` leaves +-`bound` (or is not
+    finite): a run that has left the physics stops there, with its time and step."""
+
+    def __init__(self, model, index, bound, method, per_step=1):
+        self.model, self.index, self.bound, self.method, self.per_step = model, index, bound, method, per_step
+        self.coords, self.reaction_names = model.coords, model.reaction_names
+        self.evaluations = 0
+
+    def accelerations(self, t, q, v):
+        self.evaluations += 1
+        x = q[self.index]
+        if not -self.bound <= x <= self.bound:  # NaN fails too
+            raise Unstable(self.method, t, self.evaluations // self.per_step,
+                           f"|{self.coords[self.index]}| = {abs(x):.3g} beyond {self.bound:g}")
+        return self.model.accelerations(t, q, v)
+
+    def reactions(self, t, q, v):
+        return self.model.reactions(t, q, v)
+
+    def energy(self, t, q, v):
+        return self.model.energy(t, q, v)
+
+    def drive_power(self, t, q, v):
+        return self.model.drive_power(t, q, v)
+
+
+def evaluations_per_step(method):
+    return {"RK4": 4}.get(method, 1) if method in FIXED_METHODS else 1
+
+
+def grid_step(dt_target, t_end, max_out=1000):
+    """(dt, steps, every): the largest step dt <= dt_target that divides t_end, output every `every`
+    steps, at most `max_out` rows."""
+    steps = max(1, math.ceil(t_end / dt_target - 1e-9))
+    every = max(1, math.ceil(steps / max_out))
+    steps = every * math.ceil(steps / every)
+    return t_end / steps, steps, every
+
+
+def run_fixed(case, source, method, dt_target, t_end, *, bound=None, index=None, max_out=1000):
+    """`method` at the step of `grid_step`: fixed-step generic methods integrate `source` (guarded by
+    `bound` on coordinate `index`), MuJoCo's its own scene.  Returns (run, dt, steps) or raises Unstable."""
+    dt, steps, every = grid_step(dt_target, t_end, max_out)
+    if method in MUJOCO_METHODS:
+        model = case.model("mujoco")
+        if bound is not None:  # no guard inside MuJoCo's loop: look at its raw steps first
+            _mujoco_bound(model, case.initial[:2], t_end, dt, method, bound, index)
+    else:
+        model = case.model(source)
+        if bound is not None:
+            model = Guarded(model, index, bound, method, evaluations_per_step(method))
+    run = simulate(model, case.initial[:2], t_end, method, dt=dt, output_step=every * dt, work=False)
+    return run, dt, steps  # simulate raises Unstable at a non-finite state or a MuJoCo reset
+
+
+def _mujoco_bound(model, ic, t_end, dt, method, bound, index):
+    """Raise Unstable at MuJoCo's first step beyond `bound` on coordinate `index`, non-finite, or reset."""
+    run = model.step(ic[0], ic[1], t_end, dt, method.split(":")[1])
+    check_mujoco_run(run, method, dt, (model.coords[index], index, bound))
+
+
+# -- linear stability of one-step schemes -------------------------------------------------------
+
+FAMILY = {"explicit Euler": "explicit Euler", "semi-implicit Euler": "semi-implicit Euler",
+          "mujoco:Euler": "semi-implicit Euler", "mujoco:implicitfast": "semi-implicit Euler",
+          "RK4": "RK4", "mujoco:RK4": "RK4"}
+
+
+def spectral_radius(method, x):
+    """Spectral radius of one step of `method` on x'' = -omega^2 x, for omega h = x (array or scalar):
+    explicit Euler sqrt(1 + x^2); semi-implicit Euler (the rate first, the position with the new rate:
+    trace 2 - x^2, determinant 1) 1 up to x = 2; classical RK4 |R(i x)| = sqrt(1 - x^6/72 + x^8/576)."""
+    x = np.asarray(x, dtype=float)
+    family = FAMILY.get(method)
+    if family == "explicit Euler":
+        return np.sqrt(1.0 + x * x)
+    if family == "semi-implicit Euler":
+        half = np.abs(1.0 - x * x / 2)
+        return np.where(half <= 1.0, 1.0, half + np.sqrt(np.maximum(half * half - 1.0, 0.0)))
+    if family == "RK4":
+        return np.sqrt(1.0 - x**6 / 72 + x**8 / 576)
+    raise ValueError(f"no stability theory for method '{method}'")
+
+
+def limit_step(method, omega, span, growth):
+    """The largest h for which `method` amplifies an undamped oscillation of frequency omega by at
+    most `growth` over `span` seconds: the first h with rho(omega h)^(span/h) = growth.  For the
+    sharp methods this is their omega h limit pushed up by a hair; for explicit Euler, whose
+    spectral radius sqrt(1 + (omega h)^2) exceeds 1 for every h, it is h ~ 2 ln(growth)/(omega^2 span)."""
+    if not omega > 0:
+        return math.inf
+    excess = lambda h: span / h * np.log(spectral_radius(method, omega * h)) - math.log(growth)
+    grid = np.geomspace(1e-7, 8.0, 1500) / omega
+    above = np.nonzero(excess(grid) > 0)[0]
+    if not above.size:
+        return math.inf
+    i = above[0]
+    return brentq(lambda h: float(excess(h)), grid[i - 1], grid[i], xtol=1e-14, rtol=1e-12) if i else grid[0]
+
+
+# -- common -------------------------------------------------------------------------------------
+
+def _settings(case, name):
+    """The study's sub-table with its expressions evaluated (numbers stay numbers)."""
+    raw = case.spec["stability"][name]
+    out = {}
+    for key, x in raw.items():
+        if key in ("why", "methods", "initial", "overrides", "source", "method"):
+            out[key] = x
+        elif isinstance(x, list):
+            out[key] = [case.value(y) for y in x]
+        else:
+            out[key] = case.value(x)
+    return out
+
+
+def _variant(case, **params):
+    """The case with further parameter overrides (on top of the case's own)."""
+    return load_case(case.name, **{**case.overrides, **params})
+
+
+def _fmt(x, spec=".3g", none="-"):
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return none
+    return format(x, spec)
+
+
+def _result(case, study, title, settings, data, table, findings, series, start):
+    table = table.astype(object).where(table.notna(), "-").astype(str)
+    return {"case": case.name, "study": study, "title": title, "why": " ".join(settings.get("why", "").split()),
+            "data": data, "table": table, "findings": findings, "series": series,
+            "settings": {k: v for k, v in settings.items() if k != "why"}, "wall": time.perf_counter() - start}
+
+
+def _rms(x):
+    x = np.asarray(x, dtype=float)
+    return float(np.sqrt(np.mean(x * x))) if x.size else float("nan")
+
+
+# -- figures ---
+
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+METHOD_STYLE = {
+    "explicit Euler": dict(color="tab:red", marker="o"),
+    "semi-implicit Euler": dict(color="tab:blue", marker="s"),
+    "RK4": dict(color="tab:green", marker="^"),
+    "DOP853": dict(color="black", marker="D"),
+    "mujoco:Euler": dict(color="tab:cyan", marker="x"),
+    "mujoco:implicitfast": dict(color="tab:purple", marker="+"),
+    "mujoco:RK4": dict(color="tab:olive", marker="1"),
+}
+
+
+def _style(label):
+    for key, style in METHOD_STYLE.items():
+        if label.startswith(key) and (key != "RK4" or label == "RK4"):
+            return dict(style)
+    return {}

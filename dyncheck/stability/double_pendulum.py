@@ -1,0 +1,345 @@
+"""1.9 double pendulum: the Lyapunov exponent, the agreement horizon and long-run energy drift."""
+
+import math
+import time
+
+import numpy as np
+import pandas as pd
+from scipy.integrate import solve_ivp
+
+from dyncheck.simulate import MUJOCO_METHODS, SCIPY_METHODS, Unstable, simulate
+from dyncheck.stability.common import EPS, _fmt, _plt, _result, _settings, _style, attempt, describe
+
+
+def _scale(case):
+    """Weights of the state (angles, rates) in the distance: rates divided by sqrt(g / l1)."""
+    n = len(case.coords)
+    w0 = math.sqrt(case.params["g"] / case.params.get("l1", 1.0))
+    return np.concatenate([np.ones(n), np.full(n, 1.0 / w0)])
+
+
+def _copies_rhs(model, n, copies):
+    def rhs(t, y):
+        out = np.empty_like(y)
+        for c in range(copies):
+            s = y[c * 2 * n:(c + 1) * 2 * n]
+            out[c * 2 * n:c * 2 * n + n] = s[n:]
+            out[c * 2 * n + n:(c + 1) * 2 * n] = model.accelerations(t, s[:n], s[n:])
+        return out
+    return rhs
+
+
+def benettin(case, q0, v0, horizon, renormalise, d0, rtol):
+    """Largest finite-time Lyapunov exponent by two neighbouring trajectories (Benettin): the neighbour
+    is pulled back to distance d0 every `renormalise` seconds and the logarithms of the stretches are
+    summed.  Returns times and ln(stretch) accumulated (lambda(t) = that / t)."""
+    model = case.model("reference")
+    n = len(case.coords)
+    scale = _scale(case)
+    x = np.concatenate([q0, v0]).astype(float)
+    u = np.ones(2 * n) / scale
+    u *= d0 / np.linalg.norm(u * scale)
+    y = np.concatenate([x, x + u])
+    rhs = _copies_rhs(model, n, 2)
+    steps = int(round(horizon / renormalise))
+    times, logs, total = [0.0], [0.0], 0.0
+    for i in range(steps):
+        sol = solve_ivp(rhs, (i * renormalise, (i + 1) * renormalise), y, method="DOP853", rtol=rtol,
+                        atol=rtol * 1e-2)
+        if sol.status != 0 or not np.all(np.isfinite(sol.y)):
+            raise Unstable("DOP853", sol.t[-1], i, sol.message)
+        y = sol.y[:, -1].copy()
+        dx = y[2 * n:] - y[:2 * n]
+        dist = np.linalg.norm(dx * scale)
+        total += math.log(dist / d0)
+        y[2 * n:] = y[:2 * n] + dx * (d0 / dist)
+        times.append((i + 1) * renormalise)
+        logs.append(total)
+    return np.array(times), np.array(logs)
+
+
+def amplification(case, horizon, rtol, delta=1e-7, points=200):
+    """The largest singular value of the state-transition matrix along the book's initial conditions,
+    by finite differences (one neighbour per state direction, in the scaled state), at `points` times."""
+    model = case.model("reference")
+    n = len(case.coords)
+    scale = _scale(case)
+    q0, v0, _ = case.initial
+    x = np.concatenate([q0, v0]).astype(float)
+    y0 = np.concatenate([x] + [x + delta * e / scale for e in np.eye(2 * n)])
+    grid = np.linspace(0.0, horizon, points + 1)
+    sol = solve_ivp(_copies_rhs(model, n, 2 * n + 1), (0.0, horizon), y0, method="DOP853", rtol=rtol,
+                    atol=rtol * 1e-2, t_eval=grid)
+    if sol.status != 0:
+        raise Unstable("DOP853", sol.t[-1], len(sol.t), sol.message)
+    y = sol.y.reshape(2 * n + 1, 2 * n, -1)
+    phi = (y[1:] - y[0]) * scale[None, :, None] / delta  # [direction, component, time]
+    sigma = np.array([np.linalg.svd(phi[:, :, i], compute_uv=False)[0] for i in range(phi.shape[2])])
+    return sol.t, sigma
+
+
+def agreement_horizon(case):
+    """How long two sources can be expected to agree: (horizon in s, details).
+
+    Two sources that integrate the same motion differ by about eps0 (the integrators' error level,
+    relative, [stability.lyapunov] eps0) early on; a difference grows with the motion's sensitivity
+    to its initial state, the largest singular value sigma(t) of the state-transition matrix along the
+    book's initial conditions.  The horizon is the first t with eps0 sigma(t) = tol (the difference
+    beyond which a trajectory comparison tests the chaos, not the equations).  If that lies beyond the
+    case's horizon t_end, it is extrapolated with the finite-time exponent ln sigma(t_end) / t_end
+    (an overestimate of the growth for a regular motion, so the horizon is on the safe side).
+    A case without [stability.lyapunov] has no limit: (inf, {...})."""
+    t_end = case.initial[2]
+    spec = case.spec.get("stability", {}).get("lyapunov")
+    if spec is None:
+        return math.inf, {"t_end": t_end, "within": True,
+                          "sentence": "no agreement horizon: the case declares no [stability.lyapunov]"}
+    s = _settings(case, "lyapunov")
+    eps0, tol = s["eps0"], s["tol"]
+    start = time.perf_counter()
+    result, fail = attempt(lambda: amplification(case, t_end, s["check_rtol"], delta=1e-6))
+    if fail is not None:
+        return t_end, {"t_end": t_end, "within": True, "eps0": eps0, "tol": tol,
+                       "sentence": f"amplification not computed ({describe(fail)}); the case's horizon is kept"}
+    t, sigma = result
+    ftle = math.log(sigma[-1]) / t_end
+    reached = np.nonzero(eps0 * sigma >= tol)[0]
+    if reached.size:
+        i = reached[0]
+        horizon = float(t[i])
+    else:
+        horizon = t_end + (math.log(tol / (eps0 * sigma[-1])) / ftle if ftle > 0 else math.inf)
+    within = horizon >= t_end
+    sentence = (f"a difference of {eps0:g} grows by {sigma[-1]:.3g} over the case's {t_end:g} s (finite-time "
+                f"exponent {ftle:.3g} 1/s), to {eps0 * sigma[-1]:.2g}; it reaches {tol:g} at "
+                + (f"t = {horizon:.3g} s" if math.isfinite(horizon) else "no time")
+                + (f": the case's {t_end:g} s lie within the agreement horizon" if within
+                   else f": sources can be compared only up to {horizon:.3g} s"))
+    return horizon, {"t_end": t_end, "within": within, "eps0": eps0, "tol": tol, "amplification": float(sigma[-1]),
+                     "ftle": ftle, "horizon": horizon, "wall": time.perf_counter() - start, "sentence": sentence}
+
+
+def lyapunov(case, settings, progress=None):
+    start = time.perf_counter()
+    starts = settings["initial"]
+    rows, curves = [], {}
+    eps0, tol = settings["eps0"], settings["tol"]
+    for item in starts:
+        label = item["label"]
+        if progress:
+            progress(f"Lyapunov exponent, {label}")
+        q0 = np.array([case.value(x) for x in item["q"]])
+        v0 = np.array([case.value(x) for x in item["v"]])
+        out, fail = attempt(lambda: benettin(case, q0, v0, settings["horizon"], settings["renormalise"],
+                                             settings["d0"], settings["rtol"]))
+        if fail is not None:
+            rows.append({"initial": label, "status": "unstable", "why": describe(fail)})
+            continue
+        t, logs = out
+        curves[label] = (t, logs)
+        lam = logs[-1] / t[-1]
+        half = np.searchsorted(t, t[-1] / 2)
+        lam_half = logs[half] / t[half]
+        # Exponential growth: ln(stretch) rises linearly, and its second half adds about lambda T / 2.
+        late = (logs[-1] - logs[half]) / (t[-1] - t[half])
+        chaotic = late > 0.5 * lam and lam > 0.3
+        running = logs[half:] / t[half:]
+        rows.append({"initial": label, "q0": tuple(q0), "v0": tuple(v0), "status": "chaotic" if chaotic else "regular",
+                     "lambda": lam, "lambda_half": lam_half, "lambda_second_half": late, "log_stretch": logs[-1],
+                     "lambda_min": float(running.min()), "lambda_max": float(running.max()),
+                     "horizon_rounding": math.log(tol / EPS) / lam if chaotic else None,
+                     "horizon_integrators": math.log(tol / eps0) / lam if chaotic else None})
+    data = pd.DataFrame(rows)
+    check_h, details = agreement_horizon(case)
+    table = pd.DataFrame([{
+        "initial conditions": r["initial"],
+        "motion": r["status"],
+        f"lambda at {settings['horizon']:g} s [1/s]": _fmt(r.get("lambda")),
+        f"lambda at {settings['horizon'] / 2:g} s [1/s]": _fmt(r.get("lambda_half")),
+        f"agreement horizon, {eps0:g} -> {tol:g} [s]": (_fmt(r.get("horizon_integrators"), ".3g")
+                                                       if r.get("horizon_integrators") else
+                                                       f"> {settings['horizon']:g} (no exponential growth)"),
+        "lambda over the second half [1/s]": (f"{r['lambda_min']:.3g}-{r['lambda_max']:.3g}"
+                                               if r.get("lambda_min") is not None else "-"),
+        f"agreement horizon, rounding {EPS:.1e} -> {tol:g} [s]": (_fmt(r.get("horizon_rounding"), ".3g")
+                                                                 if r.get("horizon_rounding")
+                                                                 else f"> {settings['horizon']:g}"),
+    } for r in rows])
+    findings = [f"Largest Lyapunov exponent by two neighbouring trajectories (Benettin; DOP853 at rtol "
+                f"{settings['rtol']:g}, distance {settings['d0']:g} in the state with rates divided by sqrt(g/l1), "
+                f"renormalised every {settings['renormalise']:g} s) over {settings['horizon']:g} s. The agreement "
+                f"horizon T = ln(tol/eps0)/lambda is how long two sources that differ by eps0 stay within tol."]
+    for r in rows:
+        if r["status"] == "unstable":
+            findings.append(f"{r['initial']}: {r['why']}.")
+        elif r["status"] == "chaotic":
+            findings.append(f"{r['initial']}: chaotic, lambda = {r['lambda']:.3g} 1/s (between "
+                            f"{r['lambda_min']:.3g} and {r['lambda_max']:.3g} over the second half of the run): a "
+                            f"difference grows e-fold every {1 / r['lambda']:.2g} s; from "
+                            f"the integrators' {eps0:g} to {tol:g} in {r['horizon_integrators']:.2g} s, from rounding "
+                            f"({EPS:.1e}) in {r['horizon_rounding']:.2g} s.")
+        else:
+            findings.append(f"{r['initial']}: regular (quasi-periodic): ln(stretch) grows only "
+                            f"{r['log_stretch']:.3g} in {settings['horizon']:g} s and lambda(t) keeps falling "
+                            f"({r['lambda_half']:.3g} at {settings['horizon'] / 2:g} s, {r['lambda']:.3g} at "
+                            f"{settings['horizon']:g} s, like ln(t)/t): no positive exponent, errors grow "
+                            "algebraically and two sources agree for far longer than the case's horizon.")
+    findings.append(f"Trajectory check (the book's initial conditions, reference, finite-time amplification): "
+                    f"{details['sentence']}.")
+    series = {"curves": curves, "rows": data, "check": details, "horizon": settings["horizon"]}
+    return _result(case, "lyapunov", "Lyapunov exponent and the agreement horizon", settings, data, table,
+                   findings, series, start)
+
+
+def energy_drift(case, settings, progress=None):
+    """Each method over a long horizon at one step: |E(t) - E(0)| relative to the swing's energy above rest."""
+    start = time.perf_counter()
+    q0, v0, _ = case.initial
+    T, dt = settings["horizon"], settings["dt"]
+    every = max(1, int(round(settings["output_step"] / dt)))
+    reference = case.model("reference")
+    rest = reference.energy(0.0, np.zeros(len(q0)), np.zeros(len(v0)))
+    e0 = reference.energy(0.0, q0, v0)
+    swing = e0 - rest
+    rows, curves = [], {}
+    for method in settings["methods"]:
+        if progress:
+            progress(f"energy drift, {method}")
+        source = "mujoco" if method in MUJOCO_METHODS else "reference"
+        kwargs = {"rtol": settings["rtol"]} if method in SCIPY_METHODS else {"dt": dt}
+        run, fail = attempt(lambda: simulate(case.model(source), (q0, v0), T, method, output_step=every * dt,
+                                             work=False, **kwargs))
+        label = method + (f" (rtol {settings['rtol']:g})" if method in SCIPY_METHODS else "")
+        if fail is not None:
+            rows.append({"method": label, "status": "unstable", "t_fail": fail["t"], "step_fail": fail["step"],
+                         "why": fail["why"]})
+            continue
+        t = run.index.to_numpy()
+        drift = np.abs(run["energy"].to_numpy() - e0) / swing
+        curves[label] = (t, drift)
+        at = lambda s: float(np.max(drift[t <= s]))
+        # Character: how the envelope max |dE| over [t/2, t] grows from t = T/10 to T.
+        env = lambda s: float(np.max(drift[(t >= s / 2) & (t <= s)]))
+        exponent = math.log(env(T) / env(T / 10)) / math.log(10) if env(T / 10) > 0 else None
+        final = float(np.mean(drift[t >= 0.9 * T]))
+        sign = float(np.mean(run["energy"].to_numpy()[t >= 0.9 * T] - e0))
+        if at(T) > 1.0:
+            character = f"gains {at(T):.3g} times the swing's energy"
+        elif exponent is not None and exponent > 0.5:
+            character = "secular " + ("loss" if sign < 0 else "gain")
+        elif exponent is not None and exponent < 0.2:
+            character = "bounded"
+        else:
+            character = "slow growth"
+        rows.append({"method": label, "status": "ran", "dt": dt if method not in SCIPY_METHODS else None,
+                     "evaluations": run.attrs["evaluations"], "wall": run.attrs["wall"],
+                     "drift_1s": at(1.0), "drift_T10": at(T / 10), "drift_T": at(T), "final_mean": final,
+                     "final_sign": "loses" if sign < 0 else "gains", "growth_exponent": exponent,
+                     "character": character})
+    data = pd.DataFrame(rows)
+    table = pd.DataFrame([{
+        "method": r["method"],
+        "step": _fmt(r.get("dt")),
+        "max |dE|/E_swing, 1 s": _fmt(r.get("drift_1s")),
+        f"{T / 10:g} s": _fmt(r.get("drift_T10")),
+        f"{T:g} s": _fmt(r.get("drift_T")),
+        "growth exponent": _fmt(r.get("growth_exponent"), ".2f"),
+        "character": r.get("character") if r["status"] == "ran" else describe({"status": "unstable", **r,
+                                                                               "t": r.get("t_fail"),
+                                                                               "step": r.get("step_fail")}),
+    } for r in rows])
+    dop = f", DOP853 at rtol {settings['rtol']:g}" if "DOP853" in settings["methods"] else ""
+    findings = [f"From the book's initial conditions over {T:g} s at dt = {dt:g} s (the step of the book's Pascal "
+                f"listing){dop}; "
+                f"the error is |E(t) - E(0)| relative to the swing's energy above rest, E(0) - E_rest = {swing:.4g} J. "
+                "The growth exponent is d ln(max |dE|) / d ln t from T/10 to T: 0 for a bounded error, 1 for a "
+                "linear drift."]
+    ran = data[data["status"] == "ran"] if "status" in data else data
+    top = (reference.energy(0.0, np.array([math.pi, 0.0]), np.zeros(2)) - rest) / swing if len(q0) == 2 else None
+    for _, r in ran.iterrows():
+        text = (f"{r['method']}: {r['character']} (growth exponent {r['growth_exponent']:.2f}); "
+                f"{r['drift_1s']:.2g} after 1 s, {r['drift_T10']:.2g} after {T / 10:g} s, {r['drift_T']:.2g} by {T:g} s")
+        if r["drift_T"] > 1.0 and top:
+            text += (f": the pendulum gains more than the {top:.3g} swing energies that lift both masses over the "
+                     "top, and whirls")
+        findings.append(text + ".")
+    for _, r in (data[data["status"] == "unstable"].iterrows() if "status" in data else []):
+        findings.append(f"{r['method']}: unstable at t = {_fmt(r['t_fail'])} s (step {r['step_fail']}): {r['why']}.")
+    pairs = [("mujoco:Euler", "semi-implicit Euler"), ("mujoco:implicitfast", "semi-implicit Euler"),
+             ("mujoco:RK4", "RK4")]
+    same = []
+    for a, b in pairs:
+        if a in curves and b in curves and len(curves[a][1]) == len(curves[b][1]):
+            same.append(f"{a} = {b} to {np.max(np.abs(curves[a][1] - curves[b][1])):.1g}")
+    if same:
+        findings.append("MuJoCo's integrators are the textbook schemes: " + "; ".join(same) + " (energy error curves).")
+    sie = ran[ran["method"] == "semi-implicit Euler"]
+    if len(sie):
+        findings.append("Semi-implicit Euler is symplectic only for a separable Hamiltonian in (q, p); here it "
+                        "steps the angles' rates through a configuration-dependent mass matrix, so it is not, yet its "
+                        f"energy error stays bounded after the first swing ({sie['final_mean'].iloc[0]:.2g} of the "
+                        "swing's energy on average over the last tenth): the energy it sheds in the first second "
+                        "is the numerical damping that the book's figures show.")
+    series = {"curves": curves, "rows": data, "swing": swing, "horizon": T, "dt": dt}
+    return _result(case, "energy_drift", "Long-run energy error of each method", settings, data, table,
+                   findings, series, start)
+
+
+def figure_lyapunov(result, path):
+    plt = _plt()
+    s = result["series"]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.6))
+    colors = ["tab:blue", "tab:red", "tab:green", "tab:purple"]
+    for (label, (t, logs)), color in zip(s["curves"].items(), colors):
+        a1.plot(t, logs, color=color, label=label)
+        a2.plot(t[1:], logs[1:] / t[1:], color=color, label=label)
+    rows = s["rows"]
+    for (_, r), color in zip(rows.iterrows(), colors):
+        if r.get("status") == "chaotic":
+            a2.axhline(r["lambda"], color=color, ls=":", lw=1)
+    a1.set_xlabel("t [s]")
+    a1.set_ylabel("ln(|d(t)| / |d(0)|), accumulated")
+    a1.set_title("stretch of a small separation (Benettin)", fontsize=10)
+    a2.set_xlabel("t [s]")
+    a2.set_ylabel("finite-time Lyapunov exponent lambda(t) [1/s]")
+    a2.set_xscale("log")
+    a2.set_title("convergence: flat = chaotic, falling like ln(t)/t = regular", fontsize=10)
+    for a in (a1, a2):
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=8)
+    fig.suptitle("1.9 double pendulum: sensitivity to initial conditions", fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def figure_energy_drift(result, path):
+    plt = _plt()
+    s = result["series"]
+    fig, ax = plt.subplots(figsize=(9, 5.4))
+    widths = {"mujoco:Euler": 3.5, "mujoco:implicitfast": 1.2, "mujoco:RK4": 3.5}
+    dashes = {"mujoco:Euler": "-", "mujoco:implicitfast": ":", "mujoco:RK4": "-"}
+    alphas = {"mujoco:Euler": 0.35, "mujoco:RK4": 0.35}
+    floor = 1e-16
+    for label, (t, drift) in s["curves"].items():
+        key = label.split(" (")[0]
+        st = _style(label)
+        ax.plot(t[1:], np.maximum(drift[1:], floor), color=st.get("color"), lw=widths.get(key, 1.2),
+                ls=dashes.get(key, "-"), alpha=alphas.get(key, 1.0), label=label)
+    for _, r in s["rows"].iterrows():
+        if r.get("status") == "unstable" and r.get("t_fail") is not None:
+            ax.axvline(r["t_fail"], color=_style(r["method"]).get("color", "k"), ls="--")
+            ax.text(r["t_fail"], 1, f"{r['method']} blows up", rotation=90, fontsize=8, va="top")
+    ax.set_yscale("log")
+    ax.set_xscale("log")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("|E(t) - E(0)| / (E(0) - E_rest)")
+    ax.set_title(f"1.9 double pendulum: energy error of each method at dt = {s['dt']:g} s "
+                 f"(the book's listing's step), E(0) - E_rest = {s['swing']:.3g} J\n"
+                 "MuJoCo's Euler and implicitfast lie on semi-implicit Euler, MuJoCo's RK4 on RK4 "
+                 "(wide pale lines under the thin ones)", fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right", ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
