@@ -18,7 +18,11 @@ BINDING_RTOL = 4 * np.finfo(float).eps
 
 
 def case_names():
-    return sorted(p.parent.name for p in CASES_DIR.glob("*/case.toml"))
+    names = sorted(p.parent.name for p in CASES_DIR.glob("*/case.toml"))
+    if not names:  # e.g. a non-editable install, which copies the code but not cases/
+        raise ValueError(f"no cases in {CASES_DIR}: dyncheck reads its cases from the source tree; "
+                         "install it from a checkout with `pip install -e .`")
+    return names
 
 
 def load_case(name, **overrides):

@@ -139,3 +139,11 @@ def test_the_page_shows_the_studies(monkeypatch, results, tmp_path):
     assert set(rows["method"]) == {"DOP853", "RK4", "mujoco:RK4"} and (rows["error"] > 0).all()
     for link in [line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")]:
         assert (tmp_path / link).stat().st_size > 10_000, link
+
+
+def test_no_cases_folder_exits_2_saying_where_it_looked(monkeypatch, tmp_path, capsys):
+    """A non-editable install copies the code but not cases/: say so, never run nothing and pass."""
+    from dyncheck import case as case_module
+    monkeypatch.setattr(case_module, "CASES_DIR", tmp_path / "cases")
+    assert cli.main(["run"]) == 2 and cli.main(["list"]) == 2
+    assert "no cases in" in capsys.readouterr().err
