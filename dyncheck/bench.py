@@ -24,9 +24,9 @@ Pinocchio:
     block solved; the work any Pinocchio user does for the scene) on the same states already in
     Pinocchio's configuration.  This misses 1.2: the engine step takes only 2-20 us on these
     few-joint scenes, and the book's coordinates cost a few us more (cos and sin of each
-    angle, the prescribed motions at t, the scalar writes); the top's Euler angles cost ~25 us
-    (its quaternion and angular velocity, and the Euler-angle accelerations back, in numpy on
-    3-vectors) against ~2 us of ABA.
+    angle, the prescribed motions at t, the scalar writes); the top's Euler angles cost ~20 us
+    (its quaternion and angular velocity, and the Euler-angle accelerations back) against ~2 us
+    of ABA.
   - "DOP853, harness simulate": `simulate(pinocchio, "DOP853")`, whose right-hand side asks the
     harness for the accelerations and the drive power (one engine step per state, remembered),
     against "DOP853, bare pin.<engine> rhs": `solve_ivp` with the same method, tolerances, span

@@ -128,7 +128,7 @@ def check_params(spec, params, overrides, file):
     if {"Ixx", "Izz", "m", "h"} <= set(params):  # the top: Ixx (= Iyy) and Izz about its tip
         named = lambda *names: ", ".join(f"{p} = {params[p]!r}" + (" (override)" if p in overrides else "")
                                          for p in names)
-        a, c = params["Ixx"] - params["m"] * params["h"] ** 2, params["Izz"]
+        a, c = params["Ixx"] - params["m"] * params["h"] * params["h"], params["Izz"]
         if a <= 0:
             raise ValueError(f"{file}: {named('Ixx', 'm', 'h')} give the top a moment of inertia about its centre "
                              f"of mass A = Ixx - m h^2 = {a:.4g} kg m^2, not > 0; no rigid body has it")
