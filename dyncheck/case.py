@@ -8,13 +8,25 @@ from pathlib import Path
 
 import numpy as np
 
-from dyncheck import schema
+from dyncheck import expressions, schema
 
 CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 SOURCES = ("reference", "book", "mujoco", "pinocchio")
 # Scene values are parsed from decimal text by each loader; they must equal case.toml's to
 # within a few ulps (binding scales are exact: +-1).
 BINDING_RTOL = 4 * np.finfo(float).eps
+# The two scene files' bodies and gravity (engines.scene.Body) must agree to within SCENE_RTOL of the
+# largest entry compared: each number is parsed from decimal text (half an ulp) and passes through a
+# few roundings in each loader (a quaternion or rpy to a rotation matrix, a normalised axis,
+# R diag(I) R^T, a ball joint's armature added back), each within an ulp or two of that entry.
+SCENE_RTOL = 16 * np.finfo(float).eps
+# MuJoCo needs mass and inertia on every moving body: the MJCF's massless bodies carry placeholders of at
+# most 1e-12 kg and 1e-14 kg m^2 where the URDF has nothing.  Each case.toml (`why` of its pointwise
+# tolerance) bounds their effect below that tolerance, and the engine tests keep m l^2 >= 1e-4 kg m^2,
+# where 1e-14 is 1e-10 of it.  Mass and inertia may differ by these much more; a centre of mass is
+# compared only on a body heavier than a placeholder.
+PLACEHOLDER_MASS = 1e-12
+PLACEHOLDER_INERTIA = 1e-14
 
 
 def case_names():
@@ -79,13 +91,14 @@ class Case:
 
     # -- numbers that may be expressions of the parameters --------------------
     def value(self, x, field=None):
-        """A number from case.toml: a float, or an expression of the parameters and pi; `field`, where
-        it is in the file, for the message."""
+        """A finite number from case.toml: a float, or an expression of the parameters and pi
+        (dyncheck.expressions); `field`, where it is in the file, for the message."""
         try:
-            if isinstance(x, str):
-                return float(eval(x, {"__builtins__": {}}, {**self.params, "pi": math.pi}))
-            return float(x)
-        except Exception as error:  # any mistake in the expression is the case file's
+            number = float(expressions.evaluate(x, {**self.params, "pi": math.pi}) if isinstance(x, str) else x)
+            if not math.isfinite(number):
+                raise ValueError(f"{number} is not finite")
+            return number
+        except (OverflowError, TypeError, ValueError) as error:  # also float() of a list, of a huge integer
             raise ValueError(f"{self.file}: cannot evaluate {x!r}: {error}"
                              + (f" (at {field})" if field else "")) from None
 
@@ -172,6 +185,10 @@ class Case:
                         key=lambda write: "depends" in write[0])
         model = Model(path, self.scene, writes)
         self._verify(model, path, bindings)
+        other = {"mujoco": "pinocchio", "pinocchio": "mujoco"}[source]
+        if other in self._models:  # both engines loaded: their files must model the same scene
+            engines = {source: model, other: self._models[other]}
+            compare_scenes(engines["mujoco"], engines["pinocchio"], self.name)
         return model
 
     def _verify(self, model, path, bindings):
@@ -188,3 +205,37 @@ class Case:
 
     def __repr__(self):
         return f"Case({self.name!r}, overrides={self.overrides})"
+
+
+def compare_scenes(mujoco_model, pinocchio_model, case_name):
+    """Refuse two scene files that model different bodies or gravity (see engines.scene): ValueError
+    naming both files, the body and the attribute."""
+    mjcf, urdf = Path(mujoco_model.path).name, Path(pinocchio_model.path).name
+
+    def differ(what, a, b, absolute=0.0):
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        tolerance = SCENE_RTOL * max(np.max(np.abs(a)), np.max(np.abs(b))) + absolute
+        if np.max(np.abs(a - b)) > tolerance:
+            show = lambda x: np.array2string(x, precision=17, separator=", ").replace("\n", "")
+            raise ValueError(f"{mjcf} and {urdf} of case '{case_name}' disagree: {what} is {show(a)} in {mjcf} "
+                             f"and {show(b)} in {urdf} (tolerance {tolerance:.2g})")
+
+    differ("gravity", mujoco_model.gravity, pinocchio_model.gravity)
+    bodies = {engine: {b.name: b for b in model.tree()}
+              for engine, model in (("mujoco", mujoco_model), ("pinocchio", pinocchio_model))}
+    for name in bodies["mujoco"].keys() ^ bodies["pinocchio"].keys():
+        present, absent = (mjcf, urdf) if name in bodies["mujoco"] else (urdf, mjcf)
+        raise ValueError(f"{mjcf} and {urdf} of case '{case_name}' disagree: body '{name}' is in {present} "
+                         f"but not in {absent}")
+    for name, mj in bodies["mujoco"].items():
+        pn = bodies["pinocchio"][name]
+        for attribute in ("parent", "joint", "joint_type"):
+            if getattr(mj, attribute) != getattr(pn, attribute):
+                raise ValueError(f"{mjcf} and {urdf} of case '{case_name}' disagree: body '{name}' {attribute} "
+                                 f"is '{getattr(mj, attribute)}' in {mjcf} and '{getattr(pn, attribute)}' in {urdf}")
+        for attribute in ("axis", "position", "rotation", "stiffness"):
+            differ(f"body '{name}' {attribute}", getattr(mj, attribute), getattr(pn, attribute))
+        differ(f"body '{name}' mass", mj.mass, pn.mass, PLACEHOLDER_MASS)
+        if max(mj.mass, pn.mass) > PLACEHOLDER_MASS:
+            differ(f"body '{name}' centre of mass", mj.com, pn.com)
+        differ(f"body '{name}' inertia about the centre of mass", mj.inertia, pn.inertia, PLACEHOLDER_INERTIA)

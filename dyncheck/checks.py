@@ -6,11 +6,12 @@ import time
 
 import numpy as np
 
+from dyncheck import ceilings, schema
 from dyncheck.case import SOURCES
 from dyncheck.expressions import evaluate as evaluate_expression
 from dyncheck.expressions import namespace
 from dyncheck.localise import localise
-from dyncheck.simulate import Unstable, simulate
+from dyncheck.simulate import Unstable, fastest_frequency, simulate
 from dyncheck.stability import agreement_horizon
 
 EPS = np.finfo(float).eps
@@ -18,9 +19,20 @@ ROUNDING_FLOOR = 1e3 * EPS  # rounding over a run: a thousand ulps of the quanti
 INTEGRATED = ("reference", "book", "pinocchio")  # sources driven by scipy's DOP853
 
 
-def row(check, quantity, sources, error, tolerance, detail=""):
+def row(check, quantity, sources, error, tolerance, detail="", *, ceiling):
+    """A check's row; `ceiling` (dyncheck.ceilings) is the tolerance above which the comparison proves
+    nothing: such a row is inconclusive, whatever its error."""
+    if not (math.isfinite(error) and math.isfinite(tolerance)):  # a source gave no number: never a NaN out
+        return unstable_row(check, quantity, sources, f"no number to judge: error {error}, tolerance {tolerance}; "
+                            + detail, "fail")
+    if tolerance > ceiling:
+        status = "inconclusive"
+        detail = (f"tolerance {tolerance:.2e} is above the ceiling {ceiling:.0e} of this comparison, so it "
+                  f"proves nothing (dyncheck/ceilings.py); " + detail)
+    else:
+        status = "pass" if error <= tolerance else "fail"
     return {"check": check, "quantity": quantity, "sources": sources, "error": float(error),
-            "tolerance": float(tolerance), "status": "pass" if error <= tolerance else "fail",
+            "tolerance": float(tolerance), "ceiling": float(ceiling), "status": status,
             "finding": None, "detail": detail}
 
 
@@ -28,26 +40,42 @@ def unstable_row(check, quantity, sources, failure, status="unstable"):
     """A check that has no error to show: an integration blew up (`failure` says when, which method,
     which step), or (status "fail") the check could not be made, and `failure` says why."""
     return {"check": check, "quantity": quantity, "sources": sources, "error": None, "tolerance": None,
-            "status": status, "finding": None, "detail": str(failure)}
+            "ceiling": None, "status": status, "finding": None, "detail": str(failure)}
 
 
 # -- pointwise ------------------------------------------------------------------
 
 def evaluate(case, source, states):
-    """Every quantity of `source` at `states`: {quantity: array over the states}."""
+    """Every quantity of `source` at `states`: {quantity: array over the states}.  Raises ArithmeticError
+    saying which quantity at which state when the source's arithmetic fails (an overflow in its float
+    arithmetic, a singular matrix) or gives a value that is not finite."""
     model = case.model(source)
-    acc = np.array([model.accelerations(t, q, v) for t, q, v in states])
+    i = 0
+
+    def each(quantity, method):
+        nonlocal i
+        try:
+            with np.errstate(all="ignore"):
+                return [method(t, q, v) for i, (t, q, v) in enumerate(states)]
+        except (ArithmeticError, np.linalg.LinAlgError) as error:
+            raise ArithmeticError(f"{source}: {quantity} at random state {i}: {type(error).__name__}: {error}") from None
+
+    acc = np.array(each("accelerations", model.accelerations))
     values = {f"{c}_acc": acc[:, i] for i, c in enumerate(case.coords)}
-    reactions = [model.reactions(t, q, v) for t, q, v in states]
+    reactions = each("reactions", model.reactions)
     values.update({name: np.array([r[name] for r in reactions]) for name in case.reaction_names})
     if case.scene["points"]:
-        points = [model.point_accelerations(t, q, v) for t, q, v in states]
+        points = each("point accelerations", model.point_accelerations)
         for name in case.scene["points"]:
             for axis, label in enumerate("xyz"):
                 values[f"{name}_{label}"] = np.array([p[name][axis] for p in points])
-    values["energy"] = np.array([model.energy(t, q, v) for t, q, v in states])
+    values["energy"] = np.array(each("energy", model.energy))
     if case.driven:
-        values["drive_power"] = np.array([model.drive_power(t, q, v) for t, q, v in states])
+        values["drive_power"] = np.array(each("drive power", model.drive_power))
+    for quantity, x in values.items():
+        if not np.all(np.isfinite(x)):
+            raise ArithmeticError(f"{source}: {quantity} is {x[~np.isfinite(x)][0]} at random state "
+                                  f"{np.argmin(np.isfinite(x))}")
     return values
 
 
@@ -92,13 +120,22 @@ def compare(case, a, b):
 
 def pointwise(case):
     states = case.sample_states()
-    values = {source: evaluate(case, source, states) for source in SOURCES}
+    values = {}
+    for source in SOURCES:
+        try:
+            values[source] = evaluate(case, source, states)
+        except ArithmeticError as failure:  # its comparisons fail, saying why
+            values[source] = failure
     tolerance = case.tolerance["pointwise"]["value"]
     rows = []
     for a, b in itertools.combinations(SOURCES, 2):
+        failed = [values[s] for s in (a, b) if isinstance(values[s], ArithmeticError)]
+        if failed:
+            rows.append(unstable_row("pointwise", "every quantity", f"{a} vs {b}", failed[0], "fail"))
+            continue
         for quantity, error in compare(case, values[a], values[b]).items():
             rows.append(row("pointwise", quantity, f"{a} vs {b}", error, tolerance,
-                            f"{len(states)} random states"))
+                            f"{len(states)} random states", ceiling=ceilings.POINTWISE))
     return rows, {"states": states, "values": values}
 
 
@@ -107,39 +144,71 @@ def pointwise(case):
 ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
 
 
+DRAWS = 100
+"""Draws per random parameter set.  The ranges are physical on their own (schema.check_values), but
+beside an override they may not be (the top's Ixx with the ranges of m, h and Izz can break A + B >= C).
+A draw that is not physical is drawn again (rejection): the constraints couple several parameters, so
+no range can be clipped alone, and redrawing keeps the sets uniform over the physical part of the
+ranges with the same test as loading (schema.check_params).  A set is given up only when its draws all
+fail, which for a physical part of 5 % of the ranges happens with probability 0.95^100 = 0.6 %."""
+
+
 def parameter_sets(case):
-    """Seeded random parameter sets over [sample.params.ranges]; the user's overrides stay fixed."""
+    """Seeded random parameter sets over [sample.params.ranges], physical with the user's overrides,
+    which stay fixed: (sets, how many could not be drawn).  A set holds the random values only."""
     spec = case.spec["sample"].get("params")
     if not spec:
-        return []
+        return [], 0
     rng = np.random.default_rng(spec["seed"])
     ranges = {name: (case.value(lo), case.value(hi)) for name, (lo, hi) in spec["ranges"].items()
               if name not in case.overrides}
-    return [{**case.overrides, **{name: float(rng.uniform(lo, hi)) for name, (lo, hi) in ranges.items()}}
-            for _ in range(spec["sets"])]
+    sets = []
+    for _ in range(spec["sets"]):
+        for _ in range(DRAWS):
+            drawn = {name: float(rng.uniform(lo, hi)) for name, (lo, hi) in ranges.items()}
+            try:
+                schema.check_params(case.spec, {**case.params, **drawn}, case.overrides, case.file)
+            except ValueError:
+                continue
+            sets.append(drawn)
+            break
+    return sets, spec["sets"] - len(sets)
 
 
 def random_parameters(case):
     """Reference and both engines at each random parameter set, at that set's first `states` random
-    states: one row per comparison, the worst quantity over every set."""
-    sets = parameter_sets(case)
-    if not sets:
+    states: one row per comparison, the worst quantity over every set.  Sets that cannot be drawn, and
+    a set at which a source's arithmetic fails, are failing rows that say so."""
+    sets, missing = parameter_sets(case)
+    if not sets and not missing:
         return []
-    count = case.spec["sample"]["params"]["states"]
+    spec = case.spec["sample"]["params"]
+    count, seed = spec["states"], spec["seed"]
+    named = lambda params: ", ".join(f"{k} = {v:.4g}" for k, v in params.items())
+    rows = []
+    if missing:
+        rows.append(unstable_row("random parameters", "parameter sets", "every source",
+                                 f"{missing} of {spec['sets']} sets (seed {seed}) not physical in {DRAWS} draws each "
+                                 f"beside the overrides {named(case.overrides)}", "fail"))
     worst = {}  # comparison -> (error, quantity, set)
     for params in sets:
-        other = type(case)(case.folder, params)
+        other = type(case)(case.folder, {**case.overrides, **params})
         states = other.sample_states()[:count]
-        values = {source: evaluate(other, source, states) for source in ENGINES}
+        try:
+            values = {source: evaluate(other, source, states) for source in ENGINES}
+        except ArithmeticError as failure:
+            rows.append(unstable_row("random parameters", "every quantity", "every source",
+                                     f"at {named(params)}: {failure}", "fail"))
+            continue
         for a, b in itertools.combinations(ENGINES, 2):
             for quantity, error in compare(other, values[a], values[b]).items():
                 if error >= worst.get((a, b), (-1.0,))[0]:
                     worst[(a, b)] = (error, quantity, params)
-    seed = case.spec["sample"]["params"]["seed"]
-    return [row("random parameters", quantity, f"{a} vs {b}", error, case.tolerance["pointwise"]["value"],
-                f"{len(sets)} parameter sets (seed {seed}) x {count} states; worst at "
-                + ", ".join(f"{k} = {v:.4g}" for k, v in params.items()))
-            for (a, b), (error, quantity, params) in worst.items()]
+    return rows + [row("random parameters", quantity, f"{a} vs {b}", error, case.tolerance["pointwise"]["value"],
+                       f"{len(sets)} parameter sets (seed {seed}) x {count} states; worst at {named(params)}"
+                       + (f" (overrides: {named(case.overrides)})" if case.overrides else ""),
+                       ceiling=ceilings.POINTWISE)
+                   for (a, b), (error, quantity, params) in worst.items()]
 
 
 # -- trajectories -----------------------------------------------------------------
@@ -159,7 +228,7 @@ def run_sources(case):
         model = case.model(source)
         try:
             runs[source] = tuple(simulate(model, (q0, v0), t_end, "DOP853", rtol=rtol, output_step=out_step,
-                                          work=case.driven)
+                                          work=case.driven, omega=fastest_frequency(case))
                                  for rtol in (setting["rtol"], setting["tight_rtol"]))
         except Unstable as failure:
             runs[source] = failure
@@ -191,6 +260,16 @@ def trajectory(case, runs):
     horizon, why = agreement_horizon(case)
     within = slice(None, horizon)
     tight = runs["reference"][1].loc[within]
+    # Errors need time to build: a span shorter than a radian of the fastest motion (or than ten
+    # output steps, where the case names no frequency) compares starts, which agree by construction.
+    omega = fastest_frequency(case)
+    least = 1 / omega if omega else 10 * case.integration["output_step"]
+    if tight.index[-1] < least:
+        return [unstable_row("trajectory", c, f"{source} vs tight reference",
+                             f"the agreement horizon {horizon:.3g} s is shorter than {least:.3g} s "
+                             f"({'1/omega' if omega else 'ten output steps'}): nothing to compare; {why['sentence']}",
+                             "inconclusive")
+                for source in ("book", "pinocchio", "mujoco") for c in state_columns(case)]
     tight_error = error_estimate(*runs["reference"]).loc[within] / 100  # 100x tighter rtol, order 8: >= 100x better
     safety = case.tolerance["trajectory"]["safety"]
     rows = []
@@ -209,12 +288,13 @@ def trajectory(case, runs):
             allowed = safety * (estimate[column].max() + tight_error[column].max()) / scale + ROUNDING_FLOOR
             rows.append(row("trajectory", column, label, error, allowed,
                             f"{method}, max over {min(horizon, case.initial[2]):g} s"
-                            + (f"; {why['sentence']}" if math.isfinite(horizon) else "")))
+                            + (f"; {why['sentence']}" if math.isfinite(horizon) else ""), ceiling=ceilings.RUN))
     if not isinstance(runs["mujoco"], Unstable) and case.scene["driven"]:
         # The armature holds the driven rates while MuJoCo steps; the issue asks ~1e-12.
         rows.append(row("trajectory", "driven rate", "mujoco vs prescribed",
-                        runs["mujoco"][0].attrs["driven_rate_error"], 1e-12,
-                        "max |rate - prescribed| over the run and the driven joints / largest prescribed rate"))
+                        runs["mujoco"][0].attrs["driven_rate_error"], ceilings.DRIVEN_RATE,
+                        "max |rate - prescribed| over the run and the driven joints / largest prescribed rate",
+                        ceiling=ceilings.DRIVEN_RATE))
     return rows
 
 
@@ -240,7 +320,7 @@ def energy(case, runs):
             estimate *= 16 / 15
         rows.append(row("energy", quantity, label, residual.abs().max() / scale,
                         safety * estimate / scale + ROUNDING_FLOOR,
-                        f"max |E(t) - E(0) - W(t)| / max(|E|, |W|), {run.attrs['method']}"))
+                        f"max |E(t) - E(0) - W(t)| / max(|E|, |W|), {run.attrs['method']}", ceiling=ceilings.RUN))
     return rows
 
 
@@ -277,7 +357,8 @@ def data_checks(case):
         else:  # "at most"
             error = max(printed - formula, 0.0) / abs(formula)
         rows.append(row("data", item["name"], "book data vs book formula", error, item["tolerance"],
-                        f"{item['where']}: printed {printed:.6g}, formula {item['formula']} = {formula:.6g}"))
+                        f"{item['where']}: printed {printed:.6g}, formula {item['formula']} = {formula:.6g}",
+                        ceiling=ceilings.DATA))
     return rows
 
 
@@ -319,16 +400,22 @@ def program_checks(case, sample):
     states, right = sample["states"], sample["values"]["reference"]  # the pointwise check's
     tolerance = case.tolerance["pointwise"]["value"]
     rows = []
-    acc = np.array([program.accelerations(t, q, v) for t, q, v in states])
-    reactions = [program.reactions(t, q, v) for t, q, v in states]
-    mine = {f"{coord}_acc": acc[:, i] for i, coord in enumerate(case.coords)}
-    mine.update({name: np.array([r[name] for r in reactions]) for name in program.reaction_names})
-    for quantity, values in mine.items():
-        rows.append(row("program", quantity, "program vs reference", relative_error(values, right[quantity]),
-                        tolerance, f"{len(states)} random states"))
+    try:
+        if isinstance(right, ArithmeticError):  # the reference's evaluation failed there (pointwise)
+            raise right
+        with np.errstate(all="ignore"):
+            acc = np.array([program.accelerations(t, q, v) for t, q, v in states])
+            reactions = [program.reactions(t, q, v) for t, q, v in states]
+        mine = {f"{coord}_acc": acc[:, i] for i, coord in enumerate(case.coords)}
+        mine.update({name: np.array([r[name] for r in reactions]) for name in program.reaction_names})
+        for quantity, values in mine.items():
+            rows.append(row("program", quantity, "program vs reference", relative_error(values, right[quantity]),
+                            tolerance, f"{len(states)} random states", ceiling=ceilings.POINTWISE))
+    except ArithmeticError as failure:  # an overflow in the program's or the reference's float arithmetic
+        rows = [unstable_row("program", "every quantity", "program vs reference", failure, "fail")]
     try:
         run_rows, runs = program_run_checks(case, program)
-    except (Unstable, FloatingPointError) as failure:  # the listing's integrator, or its twins, blew up
+    except (Unstable, ArithmeticError) as failure:  # the listing's integrator, or its twins, blew up
         return rows + [unstable_row("program", column, "program run", failure) for column in state_columns(case)], {}
     return rows + run_rows, runs
 
@@ -350,7 +437,7 @@ def program_run_checks(case, program):
     # Rounding: the same run from a start moved by a few ulps shows how the motion amplifies them.
     twin_runs["nudged"] = same(q0 + 4 * EPS * np.maximum(np.abs(q0), 1.0), program.dt)
     tight = simulate(reference, (q0, v0), t_end, "DOP853", rtol=case.integration["tight_rtol"],
-                     output_step=every * program.dt, work=False)
+                     output_step=every * program.dt, work=False, omega=fastest_frequency(case))
     safety = case.tolerance["trajectory"]["safety"]
     label = f"{program.integrator}, dt = {program.dt:.4g} s, {t_end:.4g} s"
     for column in state_columns(case):
@@ -359,19 +446,23 @@ def program_run_checks(case, program):
         rounding = np.max(np.abs(twin_runs["same"][column] - twin_runs["nudged"][column])) / scale
         rows.append(row("program", column, "program vs book equations, same integrator",
                         np.max(np.abs(x - twin_runs["same"][column].to_numpy())) / scale,
-                        safety * rounding + ROUNDING_FLOOR, label))
-        # First-order schemes: error(dt) ~ 2 |x(dt) - x(dt/2)| (Richardson).
+                        safety * rounding + ROUNDING_FLOOR, label, ceiling=ceilings.RUN))
+        # Does the listing draw the right curve?  Judged at a figure's resolution; whether its
+        # integrator or its formulas stray shows beside it: a first-order scheme's own error at its
+        # step is about 2 |x(dt) - x(dt/2)| (Richardson), while its steps are in the asymptotic range.
         integrator = 2 * np.max(np.abs(twin_runs["same"][column] - twin_runs["half"][column])) / scale
         rows.append(row("program", column, "program vs tight reference",
-                        np.max(np.abs(x - tight[column].to_numpy())) / scale,
-                        safety * integrator + ROUNDING_FLOOR, label))
+                        np.max(np.abs(x - tight[column].to_numpy())) / scale, ceilings.LISTING,
+                        f"{label}; its integrator's own error at this step, by Richardson: {integrator:.2g}",
+                        ceiling=ceilings.LISTING))
     for name, figure in case.spec.get("program", {}).get("figures", {}).items():
         lo, hi = figure["range"]
         for source, run in (("program", listing), ("tight reference", tight)):
             values = evaluate_expression(figure["expression"], namespace(case, run))
             outside = max(lo - np.min(values), np.max(values) - hi, 0.0) / (hi - lo)
-            rows.append(row("figure", name, f"{source} vs book figure", outside, 0.0,
-                            f"{figure['where']}: range [{lo:g}, {hi:g}]; run [{np.min(values):.4g}, {np.max(values):.4g}]"))
+            rows.append(row("figure", name, f"{source} vs book figure", outside, ceilings.FIGURE,
+                            f"{figure['where']}: range [{lo:g}, {hi:g}]; run [{np.min(values):.4g}, {np.max(values):.4g}]",
+                            ceiling=ceilings.FIGURE))
     return rows, {"listing": listing, "same integrator": twin_runs["same"], "tight": tight}
 
 
@@ -397,6 +488,8 @@ def localise_finding(case, finding, sample):
     book = case.model("program" if any("program" in s for s in finding["sources"]) else "book")
     printed = getattr(book, "PRINTED", {})
     engine = sample["values"]["mujoco"]
+    if isinstance(engine, ArithmeticError):
+        return f"not searched: MuJoCo's values at the random states failed ({engine})"
 
     def components(key):
         """A printed vector's components as the checks name them: a_eq110_x, ... or Rx, ..."""

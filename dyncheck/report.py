@@ -1,12 +1,18 @@
 """Markdown reports with figures: reports/<case>.md per case and reports/index.md.
 
-Everything is written to a temporary folder first and moved into place only when
-complete, so a failed or interrupted run leaves the previous report intact.
+The new report is built whole in a folder beside the old one and swapped in with one atomic
+rename, so a failed, interrupted or killed run leaves the previous report intact.
 """
 
+import ctypes
+import errno
+import fcntl
 import json
 import os
-import tempfile
+import re
+import shutil
+import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 import matplotlib
@@ -31,25 +37,100 @@ STYLE = {  # source -> line style, so that coinciding curves stay visible
 
 
 def write_reports(results, out):
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=out, prefix=".tmp-") as tmp:
-        tmp = Path(tmp)
-        (tmp / "figures").mkdir()
-        (tmp / "data").mkdir()
-        written = []
-        for res in results:
-            written += write_case_page(res, tmp)
-            written.append(write_summary(res, tmp))
-        written.append(write_index(tmp, out))
-        written.append(write_errata(tmp, out))
-        for folder in ("figures", "data"):
-            (out / folder).mkdir(exist_ok=True)
-        # Figures and data first, the pages that link them after, the index last: an interruption
-        # while moving leaves no page pointing at a figure that is not there.
-        for rel in sorted(written, key=lambda rel: (rel.endswith(".md"), rel == "index.md")):
-            os.replace(tmp / rel, out / rel)
+    """Write the pages of `results` into the folder `out`, keeping what it holds of other cases, and
+    return the files written (relative to `out`).
+
+    The new tree is a copy of `out` with this run's files written over it, and its index and errata
+    are made from the summaries it holds; it is built beside `out` and exchanged with it in one
+    rename, so a reader sees the previous report or the new one, never a mix.  Writers into one
+    folder take turns (`locked`), each building on the last one's report."""
+    out = Path(out).resolve()  # through a symbolic link: the link stays, the folder it names is replaced
+    with locked(out):
+        remove_stale_trees(out)
+        tree = out.parent / f"{temp_prefix(out)}{os.getpid()}"
+        try:
+            tree.mkdir()
+            if out.is_dir():  # `.tmp-*`: what killed runs of earlier versions left inside `out`
+                shutil.copytree(out, tree, dirs_exist_ok=True, ignore=shutil.ignore_patterns(".tmp-*"))
+            (tree / "figures").mkdir(exist_ok=True)
+            (tree / "data").mkdir(exist_ok=True)
+            written = []
+            for res in results:
+                written += write_case_page(res, tree)
+                written.append(write_summary(res, tree))
+            cases = summaries(tree, out)
+            written += [write_index(tree, cases), write_errata(tree, cases)]
+            swap(tree, out)
+        finally:  # this run's tree after a failure, or the previous report after the swap
+            if tree.exists():
+                shutil.rmtree(tree)
     return written
+
+
+def temp_prefix(out):
+    return f".{out.name}.tmp-"
+
+
+@contextmanager
+def locked(out):
+    """Hold the lock on `out` (flock on a file beside it, released by the system if we are killed).
+    A second writer waits its turn rather than fail: the first one's wait is seconds, and both
+    reports then land, the second built on the first."""
+    with open(out.parent / f".{out.name}.lock", "a+") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.seek(0)
+            print(f"dyncheck: waiting for {lock.read().strip() or 'another writer'}, which is writing {out}",
+                  file=sys.stderr)
+            fcntl.flock(lock, fcntl.LOCK_EX)
+        lock.truncate(0)
+        lock.write(f"dyncheck pid {os.getpid()}\n")
+        lock.flush()
+        yield
+
+
+def remove_stale_trees(out):
+    """Trees beside `out` that killed writers left; only called under the lock, so no live writer has
+    one.  A writer killed between the two renames of `swap` left the previous report aside: put back."""
+    for path in sorted(out.parent.iterdir()):
+        if path.name.startswith(temp_prefix(out)):
+            if path.name.endswith(PREVIOUS) and not out.exists():
+                path.rename(out)
+            else:
+                shutil.rmtree(path)
+
+
+PREVIOUS = "-previous"  # the name's end of the previous report while `swap` cannot exchange
+RENAME_EXCHANGE = 2  # <linux/fs.h>
+AT_FDCWD = -100  # <fcntl.h>: paths relative to the working directory
+
+
+def swap(new, out):
+    """Put the tree `new` at `out` and the previous one, if any, at `new`."""
+    if not out.exists():
+        os.rename(new, out)
+    elif not exchange(new, out):
+        # No atomic exchange here (not Linux, or a file system without it): `out` is missing for a
+        # moment between the two renames, but it is never a mix of two reports.
+        previous = new.with_name(new.name + PREVIOUS)
+        os.rename(out, previous)
+        os.rename(new, out)
+        os.rename(previous, new)
+
+
+def exchange(a, b):
+    """Exchange two paths in one atomic step (Linux's renameat2 with RENAME_EXCHANGE, which
+    Python's os does not offer); False where the system cannot."""
+    renameat2 = getattr(ctypes.CDLL(None, use_errno=True), "renameat2", None)
+    if renameat2 is None:
+        return False
+    if renameat2(AT_FDCWD, os.fsencode(a), AT_FDCWD, os.fsencode(b), RENAME_EXCHANGE) == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS):  # the file system or kernel lacks it
+        return False
+    raise OSError(code, os.strerror(code), os.fsdecode(b))
 
 
 def write_summary(res, tmp):
@@ -503,17 +584,36 @@ def _state(coords, q, v):
         ", ".join(f"{c}' = {x:.6g}" for c, x in zip(coords, v))
 
 
-def summaries(tmp, out):
-    """Every case with results in `out` (kept from earlier runs) or `tmp` (this run's), in book order."""
-    paths = {p.name: p for p in sorted((out / "data").glob("*.json"))}
-    paths.update({p.name: p for p in sorted((tmp / "data").glob("*.json"))})
-    cases = [json.loads(path.read_text()) for path in paths.values()]
-    return sorted(cases, key=lambda c: [int(n) for n in c["section"].split(".")])
+SUMMARY_KEYS = {"case", "section", "params", "checks", "findings", "title", "status", "worst_engine_error",
+                "random", "cheapest"}  # what write_summary writes
 
 
-def write_errata(tmp, out):
+def summaries(tree, out):
+    """The summary of every case in `tree`'s data/, in book order.  A file there that write_summary
+    did not write (foreign, broken, of another version) is skipped with a warning naming it in `out`."""
+    cases = []
+    for path in sorted((tree / "data").glob("*.json")):
+        try:
+            summary = json.loads(path.read_text())
+        except (ValueError, RecursionError):  # not JSON, not UTF-8, or nested too deeply
+            summary = None
+        if isinstance(summary, dict) and SUMMARY_KEYS <= summary.keys() and summary["case"] == path.stem:
+            cases.append(summary)
+        else:
+            print(f"dyncheck: warning: {out / 'data' / path.name} is not a case summary that dyncheck report"
+                  " wrote; left out of the index", file=sys.stderr)
+    return sorted(cases, key=lambda c: section_key(str(c["section"])))
+
+
+def section_key(section):
+    """Book order for any section string: numbers as numbers ("1.9" before "1.10"), the rest as
+    text ("1.7" before "1.7a", all of them before "new")."""
+    parts = re.split(r"([0-9]+)", section)  # the numbers at the odd places
+    return [(0, int(part)) if i % 2 else (1, part) for i, part in enumerate(parts)]
+
+
+def write_errata(tmp, cases):
     """errata.md: every finding of every case in one table, then each in full."""
-    cases = summaries(tmp, out)
     table = [{"finding": f"[{f['id']}](#{f['id'].replace('.', '').lower()})", "case": f"[{c['case']}]({c['case']}.md)",
               "where": f["where"], "what": f["title"], "largest relative error": f"{f['error']:.3g}",
               "localised edit": f["localised"]}
@@ -532,8 +632,7 @@ def write_errata(tmp, out):
                       *([f"- *Effect:* {f['effect']}"] if f["effect"] else []),
                       f"- *Localised edit:* {f['localised']}", "",
                       f["explanation"], ""]
-    programs = [c for c in cases if (tmp / f"figures/{c['case']}_program.png").exists()
-                or (out / f"figures/{c['case']}_program.png").exists()]
+    programs = [c for c in cases if (tmp / f"figures/{c['case']}_program.png").exists()]
     if programs:
         lines += ["## The book's programs: its figures redrawn", "",
                   "Each figure the book draws from a program, from a line-by-line transcription of that"
@@ -556,9 +655,8 @@ def speed_table(cases):
             markdown_table(pd.DataFrame(rows).fillna("-")), ""]
 
 
-def write_index(tmp, out):
-    """index.md over every case with results in `out` (kept) or `tmp` (this run's)."""
-    cases = summaries(tmp, out)
+def write_index(tmp, cases):
+    """index.md over `cases` (the summaries)."""
     rows = []
     for case in cases:
         counts = pd.Series([c["status"] for c in case["checks"]]).value_counts()

@@ -12,6 +12,8 @@ import difflib
 import importlib.util
 import math
 
+from dyncheck import ceilings
+
 # -- the schema -----------------------------------------------------------------------------------
 # A type is a string: "str", "int", "bool", "number" (a TOML integer or float), "expr" (a number,
 # or an expression of the parameters and pi in quotes), optionally with a condition: "int > 0",
@@ -92,7 +94,7 @@ BINDABLE = {("body", "mass"): 1, ("body", "pos"): 3, ("body", "ipos"): 3, ("body
             ("joint", "stiffness"): 1, ("option", None): 3}
 
 # -- parameters ---------------------------------------------------------------------------------
-# The unit of each parameter name of the design (../shared/DESIGN.md), in every case.
+# The unit of each parameter name the cases use, in every case.
 UNITS = {"m": "kg", "m1": "kg", "m2": "kg", "k": "N/m", "Ixx": "kg m^2", "Izz": "kg m^2", "Mz": "N m",
          "g": "m/s^2", "L_acc": "m/s^2", "L_rate": "m/s", "theta_acc": "rad/s^2",
          **dict.fromkeys(("a", "b", "c", "r", "h", "l", "l0", "l1", "l2", "L0", "thickness"), "m"),
@@ -156,6 +158,7 @@ def check_values(spec, file, value):
     if values["integration.tight_rtol"] >= values["integration.rtol"]:
         raise _error(file, "integration.tight_rtol", setting["tight_rtol"],
                      f"is not below integration.rtol = {setting['rtol']!r}: the tight twin must be tighter")
+    _check_sizes(spec, values, file)
     sample = spec["sample"]
     ranges = sample.get("params", {}).get("ranges", {})
     intervals = {"sample.t": sample["t"], **{f"sample.q[{i}]": x for i, x in enumerate(sample["q"])},
@@ -169,6 +172,32 @@ def check_values(spec, file, value):
         demand = _demand(spec["name"], p, spec["params"][p]["unit"])
         if demand and not all(demand[0](values[f"sample.params.ranges.{p}[{i}]"]) for i in (0, 1)):
             raise _error(file, f"sample.params.ranges.{p}", bounds, f"leaves the physical values: {p} " + demand[1])
+
+
+# How much work one case file may ask for, so that a run ends in minutes (dyncheck.simulate bounds
+# each integration as it runs; these bound what is asked before anything runs).
+MAX_STATES = 10_000  # random states of the pointwise check, and sets x states of the random parameters:
+#                      four sources at ~0.25 ms each per state, 10 s
+MAX_SETS = 1_000  # random parameter sets: each builds both engines' models, ~20 ms
+MAX_OUTPUTS = 100_000  # rows of one run's output: a reactions and an energy evaluation each, ~0.2 ms, 20 s
+
+
+def _check_sizes(spec, values, file):
+    """The number of random states and sets, and of a run's outputs and MuJoCo's steps, within the bounds above."""
+    from dyncheck.simulate import MAX_STEPS  # here, not at the top: it loads scipy and pandas
+    sample, t_end = spec["sample"], values["initial.t_end"]
+    sets = sample.get("params", {"sets": 0, "states": 0})
+    limits = [("sample.count", sample["count"], sample["count"], MAX_STATES, "random states"),
+              ("sample.params.sets", sets["sets"], sets["sets"], MAX_SETS, "random parameter sets"),
+              ("sample.params.states", sets["states"], sets["sets"] * sets["states"], MAX_STATES,
+               "random states over all parameter sets"),
+              ("initial.t_end", spec["initial"]["t_end"], t_end / values["integration.output_step"], MAX_OUTPUTS,
+               "output rows per run (t_end / integration.output_step)"),
+              ("initial.t_end", spec["initial"]["t_end"], t_end / values["integration.mujoco_step"], MAX_STEPS,
+               "MuJoCo steps per run (t_end / integration.mujoco_step)")]
+    for field, x, amount, limit, what in limits:
+        if amount > limit:
+            raise _error(file, field, x, f"asks for {amount:.3g} {what}, more than the {limit:.0e} a run allows")
 
 
 # -- the walk -----------------------------------------------------------------------------------
@@ -279,10 +308,39 @@ def _cross_references(spec, file):
     for i, finding_id in enumerate(ids):
         if finding_id in ids[:i]:
             raise _error(file, f"findings[{i}].id", finding_id, "is the id of an earlier finding")
+    for i, finding in enumerate(spec.get("findings", [])):
+        for source in finding["sources"]:
+            if not _of_the_book(source):
+                raise _error(file, f"findings[{i}].sources", source,
+                             "is not the book's: a finding is an error of the book, its program, its figures or its "
+                             "data ('book', 'program', or a comparison with one of them), never of an engine or the "
+                             "reference")
+    _ceilings(spec, file)
     for key, figure in spec.get("program", {}).get("figures", {}).items():
         lo, hi = figure["range"]
         if not lo < hi:
             raise _error(file, f"program.figures.{key}.range", figure["range"], "is not an interval lo < hi")
+
+
+def _of_the_book(source):
+    """Whether a finding's source is the book's: a source of the book, or a comparison of one with another."""
+    return any(side.startswith(("book", "program")) for side in source.split(" vs "))
+
+
+def _ceilings(spec, file):
+    """Tolerances that would make their checks vacuous (dyncheck.ceilings)."""
+    tolerance = spec["tolerance"]
+    if tolerance["pointwise"]["value"] > ceilings.POINTWISE:
+        raise _error(file, "tolerance.pointwise.value", tolerance["pointwise"]["value"],
+                     f"is above the ceiling {ceilings.POINTWISE:g} of a pointwise comparison, above which it proves nothing")
+    for check in ("trajectory", "energy"):
+        if tolerance[check]["safety"] > ceilings.SAFETY:
+            raise _error(file, f"tolerance.{check}.safety", tolerance[check]["safety"],
+                         f"is above {ceilings.SAFETY:g}: a check that trusts its error estimate this little proves nothing")
+    for i, item in enumerate(spec.get("data", [])):
+        if item["tolerance"] > ceilings.DATA:
+            raise _error(file, f"data[{i}].tolerance", item["tolerance"],
+                         f"is above the ceiling {ceilings.DATA:g}: it could not tell a printing error from the printed rounding")
 
 
 def _binding(location, field, params, file):

@@ -1,85 +1,169 @@
 """Time integration of a model in the book's coordinates; a trajectory is a DataFrame indexed by time."""
 
+import math
 import time
 
 import numpy as np
 import pandas as pd
-from scipy.integrate import cumulative_simpson, solve_ivp
+from scipy.integrate import DOP853, LSODA, RK45, Radau, cumulative_simpson
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 FIXED_METHODS = ("explicit Euler", "semi-implicit Euler", "RK4")  # the book's programs use the Eulers
 MUJOCO_METHODS = ("mujoco:Euler", "mujoco:implicitfast", "mujoco:RK4")
 METHODS = SCIPY_METHODS + FIXED_METHODS + MUJOCO_METHODS
+SCIPY_SOLVERS = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "LSODA": LSODA}
 
 
 class Unstable(Exception):
     """An integration that blew up: when, which method, which step."""
 
     def __init__(self, method, t, step, why):
-        super().__init__(f"{method} unstable at t = {t:.6g} s (step {step}): {why}")
+        # step None: the failure is in the outputs of a run, between steps
+        super().__init__(f"{method} unstable at t = {t:.6g} s" + (f" (step {step})" if step is not None else "")
+                         + f": {why}")
         self.method, self.t, self.step, self.why = method, t, step, why
 
 
-def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True, max_step=np.inf):
+# -- budgets: no integration runs unbounded --------------------------------------------------------
+# An adaptive method's step controller keeps the local error of its estimator, ~ (omega h)^(p+1) for an
+# estimator of order p on a motion of frequency omega, near rtol (atol = rtol here): omega h ~ rtol^(1/(p+1)),
+# so a run over T takes about omega T / rtol^(1/(p+1)) steps, and at least T / max_step.  p: scipy's
+# error estimators (RK45 4, DOP853 7, Radau 3); LSODA varies its order (Adams 1-12, BDF 1-5): counted as 4.
+ERROR_EXPONENT = {"RK45": 5, "DOP853": 8, "Radau": 4, "LSODA": 5}
+START_STEPS = 50  # the controller's first steps, which search for the step size
+BUDGET_FACTOR = 10  # allowed steps over the expected ones; the 412 adaptive runs of a report take 0.04 to 1.6 of them
+MAX_STEPS = 10**6  # any one run: a fixed-step run of this length costs 5 s in MuJoCo, 20-400 s in Python
+WALL_BUDGET = 120.0  # s of wall time for any one run; the longest of a report takes 9 s
+
+
+class Budget:
+    """How far one integration may go: `steps` steps (`why` says where that number comes from) and
+    WALL_BUDGET seconds; `check` raises Unstable past either."""
+
+    def __init__(self, method, t_end, steps, why):
+        self.method, self.t_end, self.steps, self.why = method, t_end, steps, why
+        if steps > MAX_STEPS:
+            raise Unstable(method, 0.0, 0, f"not started: it needs {why}, beyond the cap of {MAX_STEPS:.0e} steps "
+                                           f"for one run")
+        self.deadline = time.perf_counter() + WALL_BUDGET
+
+    def check(self, t, step):
+        if step > self.steps:
+            raise Unstable(self.method, t, step, f"gave up after {step} steps at t = {t:.4g} s of {self.t_end:g} s "
+                                                 f"(budget: {self.why})")
+        if time.perf_counter() > self.deadline:
+            raise Unstable(self.method, t, step, f"gave up after {WALL_BUDGET:g} s of wall time at step {step}, "
+                                                 f"t = {t:.4g} s of {self.t_end:g} s")
+
+
+def scipy_budget(method, t_end, rtol, max_step, omega):
+    """The Budget of an adaptive run: BUDGET_FACTOR times its expected steps (see ERROR_EXPONENT), or
+    MAX_STEPS for a scene without a frequency (`omega` None: nothing free moves)."""
+    if omega is None:
+        return Budget(method, t_end, MAX_STEPS, f"{MAX_STEPS:.0e} steps, the cap for one run")
+    expected = START_STEPS + max(omega * t_end / rtol ** (1 / ERROR_EXPONENT[method]), t_end / max_step)
+    return Budget(method, t_end, math.ceil(BUDGET_FACTOR * expected),
+                  f"{BUDGET_FACTOR} x the {expected:.3g} steps expected from omega = {omega:.4g} rad/s over "
+                  f"{t_end:g} s at rtol = {rtol:g}")
+
+
+def fastest_frequency(case):
+    """The case's fastest frequency in rad/s (its [work_precision.convergence] omega, an expression of the
+    parameters), from which the budget of an adaptive run follows; None for a case without one."""
+    omega = case.spec.get("work_precision", {}).get("convergence", {}).get("omega")
+    return None if omega is None else abs(case.value(omega, "work_precision.convergence.omega"))
+
+
+def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True, max_step=np.inf, omega=None):
     """Integrate `model` from ic = (q0, v0) over [0, t_end].
 
     method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol` and steps of at
-    most `max_step`),
+    most `max_step`, within a budget of steps from the scene's fastest frequency `omega`, see
+    scipy_budget),
     FIXED_METHODS (driven by model.accelerations at step `dt`: the explicit Euler of the book's
     Matlab program, the semi-implicit Euler of its Pascal programs, classical RK4), or
     MUJOCO_METHODS (MuJoCo's own mj_step at step `dt`; the model must be a MujocoModel).
     Returns a DataFrame indexed by t: coordinates, their rates, reactions, energy, and the work
     of the prescribed motions and applied forces so far (`work`; pass work=False for a scene where
     nothing does work, to skip the drive power), with the cost in `.attrs`.
+    Raises Unstable (when, which method, which step) for a run that blows up, whose model's arithmetic
+    fails, or that goes past its Budget; a fixed-step run longer than MAX_STEPS is not started.
     """
     q0, v0 = (np.asarray(x, dtype=float) for x in ic)
     n_out = int(round(t_end / output_step))
     grid = np.linspace(0.0, t_end, n_out + 1)
     if method in SCIPY_METHODS:
-        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step)
-    elif method in FIXED_METHODS:
-        t, q, v, w, cost = _fixed(model, q0, v0, grid, method, dt, work)
-    elif method in MUJOCO_METHODS:
-        t, q, v, w, cost = _mujoco(model, q0, v0, grid, method, dt, work)
+        budget = scipy_budget(method, t_end, rtol, max_step, omega)
+        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget)
+    elif method in FIXED_METHODS + MUJOCO_METHODS:
+        every = round(output_step / dt)  # steps per output
+        budget = Budget(method, t_end, every * n_out, f"{every * n_out} steps of {dt:g} s")
+        run = _fixed if method in FIXED_METHODS else _mujoco
+        t, q, v, w, cost = run(model, q0, v0, grid, method, dt, every, work, budget)
     else:
         raise ValueError(f"unknown method '{method}'; methods are {', '.join(METHODS)}")
     return _frame(model, t, q, v, w, {"method": method, "rtol": rtol, "dt": dt, **cost})
 
 
-def _scipy(model, q0, v0, grid, method, rtol, work, max_step):
+def _arithmetic(method, t, step, call, *args):
+    """call(*args), with an arithmetic failure in the model (an overflow in its float arithmetic, a
+    singular matrix) raised as Unstable at time t, step `step`."""
+    try:
+        return call(*args)
+    except (ArithmeticError, np.linalg.LinAlgError) as error:
+        raise Unstable(method, t, step, f"the model's arithmetic failed: {type(error).__name__}: {error}") from None
+
+
+def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget):
+    """scipy's solver stepped here rather than by solve_ivp (the same steps and outputs), so that the
+    budget is checked at every step and right-hand side."""
     n = len(q0)
-    evaluations = 0
+    evaluations = steps = 0
+
+    def derivative(t, q, v):
+        return np.concatenate([v, model.accelerations(t, q, v), [model.drive_power(t, q, v) if work else 0.0]])
 
     def rhs(t, y):
         nonlocal evaluations
         evaluations += 1
-        q, v = y[:n], y[n:2 * n]
-        power = model.drive_power(t, q, v) if work else 0.0
-        return np.concatenate([v, model.accelerations(t, q, v), [power]])
+        budget.check(t, steps)
+        return _arithmetic(method, t, steps, derivative, t, y[:n], y[n:2 * n])
 
     start = time.perf_counter()
+    outputs, done = [], 0  # the states at grid[:done]
     with np.errstate(all="ignore"):
-        sol = solve_ivp(rhs, (grid[0], grid[-1]), np.concatenate([q0, v0, [0.0]]), method=method,
-                        t_eval=grid, rtol=rtol, atol=rtol, max_step=max_step)
+        solver = SCIPY_SOLVERS[method](rhs, grid[0], np.concatenate([q0, v0, [0.0]]), grid[-1], rtol=rtol, atol=rtol,
+                                       max_step=max_step)
+        while solver.status == "running":
+            message = solver.step()
+            steps += 1
+            if solver.status == "failed":
+                raise Unstable(method, solver.t, steps, message)
+            if not np.all(np.isfinite(solver.y)):
+                raise Unstable(method, solver.t, steps, "state is not finite")
+            budget.check(solver.t, steps)
+            reached = np.searchsorted(grid, solver.t, side="right")
+            if reached > done:
+                outputs.append(solver.dense_output()(grid[done:reached]))
+                done = reached
     wall = time.perf_counter() - start
-    if sol.status != 0 or not np.all(np.isfinite(sol.y)):
-        bad = sol.t[-1] if sol.t.size else grid[0]
-        raise Unstable(method, float(bad), len(sol.t), sol.message)
-    y = sol.y.T
-    return sol.t, y[:, :n], y[:, n:2 * n], y[:, -1], {"wall": wall, "evaluations": evaluations}
+    y = np.hstack(outputs).T
+    return grid, y[:, :n], y[:, n:2 * n], y[:, -1], {"wall": wall, "evaluations": evaluations, "steps": steps}
 
 
-def _fixed(model, q0, v0, grid, method, dt, work):
+def _fixed(model, q0, v0, grid, method, dt, every, work, budget):
     """Fixed-step integration; the work W' = P rides along with the scheme's own update."""
-    every = int(round((grid[1] - grid[0]) / dt))
     nstep = every * (len(grid) - 1)
     n = len(q0)
     evaluations = 0
+    step = 0
 
     def rates(t, q, v):
         nonlocal evaluations
         evaluations += 1
-        return model.accelerations(t, q, v), (model.drive_power(t, q, v) if work else 0.0)
+        budget.check(t, step)
+        return _arithmetic(method, t, step, lambda: (model.accelerations(t, q, v),
+                                                      model.drive_power(t, q, v) if work else 0.0))
 
     def derivative(t, y):
         acc, power = rates(t, y[:n], y[n:2 * n])
@@ -89,8 +173,8 @@ def _fixed(model, q0, v0, grid, method, dt, work):
     out_q, out_v, out_w = [q.copy()], [v.copy()], [w]
     start = time.perf_counter()
     with np.errstate(all="ignore"):
-        for i in range(nstep):
-            t = i * dt
+        for step in range(nstep):
+            t = step * dt
             if method == "RK4":
                 y = np.concatenate([q, v, [w]])
                 k1 = derivative(t, y)
@@ -105,8 +189,8 @@ def _fixed(model, q0, v0, grid, method, dt, work):
                 q = q + dt * (v_new if method == "semi-implicit Euler" else v)
                 v, w = v_new, w + dt * power
             if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-                raise Unstable(method, (i + 1) * dt, i + 1, "state is not finite")
-            if (i + 1) % every == 0:
+                raise Unstable(method, (step + 1) * dt, step + 1, "state is not finite")
+            if (step + 1) % every == 0:
                 out_q.append(q.copy())
                 out_v.append(v.copy())
                 out_w.append(w)
@@ -115,7 +199,8 @@ def _fixed(model, q0, v0, grid, method, dt, work):
         {"wall": wall, "evaluations": evaluations, "steps": nstep}
 
 
-def _mujoco(model, q0, v0, grid, method, dt, work):
+def _mujoco(model, q0, v0, grid, method, dt, every, work, budget):
+    # MuJoCo steps in C, out of reach of the budget's clock: its steps are bounded before it starts (Budget).
     run = model.step(q0, v0, grid[-1], dt, method.split(":")[1])
     t, q, v = run["t"], run["q"], run["v"]
     check_mujoco_run(run, method, dt)
@@ -124,7 +209,6 @@ def _mujoco(model, q0, v0, grid, method, dt, work):
         work = cumulative_simpson(model.drive_powers(t, q, v), x=t, initial=0.0)
     else:
         work = np.zeros(len(t))
-    every = int(round((grid[1] - grid[0]) / dt))
     keep = slice(None, None, every)
     # Index by the nominal output times: MuJoCo accumulates time step by step, so its clock
     # differs from the grid by rounding, and trajectories are compared time by time.
@@ -165,15 +249,21 @@ def check_mujoco_run(run, method, dt, bound=None):
 
 
 def _frame(model, t, q, v, work, attrs):
+    method = attrs["method"]
     columns = {}
     for i, name in enumerate(model.coords):
         columns[name] = q[:, i]
         columns[name + "_rate"] = v[:, i]
-    reactions = [model.reactions(ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
-    for name in model.reaction_names:
-        columns[name] = [r[name] for r in reactions]
-    columns["energy"] = [model.energy(ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
+    with np.errstate(all="ignore"):
+        reactions = [_arithmetic(method, ti, None, model.reactions, ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
+        for name in model.reaction_names:
+            columns[name] = [r[name] for r in reactions]
+        columns["energy"] = [_arithmetic(method, ti, None, model.energy, ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
     columns["work"] = work
     frame = pd.DataFrame(columns, index=pd.Index(t, name="t"))
+    finite = np.isfinite(frame.to_numpy(dtype=float))
+    if not finite.all():  # a finite state whose reactions, energy or work overflow
+        at, column = np.argwhere(~finite)[0]
+        raise Unstable(method, t[at], None, f"{frame.columns[column]} is not finite")
     frame.attrs.update(attrs)
     return frame

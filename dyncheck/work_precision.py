@@ -16,8 +16,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from dyncheck import ceilings  # noqa: E402
 from dyncheck.checks import ROUNDING_FLOOR, energy_residual, row, state_columns, unstable_row  # noqa: E402
-from dyncheck.simulate import FIXED_METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable, simulate  # noqa: E402
+from dyncheck.schema import MAX_OUTPUTS  # noqa: E402
+from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,  # noqa: E402
+                               fastest_frequency, simulate)
 
 COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "evaluations",
            "steps", "status", "resolved", "detail"]
@@ -35,6 +38,7 @@ EXPECTED_ORDER = {"explicit Euler": 1, "semi-implicit Euler": 1, "RK4": 4,
 SWEEP_METHODS = {"reference": SCIPY_METHODS + FIXED_METHODS, "pinocchio": SCIPY_METHODS, "mujoco": MUJOCO_METHODS}
 KEYS = ("t_end", "output_step", "repeat", "repeat_under", "why", "solution", "sweep", "convergence")
 CONVERGENCE_KEYS = ("omega", "omega_t", "omega_h", "why")
+MAX_REPEAT = 100  # timed repetitions of a quick run (under repeat_under seconds in all)
 
 
 # -- the case file's [work_precision] table ---------------------------------------------------------
@@ -50,9 +54,13 @@ def settings(case):
         raise ValueError(f"{case.file}: work_precision.{field} {why}")
 
     def positive(field, x):
-        if isinstance(x, bool) or not isinstance(x, (int, float)) or not x > 0:
-            fail(field, f"= {x!r} must be a positive number")
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < math.inf:
+            fail(field, f"= {x!r} must be a positive finite number")
         return float(x)
+
+    def within(field, x, count, limit, what):  # the bounds of a run's size (schema.MAX_OUTPUTS, simulate.MAX_STEPS)
+        if count > limit:
+            fail(field, f"= {x:g} asks for {count:.3g} {what}, more than the {limit:.0e} a run allows")
 
     def multiple(field, step, of):
         if abs(of / step - round(of / step)) > 1e-9 * of / step:
@@ -62,11 +70,14 @@ def settings(case):
         for key in set(keys) ^ set(table):
             fail(field + key, "is missing" if key in keys else f"is not a known key; expected {', '.join(keys)}")
     out = {key: positive(key, spec[key]) for key in ("t_end", "output_step", "repeat_under")}
-    if not isinstance(spec["repeat"], int) or spec["repeat"] < 1:
-        fail("repeat", f"= {spec['repeat']!r} must be a positive integer")
+    if not isinstance(spec["repeat"], int) or not 1 <= spec["repeat"] <= MAX_REPEAT:
+        fail("repeat", f"= {spec['repeat']!r} must be an integer from 1 to {MAX_REPEAT}")
     out["repeat"] = spec["repeat"]
     multiple("output_step", out["output_step"], out["t_end"])
+    within("output_step", out["output_step"], out["t_end"] / out["output_step"], MAX_OUTPUTS, "output rows per run")
     out["solution"] = {key: positive(f"solution.{key}", spec["solution"].get(key)) for key in ("rtol", "max_step")}
+    within("solution.max_step", out["solution"]["max_step"], out["t_end"] / out["solution"]["max_step"], MAX_STEPS,
+           "steps")
     out["sweep"] = {}
     for source, methods in spec["sweep"].items():
         if source not in SWEEP_METHODS:
@@ -79,19 +90,23 @@ def settings(case):
             if method not in SCIPY_METHODS:
                 for dt in values:
                     multiple(field, dt, out["output_step"])
+                    within(field, dt, out["t_end"] / dt, MAX_STEPS, "steps")
             out["sweep"].setdefault(source, {})[method] = values
     # The convergence runs are set in units of the scene's fastest frequency omega (an expression of
     # the parameters), so that they stay in the asymptotic range, and as cheap, when a parameter is
     # overridden: step h = omega_h / omega, horizon the whole number of steps nearest omega_t / omega.
     conv = spec["convergence"]
-    omega = positive("convergence.omega", case.value(conv["omega"], "work_precision.convergence.omega"))
+    omega = case.value(conv["omega"], "work_precision.convergence.omega")
     omega_t = positive("convergence.omega_t", conv["omega_t"])
     out["convergence"] = {"omega": omega, "steps": {}}
     for method, omega_h in conv["omega_h"].items():
         if method not in EXPECTED_ORDER:
             fail(f"convergence.omega_h.{method}", f"is not a fixed-step method ({', '.join(EXPECTED_ORDER)})")
-        h = positive(f"convergence.omega_h.{method}", omega_h) / omega
-        out["convergence"]["steps"][method] = (h, max(1, round(omega_t / omega_h)) * h)
+        positive(f"convergence.omega_h.{method}", omega_h)
+        within(f"convergence.omega_h.{method}", omega_h, 4 * omega_t / omega_h, MAX_STEPS, "steps (at h/4)")
+        if omega > 0:  # parameters may leave nothing to converge (g = 0): convergence() says so in a row
+            h = omega_h / omega
+            out["convergence"]["steps"][method] = (h, max(1, round(omega_t / omega_h)) * h)
     return out
 
 
@@ -111,7 +126,7 @@ def _dop853(case, t_end, output_step, rtol, max_step):
     uncapped, DOP853 at 1e-13 takes a few long steps whose error its estimate misses (measured 1e-12
     to 3e-11 against Radau at 1e-13; capped at about half its mean step, 5e-14 to 1e-12)."""
     return simulate(case.model("reference"), case.initial[:2], t_end, "DOP853", rtol=rtol, max_step=max_step,
-                    output_step=output_step, work=case.driven)
+                    output_step=output_step, work=case.driven, omega=fastest_frequency(case))
 
 
 def trajectory_error(run, reference, columns):
@@ -183,13 +198,14 @@ def sweep(case, progress=None):
             while len(walls) < wp["repeat"] and took < wp["repeat_under"]:
                 start = time.perf_counter()
                 run = simulate(model, (q0, v0), wp["t_end"], method, output_step=wp["output_step"],
-                               work=case.driven, **{setting: value})
+                               work=case.driven, omega=fastest_frequency(case), **{setting: value})
                 took = time.perf_counter() - start
                 walls.append(run.attrs["wall"])
         except Unstable as failure:
             rows.append({**point, "error": np.nan, "energy_error": np.nan, "wall": np.nan, "evaluations": np.nan,
                          "steps": failure.step, "status": "unstable", "resolved": False,
-                         "detail": f"unstable at t = {failure.t:.4g} s, step {failure.step}: {failure.why}"})
+                         "detail": f"unstable at t = {failure.t:.4g} s"
+                                   + (f", step {failure.step}" if failure.step is not None else "") + f": {failure.why}"})
             _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: unstable")
             continue
         error = trajectory_error(run, reference, columns)
@@ -336,6 +352,9 @@ def convergence(case):
         return []
     conv = wp["convergence"]
     omega = conv["omega"]
+    if not omega > 0:
+        raise ValueError(f"{case.file}: work_precision.convergence.omega = {omega!r} must be a positive number "
+                         "(the scene's fastest frequency, with these parameters)")
     q0, v0, _ = case.initial
     columns = state_columns(case)
     rows = []
@@ -362,5 +381,5 @@ def convergence(case):
         rows.append(row("convergence", method, source, abs(observed - expected), omega * h * (1 + omega * t_end),
                         f"observed order {observed:.3f} (expected {expected}) from dt = {h:g}, {h / 2:g}, "
                         f"{h / 4:g} s over {t_end:g} s; differences {d1:.2e}, {d2:.2e}; allowed "
-                        f"omega h (1 + omega T) with omega = {omega:g} rad/s"))
+                        f"omega h (1 + omega T) with omega = {omega:g} rad/s", ceiling=ceilings.CONVERGENCE))
     return rows

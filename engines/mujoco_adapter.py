@@ -18,7 +18,8 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
-from engines import euler
+from engines import euler, scene as scene_rules
+from engines.scene import Body
 
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
@@ -49,6 +50,10 @@ class MujocoModel:
         self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
         self.free = np.array([dof for _, (_, dof), idx in self.layout for dof in range(dof, dof + len(idx))], dtype=int)
         self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
+        # after the case's joints are found: a renamed joint is missing before it is extra
+        unmodelled = next(_unmodelled(self.m, scene), None)
+        if unmodelled:
+            raise scene_rules.refusal(self.path, "MJCF", *unmodelled)
         for (_, dof), _ in self.driven:  # the evaluation model imposes these exactly: no armature
             self.m.dof_armature[dof] = 0.0
         self.applied = np.zeros(self.m.nv)
@@ -60,7 +65,7 @@ class MujocoModel:
         self._driven_motion = np.array([motion for _, motion in self.driven]).reshape(-1, 3).T  # q0, rate, acc
         self._driven_qacc = np.zeros(self.m.nv)
         self._driven_qacc[self._driven_dofs] = self._driven_motion[2]
-        self.reaction_specs = {name: (self._sensor(spec["sensor"]), spec["axis"], spec["frame"])
+        self.reaction_specs = {name: (self._reaction_sensor(name, spec), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
         self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
@@ -84,6 +89,55 @@ class MujocoModel:
     def _sensor(self, name):
         i = self._id(mujoco.mjtObj.mjOBJ_SENSOR, name)
         return int(self.m.sensor_adr[i]), int(self.m.sensor_objid[i])
+
+    def _reaction_sensor(self, reaction, spec):
+        """The sensor of a reaction: a force sensor on a site of the case's body, with the body's axes (the
+        Pinocchio side reads the force on that body's joint, in its frame), its reading neither clamped nor
+        delayed.  Its sensordata address and site."""
+        i = self._id(mujoco.mjtObj.mjOBJ_SENSOR, spec["sensor"])
+        site = int(self.m.sensor_objid[i])
+        kind = mujoco.mjtSensor(self.m.sensor_type[i]).name[7:].lower()
+        where = f"{self.path}: sensor '{spec['sensor']}' of reaction '{reaction}'"
+        if kind != "force":
+            raise ValueError(f"{where} is a <{kind}> sensor: a reaction reads a <force> sensor (forces, not moments)")
+        body = mujoco.mj_id2name(self.m, mujoco.mjtObj.mjOBJ_BODY, self.m.site_bodyid[site])
+        if body != spec["body"]:
+            raise ValueError(f"{where} is on body '{body}', but case.toml's reaction is on body '{spec['body']}'")
+        # A site's quat is normalised from decimal text: identity to a few ulps when it is one.
+        if np.max(np.abs(self.m.site_quat[site] - [1, 0, 0, 0])) > 4 * np.finfo(float).eps:
+            raise scene_rules.refusal(self.path, "MJCF", "body-site", "quat", f"site of sensor '{spec['sensor']}'",
+                                      _text(self.m.site_quat[site]))
+        if self.m.sensor_cutoff[i] > 0:
+            raise scene_rules.refusal(self.path, "MJCF", "sensor-force", "cutoff", f"sensor '{spec['sensor']}'",
+                                      _text(self.m.sensor_cutoff[i]))
+        if self.m.sensor_history[i][0] > 0:
+            raise scene_rules.refusal(self.path, "MJCF", "sensor-force", "nsample", f"sensor '{spec['sensor']}'",
+                                      int(self.m.sensor_history[i][0]))
+        return int(self.m.sensor_adr[i]), site
+
+    def tree(self):
+        """The moving bodies as MuJoCo models them (see engines.scene.Body).  A ball joint's armature a on a
+        body on the world is the isotropic inertia a I about the joint (no mass, so the same about the centre
+        of mass), and is counted in the body's inertia."""
+        m, bodies = self.m, []
+        for b in range(1, m.nbody):
+            j = m.body_jntadr[b]
+            kind = mujoco.mjtJoint(m.jnt_type[j]).name[6:].lower()
+            inertia = _matrix(m.body_iquat[b]) @ np.diag(m.body_inertia[b]) @ _matrix(m.body_iquat[b]).T
+            if kind == "ball":
+                inertia += self.armature[m.jnt_dofadr[j]] * np.eye(3)
+            bodies.append(Body(name=_name(m, mujoco.mjtObj.mjOBJ_BODY, b),
+                               parent=_name(m, mujoco.mjtObj.mjOBJ_BODY, m.body_parentid[b]),
+                               joint=_name(m, mujoco.mjtObj.mjOBJ_JOINT, j), joint_type=kind,
+                               axis=m.jnt_axis[j].copy() if kind != "ball" else np.zeros(3),
+                               position=m.body_pos[b].copy(), rotation=_matrix(m.body_quat[b]),
+                               mass=float(m.body_mass[b]), com=m.body_ipos[b].copy(), inertia=inertia,
+                               stiffness=np.r_[m.jnt_stiffness[j], m.jnt_stiffnesspoly[j]]))
+        return bodies
+
+    @property
+    def gravity(self):
+        return self.m.opt.gravity.copy()
 
     def read(self, location):
         """The compiled model's value at a binding location (see `_write`)."""
@@ -271,6 +325,77 @@ class MujocoModel:
                 q[:, idx] = euler.angles(qpos[:, qadr:qadr + 4], q0[idx])
                 v[:, idx] = euler.euler_rates(q[:, idx], qvel[:, dof:dof + 3])
         return q, v
+
+
+def _name(m, kind, i):
+    return mujoco.mj_id2name(m, kind, i)
+
+
+def _matrix(quat):
+    matrix = np.empty(9)
+    mujoco.mju_quat2Mat(matrix, quat)
+    return matrix.reshape(3, 3)
+
+
+def _text(values):
+    return " ".join(f"{x:g}" for x in np.atleast_1d(values))
+
+
+def _unmodelled(m, scene):
+    """What the compiled model holds that dyncheck does not model, as (element, attribute, owner, value) of
+    engines.scene.RULES: forces and constraints that the Pinocchio side lacks, joints the case does not move."""
+    obj = mujoco.mjtObj
+    named = lambda kind, i: f"{kind.name[6:].lower()} '{_name(m, kind, i) or i}'"
+    for count, element, kind in ((m.nplugin, "plugin", obj.mjOBJ_PLUGIN), (m.nu, "actuator", obj.mjOBJ_ACTUATOR),
+                                 (m.ntendon, "tendon", obj.mjOBJ_TENDON), (m.neq, "equality", obj.mjOBJ_EQUALITY),
+                                 (m.nflex, "deformable-flex", obj.mjOBJ_FLEX), (m.npair, "contact-pair", obj.mjOBJ_PAIR)):
+        if count:
+            yield element, "*", named(kind, 0), ""
+    for attribute in ("density", "viscosity"):
+        if getattr(m.opt, attribute):
+            yield "option", attribute, "<option>", _text(getattr(m.opt, attribute))
+    for flag in ("gravity", "spring", "sensor"):
+        if m.opt.disableflags & getattr(mujoco.mjtDisableBit, "mjDSBL_" + flag.upper()):
+            yield "option-flag", flag, "<option>", "disable"
+    for flag in ("sleep", "invdiscrete"):
+        if m.opt.enableflags & getattr(mujoco.mjtEnableBit, "mjENBL_" + flag.upper()):
+            yield "option-flag", flag, "<option>", "enable"
+    for g1 in range(m.ngeom):  # a pair of geoms on two bodies that MuJoCo's contact filter lets touch
+        for g2 in range(g1 + 1, m.ngeom):
+            if m.geom_bodyid[g1] == m.geom_bodyid[g2]:
+                continue
+            if m.geom_contype[g1] & m.geom_conaffinity[g2]:
+                yield "body-geom", "contype", named(obj.mjOBJ_GEOM, g1), _text(m.geom_contype[g1])
+            if m.geom_contype[g2] & m.geom_conaffinity[g1]:
+                yield "body-geom", "conaffinity", named(obj.mjOBJ_GEOM, g1), _text(m.geom_conaffinity[g1])
+    moved, driven = scene_rules.named_joints(scene), set(scene["driven"])
+    for j in range(m.njnt):
+        name, kind = _name(m, obj.mjOBJ_JOINT, j), mujoco.mjtJoint(m.jnt_type[j])
+        dof, qadr = m.jnt_dofadr[j], m.jnt_qposadr[j]
+        owner = f"joint '{name}'"
+        if kind == mujoco.mjtJoint.mjJNT_FREE:
+            yield "body-freejoint", "*", owner, ""
+        if name not in moved:
+            yield "body-joint", "name", owner, name
+        scalar = kind in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
+        dofs = slice(dof, dof + (1 if scalar else 3))
+        on_world_ball = kind == mujoco.mjtJoint.mjJNT_BALL and m.body_parentid[m.jnt_bodyid[j]] == 0
+        checks = [("pos", m.jnt_pos[j]), ("limited", m.jnt_limited[j]), ("springyield", m.jnt_springyield[j]),
+                  ("frictionloss", m.dof_frictionloss[dofs]),
+                  ("damping", np.r_[m.dof_damping[dofs], m.dof_dampingpoly[dofs].ravel()]),
+                  ("armature", 0.0 if name in driven or on_world_ball else m.dof_armature[dofs])]
+        if scalar:
+            checks += [("ref", m.qpos0[qadr]), ("springref", m.qpos_spring[qadr])]
+        for attribute, value in checks:
+            if np.any(value):
+                yield "body-joint", attribute, owner, _text(value)
+    for b in range(1, m.nbody):
+        if m.body_mocapid[b] >= 0:
+            yield "body", "mocap", named(obj.mjOBJ_BODY, b), "true"
+        if m.body_gravcomp[b]:
+            yield "body", "gravcomp", named(obj.mjOBJ_BODY, b), _text(m.body_gravcomp[b])
+        if m.body_jntnum[b] != 1:
+            yield "body", "(joints)", named(obj.mjOBJ_BODY, b), m.body_jntnum[b]
 
 
 def _write(spec, location, value):

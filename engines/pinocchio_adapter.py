@@ -7,11 +7,13 @@ the case's bindings (`write`), and `read` reports them back from this adapter.
 """
 
 import functools
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pinocchio as pin
 
-from engines import euler
+from engines import euler, scene as scene_rules
+from engines.scene import Body
 
 ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
 
@@ -43,6 +45,14 @@ class PinocchioModel:
         self.free = np.array([i for _, joint, idx in self.layout for i in range(joint.idx_v, joint.idx_v + len(idx))],
                              dtype=int)
         self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
+        # after the case's joints are found: a renamed joint is missing before it is extra
+        try:
+            robot = ET.parse(self.path).getroot()
+        except ET.ParseError as error:  # stricter than urdfdom's parser
+            raise ValueError(f"{self.path}: {error}") from None
+        unmodelled = next(_unmodelled(robot, scene), None)
+        if unmodelled:
+            raise scene_rules.refusal(self.path, "URDF", *unmodelled)
         self.applied = np.zeros(self.m.nv)
         for joint, force in scene["applied"].items():
             iv = self._joint(joint).idx_v
@@ -114,6 +124,30 @@ class PinocchioModel:
             setattr(holder, key, value)
         else:  # Pinocchio's bindings return these arrays by reference
             getattr(holder, key)[i] = value
+
+    def tree(self):
+        """The moving bodies as Pinocchio models them (see engines.scene.Body): one per joint, named after
+        the link it moves; a joint's axis is its motion subspace at the neutral configuration."""
+        link = {f.parentJoint: f.name for f in self.m.frames if f.type == pin.FrameType.BODY}
+        bodies = []
+        for j in range(1, self.m.njoints):
+            joint, placement, inertia = self.m.joints[j], self.m.jointPlacements[j], self.m.inertias[j]
+            motion = pin.computeJointJacobian(self.m, self.m.createData(), self.neutral, j)[:, joint.idx_v]
+            if joint.nv == 1:  # motion = (linear, angular) per unit rate, in the joint's frame
+                kind, axis = ("hinge", motion[3:]) if np.any(motion[3:]) else ("slide", motion[:3])
+            else:  # the root joint that the case names (spherical: the top)
+                kind, axis = "ball", np.zeros(3)
+            parent = self.m.parents[j]
+            bodies.append(Body(name=link[j], parent=link[parent] if parent else "world", joint=self.m.names[j],
+                               joint_type=kind, axis=axis.copy(), position=placement.translation.copy(),
+                               rotation=placement.rotation.copy(), mass=float(inertia.mass),
+                               com=inertia.lever.copy(), inertia=inertia.inertia.copy(),
+                               stiffness=np.array([self.stiffness.get(self.m.names[j], 0.0), 0.0, 0.0])))
+        return bodies
+
+    @property
+    def gravity(self):
+        return self.m.gravity.linear.copy()
 
     def read(self, location):
         holder, key = self._slot(location)
@@ -223,3 +257,32 @@ class PinocchioModel:
         _, velocity, _, tau = self._dynamics(t, q, v)
         driven = sum(tau[iv] * velocity[iv] for (_, _, iv), _ in self._driven_joints)
         return float(driven + self.applied @ velocity)
+
+
+# URDF cannot write an unlimited revolute or prismatic joint (urdfdom requires <limit> and refuses inf):
+# limits at or beyond this are read as none.
+NO_LIMIT = 1e300
+
+
+def _unmodelled(robot, scene):
+    """What the URDF says that Pinocchio's dynamics drop, as (element, attribute, owner, value) of
+    engines.scene.RULES (Pinocchio itself parses these silently), and joints the case does not move."""
+    moved = scene_rules.named_joints(scene)
+    for joint in robot.iter("joint"):
+        name, kind = joint.get("name"), joint.get("type")
+        owner = f"joint '{name}'"
+        if name not in moved:
+            yield "joint", "name", owner, name
+        if kind not in ("revolute", "continuous", "prismatic"):
+            yield "joint", "type", owner, kind
+        limit = joint.find("limit")
+        if limit is not None and kind != "continuous":  # a continuous joint's limits are ignored by urdfdom
+            for bound in ("lower", "upper"):
+                if abs(float(limit.get(bound, 0.0))) < NO_LIMIT:
+                    yield "joint/limit", bound, owner, limit.get(bound, "0 (by default)")
+        dynamics = joint.find("dynamics")
+        for attribute in ("damping", "friction"):
+            if dynamics is not None and float(dynamics.get(attribute, 0.0)):
+                yield "joint/dynamics", attribute, owner, dynamics.get(attribute)
+        if joint.find("mimic") is not None:
+            yield "joint/mimic", "*", owner, ""

@@ -31,7 +31,8 @@ def test_run_exits_0_and_writes_the_json_of_the_design(canned, tmp_path, capsys)
     data = json.loads(path.read_text())
     spring = next(c for c in data["cases"] if c["case"] == "spring_pendulum")
     assert set(spring) == {"case", "section", "params", "checks", "findings"}
-    assert set(spring["checks"][0]) == {"check", "quantity", "sources", "error", "tolerance", "status", "finding"}
+    assert set(spring["checks"][0]) == {"check", "quantity", "sources", "error", "tolerance", "ceiling", "status", "finding",
+                                       "detail"}
     finding = next(f for f in spring["findings"] if f["id"] == "1.8.3-R")
     assert {"id", "title", "quantity", "sources", "error", "explanation"} <= set(finding)
     assert finding["error"] > 0.1

@@ -83,6 +83,17 @@ BAD_CASE_FILES = [
      "not valid TOML: Expected ']' at the end of a table declaration"),
     ("double_pendulum", "m1 = [0.05, 2.0]", "m1 = [0.0, 2.0]",
      "sample.params.ranges.m1 = [0.0, 2.0] leaves the physical values: m1 must be > 0 (m1 is a mass, in kg)"),
+    # settings that would make a check vacuous (dyncheck/ceilings.py)
+    ("spring_pendulum", 'sources = ["book"]', 'sources = ["mujoco"]',
+     "findings[0].sources = 'mujoco' is not the book's: a finding is an error of the book"),
+    ("spring_pendulum", 'sources = ["book"]', 'sources = ["reference vs mujoco"]',
+     "findings[0].sources = 'reference vs mujoco' is not the book's"),
+    ("spring_pendulum", "value = 1e-9", "value = 1e300",
+     "tolerance.pointwise.value = 1e+300 is above the ceiling 1e-06 of a pointwise comparison"),
+    ("spring_pendulum", "safety = 10.0", "safety = 1e300", "tolerance.trajectory.safety = 1e+300 is above 100"),
+    ("spinning_top", "tolerance = 2e-5", "tolerance = 1.0", "data[0].tolerance = 1.0 is above the ceiling 0.05"),
+    ("double_pendulum", "\neps0 = 1e-10", "\neps0 = nan", "cannot evaluate nan: nan is not finite (at stability.lyapunov.eps0)"),
+    ("double_pendulum", "\ntol = 1e-3", "\ntol = 1e-12", "stability.lyapunov.tol = 1e-12 is not in (eps0 = 1e-10, 0.001]"),
 ]
 
 

@@ -32,6 +32,8 @@ integrators' error level can be expected to agree to a tolerance, from the finit
 perturbations along the book's initial conditions (cheap: five trajectories over the case's horizon).
 """
 
+from dyncheck import ceilings
+
 # The package's interface: the studies, their figures, and the pieces the tests and checks call.
 from dyncheck.stability.common import SHARP, _settings, attempt, describe, limit_step, run_fixed, spectral_radius  # noqa: F401
 from dyncheck.stability.double_pendulum import (agreement_horizon, benettin, energy_drift, figure_energy_drift,  # noqa: F401
@@ -81,10 +83,22 @@ def validate(case):
         for name, override in value.get("overrides", {}).items():
             if name not in case.params:
                 raise ValueError(f"{case.file}: stability.{key}.overrides: no parameter '{name}'")
-        try:
-            _settings(case, key)
-        except ValueError as error:
-            raise ValueError(f"{case.file}: stability.{key}: {error}") from None
+        settings = _settings(case, key)  # a ValueError names the file and the field
+        if key == "lyapunov":
+            _agreement_settings(case.file, settings)
+
+
+def _agreement_settings(file, settings):
+    """eps0 and tol set the trajectory check's agreement horizon: two sources that differ by eps0 are
+    compared until their difference could reach tol, so 0 < eps0 < tol, and tol no more than the
+    ceiling of a run's comparison (above it an error estimate means nothing)."""
+    eps0, tol = settings["eps0"], settings["tol"]
+    if not 0 < eps0 < 1:
+        raise ValueError(f"{file}: stability.lyapunov.eps0 = {eps0!r} is not a relative error level in (0, 1)")
+    if not eps0 < tol <= ceilings.RUN:
+        raise ValueError(f"{file}: stability.lyapunov.tol = {tol!r} is not in (eps0 = {eps0:g}, {ceilings.RUN:g}]: "
+                         "the agreement horizon would compare nothing, or compare beyond where an error estimate "
+                         "means anything")
 
 
 def studies(case, progress=None):

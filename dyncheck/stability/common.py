@@ -27,7 +27,8 @@ EPS = np.finfo(float).eps
 def failure(error):
     """An integration that blew up, as data: {status, t, step, why}."""
     if isinstance(error, Unstable):
-        return {"status": "unstable", "t": float(error.t), "step": int(error.step), "why": str(error.why)}
+        step = None if error.step is None else int(error.step)  # None: in a run's outputs
+        return {"status": "unstable", "t": float(error.t), "step": step, "why": str(error.why)}
     return {"status": "unstable", "t": None, "step": None, "why": f"{type(error).__name__}: {error}"}
 
 
@@ -160,9 +161,9 @@ def _settings(case, name):
         if key in ("why", "methods", "initial", "overrides", "source", "method"):
             out[key] = x
         elif isinstance(x, list):
-            out[key] = [case.value(y) for y in x]
+            out[key] = [case.value(y, f"stability.{name}.{key}[{i}]") for i, y in enumerate(x)]
         else:
-            out[key] = case.value(x)
+            out[key] = case.value(x, f"stability.{name}.{key}")
     return out
 
 

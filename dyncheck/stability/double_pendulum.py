@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
-from dyncheck.simulate import MUJOCO_METHODS, SCIPY_METHODS, Unstable, simulate
+from dyncheck.simulate import MUJOCO_METHODS, SCIPY_METHODS, Unstable, fastest_frequency, simulate
 from dyncheck.stability.common import EPS, _fmt, _plt, _result, _settings, _style, attempt, describe
 
 
@@ -208,7 +208,7 @@ def energy_drift(case, settings, progress=None):
         source = "mujoco" if method in MUJOCO_METHODS else "reference"
         kwargs = {"rtol": settings["rtol"]} if method in SCIPY_METHODS else {"dt": dt}
         run, fail = attempt(lambda: simulate(case.model(source), (q0, v0), T, method, output_step=every * dt,
-                                             work=False, **kwargs))
+                                             work=False, omega=fastest_frequency(case), **kwargs))
         label = method + (f" (rtol {settings['rtol']:g})" if method in SCIPY_METHODS else "")
         if fail is not None:
             rows.append({"method": label, "status": "unstable", "t_fail": fail["t"], "step_fail": fail["step"],

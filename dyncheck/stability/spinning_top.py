@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import brentq
 
-from dyncheck.simulate import Unstable, simulate
+from dyncheck.simulate import Unstable, fastest_frequency, simulate
 from dyncheck.stability.common import EPS, _fmt, _plt, _result, _variant, attempt, describe
 
 
@@ -273,7 +273,7 @@ def _passages(case, settings, progress):
         for key, kwargs in (("dop853", {"method": "DOP853", "rtol": settings["rtol"]}),
                             ("rk4", {"method": "RK4", "dt": dt})):
             ref, fail = attempt(lambda: simulate(case.model("reference"), (q0, v0), T, output_step=every * dt,
-                                                 work=False, **kwargs))
+                                                 work=False, omega=fastest_frequency(case), **kwargs))
             if fail is not None:
                 row[key] = {"status": "unstable", "fail": fail}
                 continue

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import fsolve
 
-from dyncheck.simulate import simulate
+from dyncheck.simulate import fastest_frequency, simulate
 from dyncheck.stability.common import (FAMILY, SHARP, Guarded, _fmt, _plt, _result, _rms, _style, _variant, attempt,
                                       describe, grid_step, limit_step, run_fixed)
 
@@ -120,7 +120,8 @@ def stable_step(case, settings, progress=None):
         # The exact solution from the book's initial conditions: bounded, or a physical runaway?
         exact_model = Guarded(variant.model(source), 1, escape, "DOP853", 1)
         exact_long, fail = attempt(lambda: simulate(exact_model, variant.initial[:2], runaway_T, "DOP853",
-                                                    rtol=settings["rtol"], output_step=1e-3, work=False))
+                                                    rtol=settings["rtol"], output_step=1e-3, work=False,
+                                                    omega=fastest_frequency(variant)))
         base = {"k": k, "omega_fast": lin[3] if lin else None, "omega_slow": lin[2] if lin else None,
                 "psi_eq": lin[0] if lin else None, "l_eq": lin[1] if lin else None}
         if fail is not None:
@@ -243,7 +244,7 @@ def _critical_stiffness(case, settings, source, escape, horizon):
         variant = _variant(case, k=k)
         model = Guarded(variant.model(source), 1, escape, "DOP853", 1)
         _, fail = attempt(lambda: simulate(model, variant.initial[:2], horizon, "DOP853", rtol=settings["rtol"],
-                                           output_step=horizon / 100, work=False))
+                                           output_step=horizon / 100, work=False, omega=fastest_frequency(variant)))
         return fail is not None
 
     lo, hi = 0.5 * k_crit, 2.0 * k_crit
@@ -266,7 +267,8 @@ def _listing_growth(case, settings, source):
     dt = program.dt
     t_end = round(program.steps * dt / 0.01) * 0.01  # whole output intervals (the listing: 2.99995 s)
     exact, fail = attempt(lambda: simulate(case.model(source), case.initial[:2], t_end, "DOP853",
-                                           rtol=settings["rtol"], output_step=dt * 4, work=False))
+                                           rtol=settings["rtol"], output_step=dt * 4, work=False,
+                                           omega=fastest_frequency(case)))
     out, fail2 = attempt(lambda: simulate(case.model(source), case.initial[:2], t_end, "explicit Euler", dt=dt,
                                           output_step=dt * 4, work=False))
     if fail or fail2:

@@ -1,0 +1,47 @@
+"""Ceilings of the checks' tolerances.  Above its ceiling a comparison proves nothing: a row whose
+derived tolerance exceeds it is `inconclusive` (never `pass`; the run exits 1), and a case file that
+asks for a tolerance above it is refused on load (exit 2).  Each ceiling's argument is beside it."""
+
+import numpy as np
+
+EPS = np.finfo(float).eps
+
+# Pointwise comparisons (and the random parameter sets, and a listing's formulas at the same states)
+# compare exact evaluations of the same quantity: rounding costs a few hundred eps (~1e-13) and the
+# scenes' modelling residues (placeholder masses and inertias) are argued below 1e-10 in each case
+# file.  A tolerance of 1e-6 is 1e4 times the largest of those; above it a term of the equations
+# could be missing and still pass.
+POINTWISE = 1e-6
+
+# Trajectories and energy balances are judged against `safety` times the run's own error estimate
+# (its difference from a tighter twin).  That estimate assumes the run's error grows linearly with a
+# perturbation; beyond about 1e-3 of a quantity's scale it does not (where the double pendulum's
+# difference stops growing linearly: [stability.lyapunov] in its case file), and neither the
+# estimate nor a comparison built on it means anything.
+RUN = 1e-3
+
+# The safety factor on an error estimate: the estimates are first-order accurate in the error, so a
+# factor of 10 covers them (the case files' choice); one above 100 says the estimate is not trusted,
+# and then the check built on it is not either.
+SAFETY = 100.0
+
+# Observed orders of convergence are integers: an allowance of half an order cannot tell an order
+# from its neighbour.
+CONVERGENCE = 0.5
+
+# The book's printed numbers against its own formulas: a number printed to two significant digits is
+# exact to 5e-2; a tolerance above that cannot tell a printing error from the printed rounding.
+DATA = 5e-2
+
+# A listing's run against the exact motion: a printed figure shows a curve to about 1 % of its axis,
+# so a run that strays by more than 1e-2 of a coordinate's scale draws a different curve.  This is
+# the tolerance of those rows as well as their ceiling; the listing's own integrator error estimate
+# says, in the row, whether its integrator or its formulas stray.
+LISTING = 1e-2
+
+# Prescribed motions must be exact to about 1e-12 (MuJoCo holds them by a large armature): a drift of
+# the driven rate beyond it changes the motion measurably over a run.
+DRIVEN_RATE = 1e-12
+
+# Figure ranges are inside/outside: any excess over the book's printed axis is outside.
+FIGURE = 0.0

@@ -1,0 +1,134 @@
+"""Issue 10: every integration is bounded, and valid numeric input gives rows or exit 2, never a traceback."""
+
+import shutil
+
+import numpy as np
+import pytest
+
+from dyncheck import simulate as sim
+from dyncheck.case import load_case
+from dyncheck.checks import evaluate, parameter_sets, pointwise, random_parameters
+from dyncheck.cli import main
+from dyncheck.simulate import Unstable, fastest_frequency, simulate
+
+
+def test_a_run_past_its_step_budget_gives_up_with_when_and_why():
+    # Mz = -1e5 N m spins the top up by 4e7 rad/s^2; omega (the spin, 51 rad/s) does not know it.
+    case = load_case("spinning_top", Mz=-1e5)
+    with pytest.raises(Unstable, match=r"gave up after \d+ steps at t = .* of 0.1 s \(budget: 10 x the"):
+        simulate(case.model("book"), case.initial[:2], 0.1, "DOP853", rtol=1e-10, output_step=1e-3, work=True,
+                 omega=fastest_frequency(case))
+
+
+def test_a_stiff_scene_is_not_started_when_its_expected_steps_exceed_the_cap():
+    case = load_case("spring_pendulum", k=1e9)  # omega = 7e4 rad/s: 5e6 steps expected over 3 s
+    with pytest.raises(Unstable, match="not started: it needs .* beyond the cap") as failure:
+        simulate(case.model("book"), case.initial[:2], 3.0, "DOP853", rtol=1e-10, output_step=1e-3,
+                 omega=fastest_frequency(case))
+    assert failure.value.step == 0
+
+
+def test_fixed_step_runs_longer_than_the_cap_are_not_started():
+    case = load_case("spring_pendulum")
+    with pytest.raises(Unstable, match="not started"):
+        simulate(case.model("book"), case.initial[:2], 3.0, "RK4", dt=1e-6 * 3 / sim.MAX_STEPS, output_step=1e-3)
+
+
+def test_a_run_past_its_wall_budget_gives_up(monkeypatch):
+    monkeypatch.setattr(sim, "WALL_BUDGET", 0.0)
+    case = load_case("spring_pendulum")
+    with pytest.raises(Unstable, match="gave up after 0 s of wall time"):
+        simulate(case.model("book"), case.initial[:2], 0.1, "RK45", rtol=1e-6, output_step=1e-2,
+                 omega=fastest_frequency(case))
+
+
+def test_stepping_scipy_here_gives_solve_ivps_outputs():
+    from scipy.integrate import solve_ivp
+    case = load_case("spring_pendulum")
+    model, (q0, v0) = case.model("book"), case.initial[:2]
+    run = simulate(model, (q0, v0), 0.2, "DOP853", rtol=1e-10, output_step=1e-2, work=False,
+                   omega=fastest_frequency(case))
+    sol = solve_ivp(lambda t, y: np.concatenate([y[2:4], model.accelerations(t, y[:2], y[2:4]), [0.0]]), (0, 0.2),
+                    np.concatenate([q0, v0, [0.0]]), method="DOP853", rtol=1e-10, atol=1e-10,
+                    t_eval=np.linspace(0, 0.2, 21))
+    assert np.array_equal(run["psi"].to_numpy(), sol.y[0])
+
+
+def test_scipy_failing_before_its_first_output_is_an_unstable_row():
+    # was: AttributeError 'list' object has no attribute 'size' in simulate.py
+    case = load_case("piston", m=1e300)
+    with pytest.raises(Unstable):
+        simulate(case.model("reference"), case.initial[:2], 0.1, "DOP853", rtol=1e-10, output_step=1e-3)
+
+
+def test_an_overflow_in_the_models_arithmetic_is_unstable_with_its_step():
+    # was: OverflowError out of reference/double_pendulum.py
+    # (without omega: with it, the run is not even started, its frequency being 6e151 rad/s)
+    case = load_case("double_pendulum", m2=1e300)
+    with pytest.raises(Unstable, match=r"\(step \d+\): the model's arithmetic failed: OverflowError"):
+        simulate(case.model("book"), case.initial[:2], 0.1, "DOP853", rtol=1e-10, output_step=1e-3, work=False)
+
+
+def test_an_overflow_at_the_random_states_is_a_failing_row_with_its_reason():
+    case = load_case("double_pendulum", m2=1e300)
+    with pytest.raises(ArithmeticError, match="book: accelerations at random state 0: OverflowError"):
+        evaluate(case, "book", case.sample_states())
+    rows, _ = pointwise(case)
+    failed = [r for r in rows if "book" in r["sources"]]
+    assert failed and all(r["status"] == "fail" and "OverflowError" in r["detail"] and r["error"] is None
+                          for r in failed)
+
+
+@pytest.mark.parametrize("ixx", ["0.0029393", "0.004"])
+def test_random_parameter_sets_are_physical_beside_an_override(ixx):
+    # was: ValueError out of the run, calling random values overrides
+    case = load_case("spinning_top", Ixx=ixx)
+    sets, missing = parameter_sets(case)
+    assert missing == 0 and len(sets) == case.spec["sample"]["params"]["sets"]
+    assert all("Ixx" not in s for s in sets)  # the override is not a random value
+    rows = random_parameters(case)
+    assert rows and all(r["status"] == "pass" for r in rows)
+
+
+def test_random_sets_that_cannot_be_drawn_are_a_failing_row(monkeypatch):
+    monkeypatch.setattr("dyncheck.checks.DRAWS", 1)
+    case = load_case("spinning_top", Ixx=0.0029393)
+    rows = random_parameters(case)
+    assert rows[0]["status"] == "fail" and "not physical in 1 draws" in rows[0]["detail"]
+
+
+@pytest.mark.parametrize("field, text, message", [
+    ("count = 100\nseed = 1010", "count = 1000000000\nseed = 1010", "sample.count = 1000000000 asks for"),
+    ("t_end = 2.5\n\n[sample]", "t_end = 1e9\n\n[sample]", "initial.t_end = 1000000000.0 asks for"),
+    ("repeat = 3", "repeat = 1000000000", "work_precision.repeat"),
+    ("repeat_under = 0.25", "repeat_under = inf", "work_precision.repeat_under = inf must be a positive finite"),
+    ("rtol = 1e-13", "rtol = nan", "work_precision.solution.rtol = nan must be a positive finite"),
+    ("horizon = 10.0", "horizon = inf", r"inf is not finite \(at stability.sleeping_top.horizon\)"),
+])
+def test_settings_that_ask_for_unbounded_work_are_refused(tmp_path, field, text, message):
+    from dyncheck import stability, work_precision
+    from dyncheck.case import CASES_DIR, Case
+    folder = tmp_path / "spinning_top"
+    shutil.copytree(CASES_DIR / "spinning_top", folder)
+    spec = (folder / "case.toml").read_text()
+    assert spec.count(field) >= 1
+    (folder / "case.toml").write_text(spec.replace(field, text, 1))
+    with pytest.raises(ValueError, match=message):
+        case = Case(folder)
+        work_precision.settings(case)
+        stability.validate(case)
+
+
+@pytest.mark.parametrize("args", [["spinning_top", "--set", "Mz=1e300"], ["piston", "--set", "m=1e300"],
+                                  ["double_pendulum", "--set", "m2=1e300"]])
+def test_absurd_values_give_rows_not_tracebacks(args, capsys):
+    assert main(["run", *args]) == 1
+    assert "unstable" in capsys.readouterr().out
+
+
+def test_a_fixed_step_run_of_no_length_is_its_initial_state():
+    # was: IndexError in simulate when the top's listing stops at once (run spinning_top --set g=1e300)
+    case = load_case("spinning_top")
+    run = simulate(case.model("book"), case.initial[:2], 0.0, "semi-implicit Euler", dt=1e-3, output_step=1e-3,
+                   work=False)
+    assert len(run) == 1 and run["nutation"].iloc[0] == case.initial[0][1]
