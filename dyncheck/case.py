@@ -215,7 +215,7 @@ def compare_scenes(mujoco_model, pinocchio_model, case_name):
     def differ(what, a, b, absolute=0.0):
         a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
         tolerance = SCENE_RTOL * max(np.max(np.abs(a)), np.max(np.abs(b))) + absolute
-        if np.max(np.abs(a - b)) > tolerance:
+        if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))) or np.max(np.abs(a - b)) > tolerance:
             show = lambda x: np.array2string(x, precision=17, separator=", ").replace("\n", "")
             raise ValueError(f"{mjcf} and {urdf} of case '{case_name}' disagree: {what} is {show(a)} in {mjcf} "
                              f"and {show(b)} in {urdf} (tolerance {tolerance:.2g})")
@@ -238,4 +238,9 @@ def compare_scenes(mujoco_model, pinocchio_model, case_name):
         differ(f"body '{name}' mass", mj.mass, pn.mass, PLACEHOLDER_MASS)
         if max(mj.mass, pn.mass) > PLACEHOLDER_MASS:
             differ(f"body '{name}' centre of mass", mj.com, pn.com)
+        for file, body in ((mjcf, mj), (urdf, pn)):  # a placeholder's centre of mass, about the body origin
+            if body.mass <= PLACEHOLDER_MASS and not body.mass * (body.com @ body.com) <= PLACEHOLDER_INERTIA:
+                raise ValueError(f"{file} of case '{case_name}': body '{name}' is a placeholder of {body.mass:.3g} kg "
+                                 f"whose centre of mass {body.com.tolist()} puts {body.mass * (body.com @ body.com):.3g} "
+                                 f"kg m^2 about its origin, beyond the {PLACEHOLDER_INERTIA:g} a placeholder may carry")
         differ(f"body '{name}' inertia about the centre of mass", mj.inertia, pn.inertia, PLACEHOLDER_INERTIA)

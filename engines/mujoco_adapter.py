@@ -104,7 +104,7 @@ class MujocoModel:
         if body != spec["body"]:
             raise ValueError(f"{where} is on body '{body}', but case.toml's reaction is on body '{spec['body']}'")
         # A site's quat is normalised from decimal text: identity to a few ulps when it is one.
-        if np.max(np.abs(self.m.site_quat[site] - [1, 0, 0, 0])) > 4 * np.finfo(float).eps:
+        if not np.max(np.abs(self.m.site_quat[site] - [1, 0, 0, 0])) <= 4 * np.finfo(float).eps:  # NaN too
             raise scene_rules.refusal(self.path, "MJCF", "body-site", "quat", f"site of sensor '{spec['sensor']}'",
                                       _text(self.m.site_quat[site]))
         if self.m.sensor_cutoff[i] > 0:
