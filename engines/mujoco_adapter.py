@@ -13,6 +13,7 @@ cancel every digit of the scene's ~1 J.
 
 import copy
 import time
+from xml.etree import ElementTree
 
 import mujoco
 import mujoco.rollout
@@ -43,6 +44,7 @@ class MujocoModel:
             self.m = spec.compile()
         except (ValueError, KeyError) as error:
             raise ValueError(f"{self.path}: {error}") from error
+        _refuse_nan(self.path)
         self.armature = self.m.dof_armature.copy()
         self.d = mujoco.MjData(self.m)
         self.coords = tuple(scene["coords"])
@@ -396,6 +398,16 @@ def _unmodelled(m, scene):
             yield "body", "gravcomp", named(obj.mjOBJ_BODY, b), _text(m.body_gravcomp[b])
         if m.body_jntnum[b] != 1:
             yield "body", "(joints)", named(obj.mjOBJ_BODY, b), m.body_jntnum[b]
+
+
+def _refuse_nan(path):
+    """MuJoCo's compiler quietly replaces some NaN values (an inertial pos): a NaN in the file is refused.
+    The file has parsed as MJCF already, so it is well-formed XML."""
+    for element in ElementTree.parse(path).iter():
+        for attribute, text in element.attrib.items():
+            if any(token.lower() == "nan" for token in text.split()):
+                raise ValueError(f"{path}: <{element.tag}> {attribute}=\"{text}\" holds a NaN, which MuJoCo's "
+                                 "compiler may quietly replace")
 
 
 def _write(spec, location, value):

@@ -401,3 +401,15 @@ def test_a_non_finite_rotation_of_a_reaction_site_is_refused(tmp_path):
     (folder / "scene.xml").write_text(text.replace(site, '<site name="O" quat="0 inf 0 0"', 1))
     with pytest.raises(ValueError, match="quat"):
         Case(folder).model("mujoco")
+
+
+def test_a_nan_in_the_mjcf_is_refused(tmp_path):
+    """Found by the campaign: MuJoCo compiles a placeholder's inertial pos="nan nan nan" to a finite centre of
+    mass (with a warning) and the scene loaded."""
+    folder = tmp_path / "rotating_pendulum"
+    shutil.copytree(CASES_DIR / "rotating_pendulum", folder)
+    text = (folder / "scene.xml").read_text()
+    (folder / "scene.xml").write_text(text.replace('<inertial pos="0 0 0" mass="1e-12"',
+                                                   '<inertial pos="nan nan nan" mass="1e-12"', 1))
+    with pytest.raises(ValueError, match="holds a NaN"):
+        Case(folder).model("mujoco")
