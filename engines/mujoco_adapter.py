@@ -401,9 +401,12 @@ def _unmodelled(m, scene):
 
 
 def _refuse_nan(path):
-    """MuJoCo's compiler quietly replaces some NaN values (an inertial pos): a NaN in the file is refused.
-    The file has parsed as MJCF already, so it is well-formed XML."""
-    for element in ElementTree.parse(path).iter():
+    """MuJoCo's compiler quietly replaces some NaN values (an inertial pos): a NaN in the file is refused."""
+    try:
+        tree = ElementTree.parse(path)
+    except ElementTree.ParseError as error:  # MuJoCo's parser lets through what XML forbids (control characters)
+        raise ValueError(f"{path}: not well-formed XML: {error}") from None
+    for element in tree.iter():
         for attribute, text in element.attrib.items():
             if any(token.lower() == "nan" for token in text.split()):
                 raise ValueError(f"{path}: <{element.tag}> {attribute}=\"{text}\" holds a NaN, which MuJoCo's "

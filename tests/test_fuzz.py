@@ -413,3 +413,14 @@ def test_a_nan_in_the_mjcf_is_refused(tmp_path):
                                                    '<inertial pos="nan nan nan" mass="1e-12"', 1))
     with pytest.raises(ValueError, match="holds a NaN"):
         Case(folder).model("mujoco")
+
+
+def test_a_control_character_in_the_mjcf_is_refused(tmp_path):
+    """Found by the campaign: MuJoCo's parser accepts a control character in an attribute, which XML forbids."""
+    folder = tmp_path / "double_pendulum"
+    shutil.copytree(CASES_DIR / "double_pendulum", folder)
+    text = (folder / "scene.xml").read_text()
+    assert 'model="double_pendulum"' in text
+    (folder / "scene.xml").write_text(text.replace('model="double_pendulum"', 'model="x\x0by"', 1))
+    with pytest.raises(ValueError, match="not well-formed XML"):
+        Case(folder).model("mujoco")
