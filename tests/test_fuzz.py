@@ -376,16 +376,22 @@ def test_a_non_finite_compared_value_is_refused(value):
                          value, 0)[0] == "refused"
 
 
+
+def edited_case(tmp_path, name, old, new):
+    """Case `name` copied into tmp_path with `old` in its scene.xml replaced by `new` (not yet built)."""
+    folder = tmp_path / name
+    shutil.copytree(CASES_DIR / name, folder)
+    text = (folder / "scene.xml").read_text()
+    assert old in text
+    (folder / "scene.xml").write_text(text.replace(old, new, 1))
+    return Case(folder)
+
+
 def test_a_placeholder_s_centre_of_mass_far_from_its_body_is_refused(tmp_path):
     """Found by the campaign: a 1e-12 kg placeholder's centre of mass moved to (2, 2, 2) m loaded, as centres
     of mass are compared only on real bodies, though it carried 1.2e-11 kg m^2 about its origin."""
-    folder = tmp_path / "rotating_pendulum"
-    shutil.copytree(CASES_DIR / "rotating_pendulum", folder)
-    text = (folder / "scene.xml").read_text()
-    placeholder = '<inertial pos="0 0 0" mass="1e-12"'
-    assert placeholder in text
-    (folder / "scene.xml").write_text(text.replace(placeholder, '<inertial pos="2 2 2" mass="1e-12"', 1))
-    case = Case(folder)
+    case = edited_case(tmp_path, "rotating_pendulum", '<inertial pos="0 0 0" mass="1e-12"',
+                       '<inertial pos="2 2 2" mass="1e-12"')
     case.model("pinocchio")
     with pytest.raises(ValueError, match="placeholder of 1e-12 kg whose centre of mass"):
         case.model("mujoco")
@@ -393,34 +399,22 @@ def test_a_placeholder_s_centre_of_mass_far_from_its_body_is_refused(tmp_path):
 
 def test_a_non_finite_rotation_of_a_reaction_site_is_refused(tmp_path):
     """Found by the campaign: quat="0 inf 0 0" on the top's reaction site loaded (NaN > eps is false)."""
-    folder = tmp_path / "spinning_top"
-    shutil.copytree(CASES_DIR / "spinning_top", folder)
-    text = (folder / "scene.xml").read_text()
-    site = '<site name="O"'
-    assert site in text
-    (folder / "scene.xml").write_text(text.replace(site, '<site name="O" quat="0 inf 0 0"', 1))
+    case = edited_case(tmp_path, "spinning_top", '<site name="O"', '<site name="O" quat="0 inf 0 0"')
     with pytest.raises(ValueError, match="quat"):
-        Case(folder).model("mujoco")
+        case.model("mujoco")
 
 
 def test_a_nan_in_the_mjcf_is_refused(tmp_path):
     """Found by the campaign: MuJoCo compiles a placeholder's inertial pos="nan nan nan" to a finite centre of
     mass (with a warning) and the scene loaded."""
-    folder = tmp_path / "rotating_pendulum"
-    shutil.copytree(CASES_DIR / "rotating_pendulum", folder)
-    text = (folder / "scene.xml").read_text()
-    (folder / "scene.xml").write_text(text.replace('<inertial pos="0 0 0" mass="1e-12"',
-                                                   '<inertial pos="nan nan nan" mass="1e-12"', 1))
+    case = edited_case(tmp_path, "rotating_pendulum", '<inertial pos="0 0 0" mass="1e-12"',
+                       '<inertial pos="nan nan nan" mass="1e-12"')
     with pytest.raises(ValueError, match="holds a NaN"):
-        Case(folder).model("mujoco")
+        case.model("mujoco")
 
 
 def test_a_control_character_in_the_mjcf_is_refused(tmp_path):
     """Found by the campaign: MuJoCo's parser accepts a control character in an attribute, which XML forbids."""
-    folder = tmp_path / "double_pendulum"
-    shutil.copytree(CASES_DIR / "double_pendulum", folder)
-    text = (folder / "scene.xml").read_text()
-    assert 'model="double_pendulum"' in text
-    (folder / "scene.xml").write_text(text.replace('model="double_pendulum"', 'model="x\x0by"', 1))
+    case = edited_case(tmp_path, "double_pendulum", 'model="double_pendulum"', 'model="x\x0by"')
     with pytest.raises(ValueError, match="not well-formed XML"):
-        Case(folder).model("mujoco")
+        case.model("mujoco")
