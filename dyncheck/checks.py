@@ -254,9 +254,12 @@ def state_columns(case):
 def trajectory(case, runs):
     """Each source's trajectory against the tight reference solution, up to the agreement horizon
     (where the motion's sensitivity would make a comparison test chaos rather than the equations)."""
-    if isinstance(runs["reference"], Unstable):  # nothing to compare with
-        return [unstable_row("trajectory", c, f"{source} vs tight reference", runs["reference"])
+    def every_comparison(failure, status="unstable"):
+        return [unstable_row("trajectory", c, f"{source} vs tight reference", failure, status)
                 for source in ("book", "pinocchio", "mujoco") for c in state_columns(case)]
+
+    if isinstance(runs["reference"], Unstable):  # nothing to compare with
+        return every_comparison(runs["reference"])
     horizon, why = agreement_horizon(case)
     within = slice(None, horizon)
     tight = runs["reference"][1].loc[within]
@@ -265,11 +268,9 @@ def trajectory(case, runs):
     omega = fastest_frequency(case)
     least = 1 / omega if omega else 10 * case.integration["output_step"]
     if tight.index[-1] < least:
-        return [unstable_row("trajectory", c, f"{source} vs tight reference",
-                             f"the agreement horizon {horizon:.3g} s is shorter than {least:.3g} s "
-                             f"({'1/omega' if omega else 'ten output steps'}): nothing to compare; {why['sentence']}",
-                             "inconclusive")
-                for source in ("book", "pinocchio", "mujoco") for c in state_columns(case)]
+        return every_comparison(f"the agreement horizon {horizon:.3g} s is shorter than {least:.3g} s "
+                                f"({'1/omega' if omega else 'ten output steps'}): nothing to compare; "
+                                f"{why['sentence']}", "inconclusive")
     tight_error = error_estimate(*runs["reference"]).loc[within] / 100  # 100x tighter rtol, order 8: >= 100x better
     safety = case.tolerance["trajectory"]["safety"]
     rows = []
