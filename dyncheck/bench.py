@@ -4,7 +4,8 @@ bare engine doing the same work, timed side by side in the same run.
 Each row: source, what, count (steps, states or right-hand-side evaluations), the median wall time of
 `repeat` runs, the rate per second, and the ratio of its time per item (seconds / count) to that of
 the row named in `against` (its bare loop; a bare row itself has ratio 1).  The rows of a comparison
-are timed in turns, so that a change of the machine's load falls on both alike.
+are timed in turns, so that a change of the machine's load falls on both alike.  The bare loops are
+engines/bench.py's (`MujocoLoops`, `pinocchio_steps`, `pinocchio_rhs`): only engines/ calls the engines.
 
 MuJoCo, the scene as `MujocoModel.step` steps it (armature back, RK4 at the case's step, the same
 constant generalized forces) from the case's initial state:
@@ -19,7 +20,7 @@ constant generalized forces) from the case's initial state:
     MuJoCo run needs the power at every step) against `drive_power` state by state.
 Pinocchio:
   - "harness accelerations" at the pointwise check's states, against "pin.<engine> loop": the
-    engine step alone (`PinocchioModel._engine`: the generalized forces, then ABA when nothing is
+    engine step alone (`PinocchioModel.engine_dynamics`: the generalized forces, then ABA when nothing is
     prescribed, else RNEA with the prescribed accelerations and, if anything is free, CRBA's free
     block solved; the work any Pinocchio user does for the scene) on the same states already in
     Pinocchio's configuration.  This misses 1.2: the engine step takes only 2-20 us on these
@@ -46,14 +47,12 @@ linear solve) take one state at a time: vectorising them would mean writing thei
 import statistics
 import time
 
-import mujoco
-import mujoco.rollout
 import numpy as np
 import pandas as pd
-import pinocchio as pin
 from scipy.integrate import solve_ivp
 
 from dyncheck.simulate import simulate
+from engines.bench import MujocoLoops, pinocchio_rhs, pinocchio_steps
 
 BATCH = 64  # initial conditions in the batched rollouts
 SPAN = 0.5  # s of integration in the scipy pair
@@ -98,31 +97,22 @@ def _mujoco_rows(case, steps, repeat):
     mj = case.model("mujoco")
     q0, v0, _ = case.initial
     dt = case.integration["mujoco_step"]
-    m, d, state0, forces = mj.stepping(q0, v0, dt, "RK4")
-    spec, control = mujoco.mjtState.mjSTATE_FULLPHYSICS, mujoco.mjtState.mjSTATE_QFRC_APPLIED
-
-    def bare():
-        mujoco.mj_setState(m, d, state0, spec)
-        d.qfrc_applied[:] = forces
-        mujoco.mj_step(m, d, nstep=steps)
-
-    def rollout(states, nstep, data=d):
-        mujoco.rollout.rollout(m, data, states, forces[None, None], nstep=nstep, control_spec=control)
-
+    bare = MujocoLoops(mj, q0, v0, dt, "RK4")
     step, roll, harness = "mj_step(nstep), RK4", "rollout, RK4", "harness step"
-    rows = _measure("mujoco", [(step, steps, _timed(bare), ""),
-                               (roll, steps, _timed(lambda: rollout(state0[None], steps)), step),
+    rows = _measure("mujoco", [(step, steps, _timed(lambda: bare.mj_step(steps)), ""),
+                               (roll, steps, _timed(lambda: bare.rollout(steps)), step),
                                (harness, steps, _timed(lambda: mj.step(q0, v0, steps * dt, dt, "RK4")), step)],
                     repeat)
     rows.append(rows[-1][:-1] + (roll,))  # the harness step against rollout too
 
-    starts = np.array([mj.stepping(q0 + 1e-3 * k, v0, dt, "RK4")[2] for k in range(BATCH)])
-    nstep, pair = steps // 8, [mujoco.MjData(m) for _ in range(2)]
+    starts = np.array([bare.engine_start(q0 + 1e-3 * k, v0) for k in range(BATCH)])
+    nstep = steps // 8
     loop = f"{BATCH} rollouts of 1 start"
     rows += _measure("mujoco", [
-        (loop, BATCH * nstep, _timed(lambda: [rollout(s[None], nstep) for s in starts]), ""),
-        (f"rollout of {BATCH} starts", BATCH * nstep, _timed(lambda: rollout(starts, nstep)), loop),
-        (f"rollout of {BATCH} starts, 2 threads", BATCH * nstep, _timed(lambda: rollout(starts, nstep, pair)), loop)],
+        (loop, BATCH * nstep, _timed(lambda: [bare.rollout(nstep, s[None]) for s in starts]), ""),
+        (f"rollout of {BATCH} starts", BATCH * nstep, _timed(lambda: bare.rollout(nstep, starts)), loop),
+        (f"rollout of {BATCH} starts, 2 threads", BATCH * nstep,
+         _timed(lambda: bare.rollout(nstep, starts, threads=2)), loop)],
         repeat)
 
     if case.driven:
@@ -139,18 +129,17 @@ def _mujoco_rows(case, steps, repeat):
 def _pinocchio_rows(case, repeat):
     pn = case.model("pinocchio")
     sample = case.sample_states() * 10
-    engine_states = [pn._state(t, q, v) for t, q, v in sample]
-    engine = "aba" if len(pn.free) == pn.m.nv else "rnea+crba" if len(pn.free) else "rnea"  # as _engine does
-    bare = f"pin.{engine} loop"
+    engine_states = [pn.engine_state(t, q, v) for t, q, v in sample]
+    bare = f"pin.{pn.algorithm} loop"
     rows = _measure("pinocchio", [
-        (bare, len(sample), _timed(lambda: [pn._engine(*s) for s in engine_states]), ""),
+        (bare, len(sample), _timed(lambda: pinocchio_steps(pn, engine_states)), ""),
         ("harness accelerations", len(sample), _timed(lambda: [pn.accelerations(t, q, v) for t, q, v in sample]),
          bare)], repeat)
 
     q0, v0, t_end = case.initial
     span, setting = min(SPAN, t_end), case.integration
     grid = np.linspace(0.0, span, int(round(span / setting["output_step"])) + 1)
-    rhs, y0 = _bare_rhs(case, pn)
+    rhs, y0 = pinocchio_rhs(pn, q0, v0, work=case.driven)
     evaluations = {}
 
     def bare_run():
@@ -166,46 +155,10 @@ def _pinocchio_rows(case, repeat):
         evaluations["harness"] = run.attrs["evaluations"]
         return run.attrs["wall"]  # the integration, not the reactions and energy at the output times
 
-    bare = f"DOP853, bare pin.{engine} rhs"
+    bare = f"DOP853, bare pin.{pn.algorithm} rhs"
     timed = _measure("pinocchio", [(bare, 0, bare_run, ""), ("DOP853, harness simulate", 0, harness_run, bare)],
                      repeat)
     return rows + [row[:2] + (evaluations[key],) + row[3:] for row, key in zip(timed, ("bare", "harness"))]
-
-
-def _bare_rhs(case, pn):
-    """A right-hand side written for Pinocchio alone (see the module's docstring), and its initial state;
-    like the harness's, its last component is the drive power (0 where nothing does work)."""
-    m, n = pn.m, len(case.coords)
-    q0, v0, _ = case.initial
-    if any(kind == "euler" for kind, _, _ in pn.layout):  # the top: Pinocchio's quaternion (x, y, z, w), and w
-        assert len(pn.layout) == 1 and not pn.driven, "a bare right-hand side for a lone ball joint only"
-
-        def rhs(t, y):
-            config, w = y[:4], y[4:7]
-            (qx, qy, qz, qw), (wx, wy, wz) = config, w
-            turning = 0.5 * np.array([qw * wx + qy * wz - qz * wy, qw * wy + qz * wx - qx * wz,
-                                      qw * wz + qx * wy - qy * wx, -(qx * wx + qy * wy + qz * wz)])
-            return np.concatenate([turning, pn._engine(config, w)[0], [pn.applied @ w if case.driven else 0.0]])
-
-        return rhs, np.concatenate([*pn._state(0.0, q0, v0), [0.0]])
-
-    # the book's coordinates of these scenes are the free joints' positions
-    coord = np.array([idx[0] for _, _, idx in pn.layout], dtype=int)
-    coord_v = np.array([joint.idx_v for _, joint, _ in pn.layout], dtype=int)
-    driven_v = np.array([joint.idx_v for joint, _ in pn.driven], dtype=int)
-    start, rate, acc = np.array([motion for _, motion in pn.driven]).reshape(-1, 3).T
-
-    def rhs(t, y):
-        position, velocity = np.empty(m.nv), np.empty(m.nv)
-        position[coord_v], velocity[coord_v] = y[coord], y[n + coord]
-        position[driven_v], velocity[driven_v] = start + rate * t + 0.5 * acc * t**2, rate + acc * t
-        accelerations, tau = pn._engine(pin.integrate(m, pn.neutral, position), velocity)
-        power = tau[driven_v] @ velocity[driven_v] + pn.applied @ velocity if case.driven else 0.0
-        out = np.empty(2 * n + 1)
-        out[:n], out[n + coord], out[-1] = y[n:2 * n], accelerations[coord_v], power
-        return out
-
-    return rhs, np.concatenate([q0, v0, [0.0]])
 
 
 def _equation_rows(case, repeat):

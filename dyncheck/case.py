@@ -1,14 +1,19 @@
-"""Cases: one folder per scene with case.toml, scene.xml (MJCF) and scene.urdf."""
+"""Cases: one folder per scene with case.toml, scene.xml (MJCF) and scene.urdf; the case file names
+where its equations (its derivation) live."""
 
 import importlib
+import importlib.util
 import math
+import sys
 import tomllib
+from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
 from dyncheck import expressions, schema
+from dyncheck.messages import suggest
 
 CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 SOURCES = ("reference", "book", "mujoco", "pinocchio")
@@ -29,27 +34,62 @@ PLACEHOLDER_MASS = 1e-12
 PLACEHOLDER_INERTIA = 1e-14
 
 
-def case_names():
-    names = sorted(p.parent.name for p in CASES_DIR.glob("*/case.toml"))
+@dataclass(frozen=True)
+class Parameter:
+    """A parameter of a case as this run uses it."""
+    name: str
+    value: float
+    default: float  # the case file's value
+    unit: str
+    about: str
+
+
+def load_file(path):
+    """The Python file at `path` as a module, loaded once per version of the file (an edited file is
+    loaded again: a researcher fixing a derivation between two runs in one process gets the fix)."""
+    path = Path(path).resolve()
+    stat = path.stat()
+    name = f"dyncheck_file_{abs(hash((str(path), stat.st_mtime_ns, stat.st_size))):x}"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[name]
+            raise
+    return sys.modules[name]
+
+
+def case_names(cases_dir=CASES_DIR):
+    """The case folders in `cases_dir` (each a folder holding a case.toml), by name."""
+    cases_dir = Path(cases_dir)
+    if not cases_dir.is_dir():
+        raise ValueError(f"--cases {cases_dir}: no such folder")
+    names = sorted(p.parent.name for p in cases_dir.glob("*/case.toml"))
     if not names:  # e.g. a non-editable install, which copies the code but not cases/
-        raise ValueError(f"no cases in {CASES_DIR}: dyncheck reads its cases from the source tree; "
-                         "install it from a checkout with `pip install -e .`")
+        raise ValueError(f"no cases in {cases_dir} (no <folder>/case.toml); give a folder of cases with --cases DIR")
     return names
 
 
-def load_case(name, **overrides):
-    """The case `name` with parameters overridden by name; ValueError names what is wrong."""
-    known = case_names()
+def load_case(name, cases_dir=CASES_DIR, **overrides):
+    """The case `name` of `cases_dir` with parameters overridden by name; ValueError names what is wrong."""
+    known = case_names(cases_dir)
     if name not in known:
-        raise ValueError(f"unknown case '{name}'{schema.suggest(name, known)}; known cases: {', '.join(known)}")
-    return Case(CASES_DIR / name, overrides)
+        raise ValueError(f"unknown case '{name}'{suggest(name, known)}; known cases: {', '.join(known)}")
+    return Case(Path(cases_dir) / name, overrides)
 
 
 class Case:
-    def __init__(self, folder, overrides=None):
+    """A case: its file's numbers at its parameters (the defaults with `overrides`), its scene as the
+    engines take it, and its models by source.  `spec` (the parsed file) may be given instead of read,
+    as when a report is rendered from saved results (dyncheck.results.CaseResult.spec)."""
+
+    def __init__(self, folder, overrides=None, spec=None):
         self.folder = Path(folder)
         self.file = self.folder / "case.toml"
-        self.spec = self._read()
+        self.spec = self._read() if spec is None else spec
         schema.validate(self.spec, self.file)
         self.name = self.spec["name"]
         self.section = self.spec["section"]
@@ -62,7 +102,7 @@ class Case:
         for key, value in (overrides or {}).items():
             if key not in self.defaults:
                 raise ValueError(f"{self.file}: case '{self.name}' has no parameter '{key}'"
-                                 f"{schema.suggest(key, self.defaults)}; its parameters are {', '.join(self.defaults)}")
+                                 f"{suggest(key, self.defaults)}; its parameters are {', '.join(self.defaults)}")
             try:
                 number = float(value)
             except (TypeError, ValueError):
@@ -75,6 +115,22 @@ class Case:
         schema.check_values(self.spec, self.file, self.value)
         self.findings = self.spec.get("findings", [])
         self._models = {}
+        self._frozen = True
+
+    def __setattr__(self, name, value):
+        if getattr(self, "_frozen", False):  # a case is a value: change it with with_params
+            raise AttributeError(f"a Case is frozen: cannot set {name}; use case.with_params(...)")
+        super().__setattr__(name, value)
+
+    @property
+    def parameters(self):
+        """Every parameter, in the case file's order."""
+        return tuple(Parameter(name, self.params[name], self.defaults[name], self.units[name], item["about"])
+                     for name, item in self.spec["params"].items())
+
+    def with_params(self, **params):
+        """This case with further parameters overridden (on top of its own overrides)."""
+        return Case(self.folder, {**self.overrides, **params}, self.spec)
 
     def _read(self):
         try:
@@ -147,10 +203,19 @@ class Case:
         """Whether anything does work on the scene: prescribed motions or applied forces."""
         return bool(self.scene["driven"] or self.scene["applied"])
 
+    @cached_property
+    def derivation(self):
+        """The module of the case's equations (its `derivation`: a module name, or a .py file in the case
+        folder), with its classes Reference, Book and, where the book prints one, Program."""
+        where = self.spec["derivation"]
+        if not where.endswith(".py"):
+            return importlib.import_module(where)
+        return load_file(self.folder / where)
+
     @property
     def has_program(self):
-        """Whether the book prints a program for this case (reference module's `Program`)."""
-        return hasattr(importlib.import_module(f"reference.{self.name}"), "Program")
+        """Whether the book prints a program for this case (the derivation's `Program`)."""
+        return hasattr(self.derivation, "Program")
 
     def model(self, source):
         """The model of this case by `source`: "book" | "reference" | "mujoco" | "pinocchio" | "program"."""
@@ -164,8 +229,7 @@ class Case:
 
     def _build(self, source):
         if source in ("book", "reference", "program"):
-            module = importlib.import_module(f"reference.{self.name}")
-            return getattr(module, source.capitalize())(self.params)
+            return getattr(self.derivation, source.capitalize())(self.params)
         if source == "mujoco":
             from engines.mujoco_adapter import MujocoModel as Model
             path = self.folder / "scene.xml"

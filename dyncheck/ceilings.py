@@ -5,6 +5,7 @@ asks for a tolerance above it is refused on load (exit 2).  Each ceiling's argum
 import numpy as np
 
 EPS = np.finfo(float).eps
+ROUNDING_FLOOR = 1e3 * EPS  # rounding over a run: a thousand ulps of the quantity's scale
 
 # Pointwise comparisons (and the random parameter sets, and a listing's formulas at the same states)
 # compare exact evaluations of the same quantity: rounding costs a few hundred eps (~1e-13) and the

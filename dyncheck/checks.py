@@ -1,46 +1,25 @@
-"""Checks: each yields rows (check, quantity, sources, error, tolerance, status, finding)."""
+"""Checks: each yields rows (dyncheck.results.Row); `run_case` runs them all into a CaseResult."""
 
 import itertools
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from dyncheck import ceilings, schema
 from dyncheck.case import SOURCES
+from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.expressions import evaluate as evaluate_expression
 from dyncheck.expressions import namespace
 from dyncheck.localise import localise
-from dyncheck.simulate import Unstable, fastest_frequency, simulate
-from dyncheck.stability import agreement_horizon
+from dyncheck.results import CaseResult, Finding, Outcome, Status, no_number, row
+from dyncheck.simulate import Unstable, energy_residual, fastest_frequency, simulate, state_columns
+from dyncheck.stability.long_runs import agreement_horizon
+from dyncheck.work_precision import convergence
 
 EPS = np.finfo(float).eps
-ROUNDING_FLOOR = 1e3 * EPS  # rounding over a run: a thousand ulps of the quantity's scale
 INTEGRATED = ("reference", "book", "pinocchio")  # sources driven by scipy's DOP853
-
-
-def row(check, quantity, sources, error, tolerance, detail="", *, ceiling):
-    """A check's row; `ceiling` (dyncheck.ceilings) is the tolerance above which the comparison proves
-    nothing: such a row is inconclusive, whatever its error."""
-    if not (math.isfinite(error) and math.isfinite(tolerance)):  # a source gave no number: never a NaN out
-        return unstable_row(check, quantity, sources, f"no number to judge: error {error}, tolerance {tolerance}; "
-                            + detail, "fail")
-    if tolerance > ceiling:
-        status = "inconclusive"
-        detail = (f"tolerance {tolerance:.2e} is above the ceiling {ceiling:.0e} of this comparison, so it "
-                  f"proves nothing (dyncheck/ceilings.py); " + detail)
-    else:
-        status = "pass" if error <= tolerance else "fail"
-    return {"check": check, "quantity": quantity, "sources": sources, "error": float(error),
-            "tolerance": float(tolerance), "ceiling": float(ceiling), "status": status,
-            "finding": None, "detail": detail}
-
-
-def unstable_row(check, quantity, sources, failure, status="unstable"):
-    """A check that has no error to show: an integration blew up (`failure` says when, which method,
-    which step), or (status "fail") the check could not be made, and `failure` says why."""
-    return {"check": check, "quantity": quantity, "sources": sources, "error": None, "tolerance": None,
-            "ceiling": None, "status": status, "finding": None, "detail": str(failure)}
 
 
 # -- pointwise ------------------------------------------------------------------
@@ -50,15 +29,17 @@ def evaluate(case, source, states):
     saying which quantity at which state when the source's arithmetic fails (an overflow in its float
     arithmetic, a singular matrix) or gives a value that is not finite."""
     model = case.model(source)
-    i = 0
 
     def each(quantity, method):
-        nonlocal i
-        try:
-            with np.errstate(all="ignore"):
-                return [method(t, q, v) for i, (t, q, v) in enumerate(states)]
-        except (ArithmeticError, np.linalg.LinAlgError) as error:
-            raise ArithmeticError(f"{source}: {quantity} at random state {i}: {type(error).__name__}: {error}") from None
+        out = []
+        for i, (t, q, v) in enumerate(states):
+            try:
+                with np.errstate(all="ignore"):
+                    out.append(method(t, q, v))
+            except (ArithmeticError, np.linalg.LinAlgError) as error:
+                raise ArithmeticError(f"{source}: {quantity} at random state {i}: {type(error).__name__}: "
+                                      f"{error}") from None
+        return out
 
     acc = np.array(each("accelerations", model.accelerations))
     values = {f"{c}_acc": acc[:, i] for i, c in enumerate(case.coords)}
@@ -94,7 +75,7 @@ def quantity_scales(case, a, b):
     scales = {}
     # The reactions are components of one force: each is judged against the largest of them and at
     # least the case's force scale (the weight), so that a component that vanishes identically (the
-    # piston's F2 at constant rates, R without spin) is not judged by rounding noise relative to zero.
+    # force along an axis nothing loads, at constant rates) is not judged by rounding noise relative to zero.
     forces = max([case.value(case.tolerance["pointwise"]["force_scale"])]
                  + [np.max(np.abs(s[name])) for s in (a, b) for name in case.reaction_names if name in s])
     scales.update(dict.fromkeys([name for name in case.reaction_names if name in a], forces))
@@ -120,23 +101,23 @@ def compare(case, a, b):
 
 def pointwise(case):
     states = case.sample_states()
-    values = {}
+    values, failures = {}, {}
     for source in SOURCES:
         try:
             values[source] = evaluate(case, source, states)
         except ArithmeticError as failure:  # its comparisons fail, saying why
-            values[source] = failure
+            failures[source] = str(failure)
     tolerance = case.tolerance["pointwise"]["value"]
     rows = []
     for a, b in itertools.combinations(SOURCES, 2):
-        failed = [values[s] for s in (a, b) if isinstance(values[s], ArithmeticError)]
+        failed = [failures[s] for s in (a, b) if s in failures]
         if failed:
-            rows.append(unstable_row("pointwise", "every quantity", f"{a} vs {b}", failed[0], "fail"))
+            rows.append(no_number("pointwise", "every quantity", (a, b), failed[0], Status.FAIL))
             continue
         for quantity, error in compare(case, values[a], values[b]).items():
-            rows.append(row("pointwise", quantity, f"{a} vs {b}", error, tolerance,
+            rows.append(row("pointwise", quantity, (a, b), error, tolerance,
                             f"{len(states)} random states", ceiling=ceilings.POINTWISE))
-    return rows, {"states": states, "values": values}
+    return rows, {"states": states, "values": values, "failures": failures}
 
 
 # -- random parameters ------------------------------------------------------------
@@ -187,24 +168,24 @@ def random_parameters(case):
     named = lambda params: ", ".join(f"{k} = {v:.4g}" for k, v in params.items())
     rows = []
     if missing:
-        rows.append(unstable_row("random parameters", "parameter sets", "every source",
+        rows.append(no_number("random parameters", "parameter sets", ("every source",),
                                  f"{missing} of {spec['sets']} sets (seed {seed}) not physical in {DRAWS} draws each "
-                                 f"beside the overrides {named(case.overrides)}", "fail"))
+                                 f"beside the overrides {named(case.overrides)}", Status.FAIL))
     worst = {}  # comparison -> (error, quantity, set)
     for params in sets:
-        other = type(case)(case.folder, {**case.overrides, **params})
+        other = case.with_params(**params)
         states = other.sample_states()[:count]
         try:
             values = {source: evaluate(other, source, states) for source in ENGINES}
         except ArithmeticError as failure:
-            rows.append(unstable_row("random parameters", "every quantity", "every source",
-                                     f"at {named(params)}: {failure}", "fail"))
+            rows.append(no_number("random parameters", "every quantity", ("every source",),
+                                     f"at {named(params)}: {failure}", Status.FAIL))
             continue
         for a, b in itertools.combinations(ENGINES, 2):
             for quantity, error in compare(other, values[a], values[b]).items():
                 if error >= worst.get((a, b), (-1.0,))[0]:
                     worst[(a, b)] = (error, quantity, params)
-    return rows + [row("random parameters", quantity, f"{a} vs {b}", error, case.tolerance["pointwise"]["value"],
+    return rows + [row("random parameters", quantity, (a, b), error, case.tolerance["pointwise"]["value"],
                        f"{len(sets)} parameter sets (seed {seed}) x {count} states; worst at {named(params)}"
                        + (f" (overrides: {named(case.overrides)})" if case.overrides else ""),
                        ceiling=ceilings.POINTWISE)
@@ -216,9 +197,9 @@ def random_parameters(case):
 def run_sources(case):
     """The book's initial conditions integrated by every source, each with a tighter twin.
 
-    Returns {label: (run, twin)}; the tight reference solution is the reference's twin.
+    Returns {source: Outcome}; the tight reference solution is the reference's twin.
     DOP853 twins run at tight_rtol; MuJoCo's RK4 twin at dt/2.  A run that blew up is an
-    Unstable instead of a pair.
+    Outcome with its failure.
     """
     q0, v0, t_end = case.initial
     setting = case.integration
@@ -227,42 +208,38 @@ def run_sources(case):
     for source in INTEGRATED:
         model = case.model(source)
         try:
-            runs[source] = tuple(simulate(model, (q0, v0), t_end, "DOP853", rtol=rtol, output_step=out_step,
-                                          work=case.driven, omega=fastest_frequency(case))
-                                 for rtol in (setting["rtol"], setting["tight_rtol"]))
+            runs[source] = Outcome(*(simulate(model, (q0, v0), t_end, "DOP853", rtol=rtol, output_step=out_step,
+                                              work=case.driven, omega=fastest_frequency(case))
+                                     for rtol in (setting["rtol"], setting["tight_rtol"])))
         except Unstable as failure:
-            runs[source] = failure
+            runs[source] = Outcome(failure=failure.failure)
     dt = setting["mujoco_step"]
     try:
-        runs["mujoco"] = tuple(simulate(case.model("mujoco"), (q0, v0), t_end, "mujoco:RK4", dt=h,
-                                        output_step=out_step, work=case.driven) for h in (dt, dt / 2))
+        runs["mujoco"] = Outcome(*(simulate(case.model("mujoco"), (q0, v0), t_end, "mujoco:RK4", dt=h,
+                                            output_step=out_step, work=case.driven) for h in (dt, dt / 2)))
     except Unstable as failure:
-        runs["mujoco"] = failure
+        runs["mujoco"] = Outcome(failure=failure.failure)
     return runs
 
 
-def error_estimate(run, twin):
+def error_estimate(outcome):
     """Estimated error of `run`, per column, from its tighter twin (Richardson for RK4)."""
-    factor = 16 / 15 if run.attrs["method"] == "mujoco:RK4" else 1.0
-    return factor * (run - twin).abs()
-
-
-def state_columns(case):
-    return [c for name in case.coords for c in (name, name + "_rate")]
+    factor = 16 / 15 if outcome.run.attrs["method"] == "mujoco:RK4" else 1.0
+    return factor * (outcome.run - outcome.twin).abs()
 
 
 def trajectory(case, runs):
     """Each source's trajectory against the tight reference solution, up to the agreement horizon
     (where the motion's sensitivity would make a comparison test chaos rather than the equations)."""
-    def every_comparison(failure, status="unstable"):
-        return [unstable_row("trajectory", c, f"{source} vs tight reference", failure, status)
+    def every_comparison(failure, status=Status.UNSTABLE):
+        return [no_number("trajectory", c, (source, "tight reference"), failure, status)
                 for source in ("book", "pinocchio", "mujoco") for c in state_columns(case)]
 
-    if isinstance(runs["reference"], Unstable):  # nothing to compare with
-        return every_comparison(runs["reference"])
+    if not runs["reference"].ok:  # nothing to compare with
+        return every_comparison(runs["reference"].failure)
     horizon, why = agreement_horizon(case)
     within = slice(None, horizon)
-    tight = runs["reference"][1].loc[within]
+    tight = runs["reference"].twin.loc[within]
     # Errors need time to build: a span shorter than a radian of the fastest motion (or than ten
     # output steps, where the case names no frequency) compares starts, which agree by construction.
     omega = fastest_frequency(case)
@@ -270,18 +247,19 @@ def trajectory(case, runs):
     if tight.index[-1] < least:
         return every_comparison(f"the agreement horizon {horizon:.3g} s is shorter than {least:.3g} s "
                                 f"({'1/omega' if omega else 'ten output steps'}): nothing to compare; "
-                                f"{why['sentence']}", "inconclusive")
-    tight_error = error_estimate(*runs["reference"]).loc[within] / 100  # 100x tighter rtol, order 8: >= 100x better
+                                f"{why['sentence']}", Status.INCONCLUSIVE)
+    tight_error = error_estimate(runs["reference"]).loc[within] / 100  # 100x tighter rtol, order 8: >= 100x better
     safety = case.tolerance["trajectory"]["safety"]
     rows = []
     for source in ("book", "pinocchio", "mujoco"):
-        label = f"{source} vs tight reference"
-        if isinstance(runs[source], Unstable):
-            rows += [unstable_row("trajectory", c, label, runs[source]) for c in state_columns(case)]
+        label = (source, "tight reference")
+        outcome = runs[source]
+        if not outcome.ok:
+            rows += [no_number("trajectory", c, label, outcome.failure) for c in state_columns(case)]
             continue
-        attrs = runs[source][0].attrs
-        run, twin = (r.loc[within] for r in runs[source])
-        estimate = error_estimate(run, twin)
+        attrs = outcome.run.attrs
+        run = outcome.run.loc[within]
+        estimate = error_estimate(outcome).loc[within]
         method = attrs["method"] + (f" dt={attrs['dt']:g}" if attrs["dt"] else f" rtol={attrs['rtol']:g}")
         for column in state_columns(case):
             scale = tight[column].abs().max() or 1.0  # a coordinate at rest: its error in SI units
@@ -290,18 +268,13 @@ def trajectory(case, runs):
             rows.append(row("trajectory", column, label, error, allowed,
                             f"{method}, max over {min(horizon, case.initial[2]):g} s"
                             + (f"; {why['sentence']}" if math.isfinite(horizon) else ""), ceiling=ceilings.RUN))
-    if not isinstance(runs["mujoco"], Unstable) and case.scene["driven"]:
+    if runs["mujoco"].ok and case.scene["driven"]:
         # The armature holds the driven rates while MuJoCo steps; the issue asks ~1e-12.
-        rows.append(row("trajectory", "driven rate", "mujoco vs prescribed",
-                        runs["mujoco"][0].attrs["driven_rate_error"], ceilings.DRIVEN_RATE,
+        rows.append(row("trajectory", "driven rate", ("mujoco", "prescribed"),
+                        runs["mujoco"].run.attrs["driven_rate_error"], ceilings.DRIVEN_RATE,
                         "max |rate - prescribed| over the run and the driven joints / largest prescribed rate",
                         ceiling=ceilings.DRIVEN_RATE))
     return rows
-
-
-def energy_residual(run):
-    """E(t) - E(0) - W(t): zero for exact dynamics (W = 0 when nothing is driven)."""
-    return run["energy"] - run["energy"].iloc[0] - run["work"]
 
 
 def energy(case, runs):
@@ -309,11 +282,11 @@ def energy(case, runs):
     quantity = "work-energy balance" if case.driven else "energy drift"
     rows = []
     for source in INTEGRATED + ("mujoco",):
-        label = source
-        if isinstance(runs[source], Unstable):
-            rows.append(unstable_row("energy", quantity, label, runs[source]))
+        label = (source,)
+        if not runs[source].ok:
+            rows.append(no_number("energy", quantity, label, runs[source].failure))
             continue
-        run, twin = runs[source]
+        run, twin = runs[source].run, runs[source].twin
         scale = max(run["energy"].abs().max(), run["work"].abs().max()) or 1.0  # at rest: in joules
         residual = energy_residual(run)
         estimate = (residual - energy_residual(twin)).abs().max()
@@ -331,20 +304,22 @@ def apply_findings(case, rows):
     """A failing row that a registered finding explains is a finding; a finding that no longer fails
     fails (at the book's own parameters: overridden ones may legitimately hide an error, e.g. a
     Coriolis term at zero spin, which is then said in the row)."""
+    out = []
     for r in rows:
         for finding in case.findings:
             # A finding names whole sources ("book": every comparison with it) or one comparison.
-            involved = (set(r["sources"].split(" vs ")) | {r["sources"]}) & set(finding["sources"])
-            if involved and r["quantity"] in finding["quantities"] and r["status"] in ("pass", "fail"):
-                r["finding"] = finding["id"]
-                if r["status"] == "fail":
-                    r["status"] = "finding"
+            involved = (set(r.sources) | {r.comparison}) & set(finding["sources"])
+            if involved and r.quantity in finding["quantities"] and r.status in (Status.PASS, Status.FAIL):
+                if r.status == Status.FAIL:
+                    r = replace(r, finding=finding["id"], status=Status.FINDING)
                 elif case.overrides:
-                    r["detail"] = f"finding {finding['id']} does not show with these parameters; " + r["detail"]
+                    r = replace(r, finding=finding["id"],
+                                detail=f"finding {finding['id']} does not show with these parameters; " + r.detail)
                 else:
-                    r["status"] = "fail"
-                    r["detail"] = f"registered finding {finding['id']} no longer reproduces; " + r["detail"]
-    return rows
+                    r = replace(r, finding=finding["id"], status=Status.FAIL,
+                                detail=f"registered finding {finding['id']} no longer reproduces; " + r.detail)
+        out.append(r)
+    return out
 
 
 def data_checks(case):
@@ -357,31 +332,65 @@ def data_checks(case):
             error = abs(printed - formula) / abs(formula)
         else:  # "at most"
             error = max(printed - formula, 0.0) / abs(formula)
-        rows.append(row("data", item["name"], "book data vs book formula", error, item["tolerance"],
+        rows.append(row("data", item["name"], ("book data", "book formula"), error, item["tolerance"],
                         f"{item['where']}: printed {printed:.6g}, formula {item['formula']} = {formula:.6g}",
                         ceiling=ceilings.DATA))
     return rows
 
 
-def run_case(case, progress=None):
-    """All checks of a case: rows and the data behind them (for the report)."""
+def run_case(case):
+    """All checks of a case, the findings they establish and what the figures draw: a CaseResult."""
     start = time.perf_counter()
     rows, sample = pointwise(case)
     rows += random_parameters(case)
     runs = run_sources(case)
     rows += trajectory(case, runs) + energy(case, runs)
-    from dyncheck.work_precision import convergence  # it builds on this module's rows
     try:
         rows += convergence(case)
     except ValueError as error:  # e.g. overrides that leave nothing to converge (no motion, omega = 0)
-        rows.append(unstable_row("convergence", "every method", "reference", f"not measured: {error}", "fail"))
-    program_rows, program_runs = program_checks(case, sample)
+        rows.append(no_number("convergence", "every method", ("reference",), f"not measured: {error}", Status.FAIL))
+    program_rows, program = program_checks(case, sample)
     rows += program_rows + data_checks(case)
-    apply_findings(case, rows)
-    for r in rows:
-        r["case"] = case.name
-    return {"case": case, "rows": rows, "sample": sample, "runs": runs, "program": program_runs,
-            "wall": time.perf_counter() - start}
+    rows = apply_findings(case, rows)
+    runs = {source: replace(outcome, run=with_paths(case, outcome.run), twin=with_paths(case, outcome.twin))
+            if outcome.ok else outcome for source, outcome in runs.items()}
+    return CaseResult(folder=str(case.folder), spec=case.spec, overrides=dict(case.overrides), rows=tuple(rows),
+                      findings=tuple(findings_of(case, rows, sample, runs)), sample=sample, runs=runs,
+                      program=program, drawings=drawings(case, runs), wall=time.perf_counter() - start)
+
+
+# -- what the figures draw ------------------------------------------------------------
+
+def with_paths(case, run):
+    """`run` with the world coordinates of the case's traced bodies'
+    centres of mass (<body>_x, _y, _z) as columns, for the case's figures and values
+    (dyncheck.expressions.namespace): computed here, where the engines are, so that the report
+    needs none."""
+    if not case.scene["paths"]:
+        return run
+    model = case.model("mujoco")
+    q = run[list(case.coords)].to_numpy()
+    positions = np.array([model.points(t, qi)[0] for t, qi in zip(run.index, q)])  # (time, body, xyz)
+    out = run.copy()
+    for b, body in enumerate(case.scene["paths"]):
+        for i, axis in enumerate("xyz"):
+            out[f"{body}_{axis}"] = positions[:, b, i]
+    out.attrs = dict(run.attrs)
+    return out
+
+
+def drawings(case, runs):
+    """The scene at t = 0 for the report's scene figure: the world positions of the body origins, the
+    index of each body's parent (0: the world), and of each traced body's origin; None when the
+    tight reference blew up (nothing is drawn along it)."""
+    if not runs["reference"].ok:
+        return {"scene": None}
+    model = case.model("mujoco")
+    tight = runs["reference"].twin
+    _, origins, parents = model.points(0.0, tight[list(case.coords)].to_numpy()[0])
+    return {"scene": {"origins": origins, "parents": parents,
+                      "path_origins": np.array([model.body_id(name) - 1 for name in case.scene["paths"]],
+                                               dtype=int)}}
 
 
 # -- the book's programs ------------------------------------------------------------
@@ -398,26 +407,26 @@ def program_checks(case, sample):
     if not case.has_program:
         return [], {}
     program = case.model("program")
-    states, right = sample["states"], sample["values"]["reference"]  # the pointwise check's
+    states, right = sample["states"], sample["values"].get("reference")  # the pointwise check's
     tolerance = case.tolerance["pointwise"]["value"]
     rows = []
     try:
-        if isinstance(right, ArithmeticError):  # the reference's evaluation failed there (pointwise)
-            raise right
+        if "reference" in sample["failures"]:  # the reference's evaluation failed there (pointwise)
+            raise ArithmeticError(sample["failures"]["reference"])
         with np.errstate(all="ignore"):
             acc = np.array([program.accelerations(t, q, v) for t, q, v in states])
             reactions = [program.reactions(t, q, v) for t, q, v in states]
         mine = {f"{coord}_acc": acc[:, i] for i, coord in enumerate(case.coords)}
         mine.update({name: np.array([r[name] for r in reactions]) for name in program.reaction_names})
         for quantity, values in mine.items():
-            rows.append(row("program", quantity, "program vs reference", relative_error(values, right[quantity]),
+            rows.append(row("program", quantity, ("program", "reference"), relative_error(values, right[quantity]),
                             tolerance, f"{len(states)} random states", ceiling=ceilings.POINTWISE))
     except ArithmeticError as failure:  # an overflow in the program's or the reference's float arithmetic
-        rows = [unstable_row("program", "every quantity", "program vs reference", failure, "fail")]
+        rows = [no_number("program", "every quantity", ("program", "reference"), failure, Status.FAIL)]
     try:
         run_rows, runs = program_run_checks(case, program)
     except (Unstable, ArithmeticError) as failure:  # the listing's integrator, or its twins, blew up
-        return rows + [unstable_row("program", column, "program run", failure) for column in state_columns(case)], {}
+        return rows + [no_number("program", column, ("program run",), failure) for column in state_columns(case)], {}
     return rows + run_rows, runs
 
 
@@ -427,9 +436,8 @@ def program_run_checks(case, program):
     rows = []
     reference = case.model("reference")
     q0, v0, _ = case.initial
-    listing = program.run(q0, v0)
     every = max(1, int(round(case.integration["output_step"] / program.dt)))
-    listing = listing.iloc[::every]
+    listing = with_paths(case, program.run(q0, v0).iloc[::every])
     t_end = (len(listing) - 1) * every * program.dt
     book = case.model("book")
     same = lambda q, dt: simulate(book, (q, v0), t_end, program.integrator, dt=dt,
@@ -437,22 +445,22 @@ def program_run_checks(case, program):
     twin_runs = {"same": same(q0, program.dt), "half": same(q0, program.dt / 2)}
     # Rounding: the same run from a start moved by a few ulps shows how the motion amplifies them.
     twin_runs["nudged"] = same(q0 + 4 * EPS * np.maximum(np.abs(q0), 1.0), program.dt)
-    tight = simulate(reference, (q0, v0), t_end, "DOP853", rtol=case.integration["tight_rtol"],
-                     output_step=every * program.dt, work=False, omega=fastest_frequency(case))
+    tight = with_paths(case, simulate(reference, (q0, v0), t_end, "DOP853", rtol=case.integration["tight_rtol"],
+                                      output_step=every * program.dt, work=False, omega=fastest_frequency(case)))
     safety = case.tolerance["trajectory"]["safety"]
     label = f"{program.integrator}, dt = {program.dt:.4g} s, {t_end:.4g} s"
     for column in state_columns(case):
         x = listing[column].to_numpy()
         scale = np.max(np.abs(tight[column])) or 1.0  # a coordinate at rest: its error in SI units
         rounding = np.max(np.abs(twin_runs["same"][column] - twin_runs["nudged"][column])) / scale
-        rows.append(row("program", column, "program vs book equations, same integrator",
+        rows.append(row("program", column, ("program", "book equations, same integrator"),
                         np.max(np.abs(x - twin_runs["same"][column].to_numpy())) / scale,
                         safety * rounding + ROUNDING_FLOOR, label, ceiling=ceilings.RUN))
         # Does the listing draw the right curve?  Judged at a figure's resolution; whether its
         # integrator or its formulas stray shows beside it: a first-order scheme's own error at its
         # step is about 2 |x(dt) - x(dt/2)| (Richardson), while its steps are in the asymptotic range.
         integrator = 2 * np.max(np.abs(twin_runs["same"][column] - twin_runs["half"][column])) / scale
-        rows.append(row("program", column, "program vs tight reference",
+        rows.append(row("program", column, ("program", "tight reference"),
                         np.max(np.abs(x - tight[column].to_numpy())) / scale, ceilings.LISTING,
                         f"{label}; its integrator's own error at this step, by Richardson: {integrator:.2g}",
                         ceiling=ceilings.LISTING))
@@ -461,19 +469,19 @@ def program_run_checks(case, program):
         for source, run in (("program", listing), ("tight reference", tight)):
             values = evaluate_expression(figure["expression"], namespace(case, run))
             outside = max(lo - np.min(values), np.max(values) - hi, 0.0) / (hi - lo)
-            rows.append(row("figure", name, f"{source} vs book figure", outside, ceilings.FIGURE,
+            rows.append(row("figure", name, (source, "book figure"), outside, ceilings.FIGURE,
                             f"{figure['where']}: range [{lo:g}, {hi:g}]; run [{np.min(values):.4g}, {np.max(values):.4g}]",
                             ceiling=ceilings.FIGURE))
-    return rows, {"listing": listing, "same integrator": twin_runs["same"], "tight": tight}
+    return rows, {"listing": listing, "same integrator": twin_runs["same"], "tight": tight,
+                  "integrator": program.integrator, "dt": program.dt}
 
 
-def finding_effect(res, finding):
+def finding_effect(case, finding, runs):
     """What a finding changes in the book's own results: for an error of its equations, its reactions
     in newtons and its energy balance in joules along its run; otherwise the case file's `effect`."""
-    case, runs = res["case"], res["runs"]
-    if "book" not in finding["sources"] or not all(isinstance(runs.get(s), tuple) for s in ("book", "reference")):
+    if "book" not in finding["sources"] or not all(runs[s].ok for s in ("book", "reference")):
         return " ".join(finding.get("effect", "").split())
-    book, tight = runs["book"][0], runs["reference"][1]
+    book, tight = runs["book"].run, runs["reference"].twin
     parts = [f"the book's {q} is off by up to {(book[q] - tight[q]).abs().max():.3g} N"
              f" (|{q}| up to {tight[q].abs().max():.3g} N)"
              for q in finding["quantities"] if q in case.reaction_names]
@@ -488,9 +496,9 @@ def localise_finding(case, finding, sample):
     # The finding's source: the book's derived equations, or its program.
     book = case.model("program" if any("program" in s for s in finding["sources"]) else "book")
     printed = getattr(book, "PRINTED", {})
+    if "mujoco" in sample["failures"]:
+        return f"not searched: MuJoCo's values at the random states failed ({sample['failures']['mujoco']})"
     engine = sample["values"]["mujoco"]
-    if isinstance(engine, ArithmeticError):
-        return f"not searched: MuJoCo's values at the random states failed ({engine})"
 
     def components(key):
         """A printed vector's components as the checks name them: a_eq110_x, ... or Rx, ..."""
@@ -518,20 +526,17 @@ def localise_finding(case, finding, sample):
     return "; ".join(parts)
 
 
-def findings_of(res):
+def findings_of(case, rows, sample, runs):
     """The case's registered findings with their measured size, where and how established, and effect."""
-    engines = [r["error"] for r in res["rows"] if r["check"] == "pointwise"
-               and set(r["sources"].split(" vs ")) <= {"reference", "mujoco", "pinocchio"}]
-    states = res["case"].spec["sample"]["count"]
+    engines = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= set(ENGINES)]
     out = []
-    for finding in res["case"].findings:
-        errors = [r["error"] for r in res["rows"] if r["finding"] == finding["id"] and r["error"] is not None]
-        out.append({"id": finding["id"], "title": finding["title"], "quantity": finding["quantities"],
-                    "sources": finding["sources"], "error": max(errors, default=None),
-                    "explanation": " ".join(finding["explanation"].split()),
-                    "where": finding["where"],
-                    "established": f"reference, MuJoCo and Pinocchio agree with each other to "
-                                   f"{max(engines, default=0):.1e} at {states} random states",
-                    "effect": finding_effect(res, finding),
-                    "localised": localise_finding(res["case"], finding, res["sample"])})
+    for finding in case.findings:
+        errors = [r.error for r in rows if r.finding == finding["id"] and r.error is not None]
+        out.append(Finding(
+            id=finding["id"], title=finding["title"], where=finding["where"],
+            quantities=tuple(finding["quantities"]), sources=tuple(finding["sources"]),
+            error=max(errors, default=None), explanation=" ".join(finding["explanation"].split()),
+            established=f"reference, MuJoCo and Pinocchio agree with each other to {max(engines, default=0):.1e} "
+                        f"at {len(sample['states'])} random states",
+            effect=finding_effect(case, finding, runs), localised=localise_finding(case, finding, sample)))
     return out

@@ -1,5 +1,9 @@
-"""Command line: `dyncheck list | run | report`.  Exit codes: 0 all pass, 1 a check failed, 2 bad input,
-130 interrupted (Ctrl-C)."""
+"""Command line: `dyncheck list | run | report | bench`.  Exit codes: 0 all pass, 1 a check failed,
+2 bad input, 130 interrupted (Ctrl-C) (docs/statuses.md).
+
+`run` and the studies produce results (dyncheck.results); `report` saves them beside the pages and
+renders the pages from what it saved, so `report --from` renders the same pages from saved results
+alone, without the engines."""
 
 import argparse
 import json
@@ -9,23 +13,19 @@ import tempfile
 import time
 from pathlib import Path
 
-import mujoco
 import pandas as pd
 from tqdm import tqdm
 
-from dyncheck import stability, work_precision
-from dyncheck.case import SOURCES, case_names, load_case
-from dyncheck.checks import findings_of, run_case
-from dyncheck.schema import suggest
-
-OK_STATUSES = ("pass", "finding")
-TABLE_COLUMNS = ["check", "quantity", "sources", "error", "tolerance", "status"]
+from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
+from dyncheck.checks import run_case
+from dyncheck.messages import suggest
+from dyncheck.results import format_rows, load_results, save_results, to_json
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="dyncheck", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
-    commands.add_parser("list", help="list the cases")
+    listing = commands.add_parser("list", help="list the cases")
     run = commands.add_parser("run", help="run the checks and print a table")
     report = commands.add_parser("report", help="run the checks and write Markdown reports with figures")
     bench = commands.add_parser("bench", help="throughput of each source and the harness's overhead")
@@ -35,23 +35,32 @@ def main(argv=None):
         sub.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
         sub.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                          help="override a parameter in every selected case that has it")
+    for sub in (listing, run, report, bench):
+        sub.add_argument("--cases", type=Path, default=CASES_DIR, metavar="DIR", dest="cases_dir",
+                         help="the folder of case folders (default: the checkout's cases/)")
     run.add_argument("--json", type=Path, metavar="PATH", help="also write the results as JSON")
+    run.add_argument("--results", type=Path, metavar="DIR",
+                     help="also save the results (rows, runs, findings) for `dyncheck report --from DIR`")
     report.add_argument("--out", type=Path, default=Path("reports"), metavar="DIR",
                         help="where to write the reports (default: reports)")
     report.add_argument("--no-studies", action="store_true",
                         help="leave out the work-precision and stability studies (minutes) from the pages")
+    report.add_argument("--from", type=Path, metavar="DIR", dest="saved",
+                        help="render the pages from results saved in DIR (a report's results/ folder, or "
+                             "`run --results DIR`) instead of running anything; needs neither engine")
     args = parser.parse_args(argv)
-    # MuJoCo prints a line for each run that blows up, and the studies blow runs up on purpose: each
-    # is reported instead as an unstable row, from the warnings MuJoCo counts in its data.
-    mujoco.set_mju_user_warning(lambda message: None)
     try:
         if args.command == "list":
-            return list_cases()
-        cases = select_cases(args.cases, args.set)
-        if args.command == "run" and args.json:
-            check_json_path(args.json)
+            return list_cases(args.cases_dir)
         if args.command == "report":
             check_out_folder(args.out)
+            if args.saved:
+                return report_saved(args)
+        cases = select_cases(args.cases, args.set, args.cases_dir)
+        if args.command == "run" and args.json:
+            check_json_path(args.json)
+        if args.command == "run" and args.results:
+            check_results_folder(args.results)
     except ValueError as error:
         return error_exit(error)
     if args.command == "bench":
@@ -62,25 +71,33 @@ def main(argv=None):
         return 0
     try:
         results, interrupted = run_cases(cases)
+        writing = f"--out {args.out}" if args.command == "report" else None  # for a write that fails
         if args.command == "run":
             print_results(results)
             if args.json:
+                writing = f"--json {args.json}"
                 marked = {"incomplete": f"interrupted (Ctrl-C) during case {interrupted}"} if interrupted else {}
                 write_json({**to_json(results), **marked}, args.json)
+            if args.results and not interrupted:
+                writing = f"--results {args.results}"
+                save_results(results, args.results)
         elif not interrupted:  # a report of some cases would pass for one of all
-            make_report(results, args.out, args.no_studies)
+            results = make_report(results, cases, args.out, args.no_studies)
     except KeyboardInterrupt:  # in the studies or while writing: the JSON and the report are replaced whole
         print("dyncheck: interrupted", file=sys.stderr)
         return 130
     except OSError as error:  # the output passed its checks before the run but failed now (a full disk)
-        where = f"--json {args.json}" if args.command == "run" else f"--out {args.out}"
-        return error_exit(f"{where}: cannot write it: {error.strerror or error}")
+        return error_exit(f"{writing}: cannot write it: {error.strerror or error}")
     if interrupted:
         print(f"dyncheck: interrupted during case {interrupted}; " + (
             f"above are the {len(results)} cases that finished" if args.command == "run"
             else f"the report in {args.out}/ is unchanged"), file=sys.stderr)
         return 130
-    return 0 if all(r["status"] in OK_STATUSES for res in results for r in res["rows"]) else 1
+    return exit_code(results)
+
+
+def exit_code(results):
+    return 0 if all(r.status.ok for result in results for r in result.rows) else 1
 
 
 def error_exit(error):
@@ -100,14 +117,27 @@ def run_cases(cases):
     return results, None
 
 
-def make_report(results, out, no_studies):
+def make_report(results, cases, out, no_studies):
+    """The studies of each case added to its results, and the pages written; the results."""
     from dyncheck.report import write_reports
     start = time.perf_counter()
-    for res in results:
-        res["studies"] = None if no_studies else study_case(res["case"])
+    results = [result if no_studies else result.with_studies(study_case(case)) for result, case in zip(results, cases)]
     written = write_reports(results, out)
     print(f"studies and pages: wrote {len(written)} files to {out}/ in {time.perf_counter() - start:.1f} s")
     print_results(results, table=False)
+    return results
+
+
+def report_saved(args):
+    """`report --from DIR`: the pages of the results saved in DIR, with no run."""
+    from dyncheck.report import write_reports
+    if args.cases or args.set or args.no_studies:
+        raise ValueError("--from renders saved results as they are: give no CASE, --set or --no-studies with it")
+    results = load_results(args.saved)
+    written = write_reports(results, args.out)
+    print(f"pages: wrote {len(written)} files to {args.out}/ from {args.saved}/")
+    print_results(results, table=False)
+    return exit_code(results)
 
 
 def study_case(case):
@@ -121,10 +151,10 @@ def study_case(case):
                 "stability": stability.studies(case, progress)}
 
 
-def list_cases():
+def list_cases(cases_dir):
     rows = []
-    for name in case_names():
-        case = load_case(name)
+    for name in case_names(cases_dir):
+        case = load_case(name, cases_dir)
         rows.append({"case": name, "section": case.section, "title": case.title,
                      "coordinates": ", ".join(case.coords) or "-", "reactions": ", ".join(case.reaction_names)})
     print(pd.DataFrame(rows).to_string(index=False))
@@ -146,16 +176,18 @@ def parse_overrides(pairs):
     return overrides
 
 
-def select_cases(names, set_pairs):
-    names = list(dict.fromkeys(names)) or case_names()  # a case named twice runs once
-    defaults = {name: load_case(name).defaults for name in names}  # an unknown case name is named here
+def select_cases(names, set_pairs, cases_dir=CASES_DIR):
+    from dyncheck import stability, work_precision
+    names = list(dict.fromkeys(names)) or case_names(cases_dir)  # a case named twice runs once
+    defaults = {name: load_case(name, cases_dir).defaults for name in names}  # an unknown case name is named here
     overrides = parse_overrides(set_pairs)
     for key in overrides:
         if not any(key in d for d in defaults.values()):
             known = sorted({p for d in defaults.values() for p in d})
             raise ValueError(f"--set {key}: no selected case has a parameter '{key}'{suggest(key, known)} "
                              f"(cases: {', '.join(names)})")
-    cases = [load_case(name, **{k: v for k, v in overrides.items() if k in defaults[name]}) for name in names]
+    cases = [load_case(name, cases_dir, **{k: v for k, v in overrides.items() if k in defaults[name]})
+             for name in names]
     for case in cases:  # load every model and study setting now: a scene that disagrees with its case,
         for source in SOURCES:  # or a setting that is vacuous or runs away, is bad input
             case.model(source)
@@ -164,31 +196,16 @@ def select_cases(names, set_pairs):
     return cases
 
 
-def format_rows(rows):
-    table = pd.DataFrame(rows)[TABLE_COLUMNS]
-    for column in ("error", "tolerance"):
-        table[column] = table[column].map(lambda x: "-" if x is None or pd.isna(x) else f"{x:.2e}")
-    return table
-
-
 def print_results(results, table=True):
-    for res in results:
-        case, rows = res["case"], res["rows"]
+    for result in results:
+        spec, rows = result.spec, result.rows
         if table:
-            print(f"\n== {case.name} ({case.section}) {case.title}"
-                  + (f"  [overrides: {case.overrides}]" if case.overrides else ""))
+            print(f"\n== {result.name} ({spec['section']}) {spec['title']}"
+                  + (f"  [overrides: {result.overrides}]" if result.overrides else ""))
             print(format_rows(rows).to_string(index=False))
-        counts = pd.Series([r["status"] for r in rows]).value_counts().to_dict()
+        counts = pd.Series([str(r.status) for r in rows]).value_counts().to_dict()
         summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-        print(f"{case.name}: {summary} ({res['wall']:.1f} s)")
-
-
-def to_json(results):
-    keys = ("check", "quantity", "sources", "error", "tolerance", "ceiling", "status", "finding", "detail")
-    return {"cases": [{"case": res["case"].name, "section": res["case"].section,
-                       "params": res["case"].params,
-                       "checks": [{k: r[k] for k in keys} for r in res["rows"]],
-                       "findings": findings_of(res)} for res in results]}
+        print(f"{result.name}: {summary} ({result.wall:.1f} s)")
 
 
 def check_json_path(path):
@@ -207,6 +224,16 @@ def check_out_folder(out):
                          "whole folder; give a new or empty folder, or one that holds a report")
     out = out.resolve()  # the parent of where a symbolic link points: there the new report is built
     check_writable("--out", out, [out.parent] + ([out] if out.is_dir() else []))
+
+
+def check_results_folder(folder):
+    """`run --results` writes folder/<case>/ for each case: refuse a folder of something else."""
+    if folder.exists() and not folder.is_dir():
+        raise ValueError(f"--results {folder}: is not a folder")
+    if folder.is_dir() and any(folder.iterdir()) and not any(folder.glob("*/value.json")):
+        raise ValueError(f"--results {folder}: holds files but no saved results (no <case>/value.json); "
+                         "give a new or empty folder, or one `run --results` wrote")
+    check_writable("--results", folder.resolve(), [folder.resolve()])
 
 
 def check_writable(option, path, folders):

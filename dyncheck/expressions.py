@@ -15,7 +15,7 @@ import operator
 
 import numpy as np
 
-from dyncheck.schema import suggest
+from dyncheck.messages import suggest
 
 FUNCTIONS = ("sin", "cos", "tan", "arctan", "sqrt", "abs", "max", "min")  # numpy's, by these names
 CALLABLE = FUNCTIONS + ("first",)  # and first(condition), see `namespace`
@@ -30,19 +30,15 @@ MAX_EXPONENT = 1024
 
 
 def namespace(case, run):
-    """What a case's expressions may use along `run` (a DataFrame indexed by t): its columns, t, the
-    parameters, the traced bodies' centre-of-mass coordinates (<body>_x, _y, _z), numpy's
-    functions, pi and first(condition); up to the case's `stop` condition, if it has one."""
-    model = case.model("mujoco")
-    q = run[list(case.coords)].to_numpy()
-    positions = np.array([model.points(t, qi)[0] for t, qi in zip(run.index, q)])
+    """What a case's expressions may use along `run` (a DataFrame indexed by t): its columns (among them
+    the traced bodies' centre-of-mass coordinates <body>_x, _y, _z, see dyncheck.checks.with_paths),
+    t, the parameters, numpy's functions, pi and first(condition); up to the case's `stop` condition,
+    if it has one."""
     t = run.index.to_numpy()
     names = {name: getattr(np, name) for name in FUNCTIONS}
     names["pi"] = np.pi
     names.update(case.params)
     names.update({column: run[column].to_numpy() for column in run.columns})
-    for b, body in enumerate(case.scene["paths"]):
-        names.update({f"{body}_{axis}": positions[:, b, i] for i, axis in enumerate("xyz")})
     names["t"] = t
     stop = case.spec["report"].get("stop")
     if stop:  # the book's program stops here: cut every series after the first time it holds

@@ -1,4 +1,7 @@
-"""Markdown reports with figures: reports/<case>.md per case and reports/index.md.
+"""Markdown reports with figures: reports/<case>.md per case, reports/index.md and errata.md, rendered
+from results alone (dyncheck.results.CaseResult): no engine is imported here, nothing is computed
+but what the pages show.  The results are saved in the report's results/ folder, and the pages are
+rendered from what was saved, so that `dyncheck report --from reports/results` renders them again.
 
 The new report is built whole in a folder beside the old one and swapped in with one atomic
 rename, so a failed, interrupted or killed run leaves the previous report intact.
@@ -8,6 +11,7 @@ import ctypes
 import errno
 import fcntl
 import json
+import math
 import os
 import re
 import shutil
@@ -15,25 +19,18 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
+from dyncheck import stability, work_precision
+from dyncheck.case import Case
+from dyncheck.expressions import evaluate, namespace
+from dyncheck.results import RESULTS_VERSION, Status, case_json, format_rows, load_results, save_results
+from dyncheck.simulate import energy_residual, state_columns
+from dyncheck.style import SOURCE_STYLE as STYLE
+from dyncheck.style import plt
 
-from dyncheck.checks import ENGINES, energy_residual, findings_of, state_columns  # noqa: E402
-from dyncheck.cli import OK_STATUSES, format_rows, to_json  # noqa: E402
-from dyncheck.expressions import evaluate, namespace  # noqa: E402
-from dyncheck import stability, work_precision  # noqa: E402
-
-STYLE = {  # source -> line style, so that coinciding curves stay visible
-    "tight reference": dict(color="black", lw=2.6, alpha=0.35),
-    "book": dict(color="tab:red", lw=1.0, ls="--"),
-    "pinocchio": dict(color="tab:blue", lw=1.0, ls=":"),
-    "mujoco": dict(color="tab:green", lw=1.0, ls="-."),
-    "reference": dict(color="tab:orange", lw=1.0, ls=(0, (1, 3))),
-}
+ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
 
 
 def write_reports(results, out):
@@ -54,10 +51,14 @@ def write_reports(results, out):
                 shutil.copytree(out, tree, dirs_exist_ok=True, ignore=shutil.ignore_patterns(".tmp-*"))
             (tree / "figures").mkdir(exist_ok=True)
             (tree / "data").mkdir(exist_ok=True)
-            written = []
-            for res in results:
-                written += write_case_page(res, tree)
-                written.append(write_summary(res, tree))
+            save_results(results, tree / "results")
+            written = [f"results/{result.name}" for result in results]
+            # The pages from the results as saved: what `report --from` renders from them.
+            saved = [r for r in load_results(tree / "results") if r.name in {result.name for result in results}]
+            for result in saved:
+                case = Case(result.folder, result.overrides, result.spec)
+                written += write_case_page(result, case, tree)
+                written.append(write_summary(result, case, tree))
             cases = summaries(tree, out)
             written += [write_index(tree, cases), write_errata(tree, cases)]
             swap(tree, out)
@@ -133,38 +134,38 @@ def exchange(a, b):
     raise OSError(code, os.strerror(code), os.fsdecode(b))
 
 
-def write_summary(res, tmp):
+def write_summary(result, case, tmp):
     """data/<case>.json: the case's results (the schema of `dyncheck run --json`) for the index."""
-    rows = res["rows"]
-    studies = res.get("studies")
-    sweep = studies["work_precision"] if studies else None
-    summary = {**to_json([res])["cases"][0], "title": res["case"].title, "status": status_of(rows),
-               "worst_engine_error": worst_engine_error(rows), "random": random_tried(res),
+    rows = result.rows
+    sweep = result.studies["work_precision"] if result.studies else None
+    worst = worst_engine_error(rows)
+    summary = {"version": RESULTS_VERSION, **case_json(result), "title": case.title, "status": result.status,
+               "worst_engine_error": worst if math.isfinite(worst) else None,  # JSON has no NaN
+               "random": random_tried(result, case),
                "cheapest": None if sweep is None or sweep.empty else  # for the index: level -> method
                {f"{r['level']:.0e}": r["cheapest"] for _, r in work_precision.cheapest(sweep).iterrows()}}
-    rel = f"data/{res['case'].name}.json"
+    rel = f"data/{case.name}.json"
     (tmp / rel).write_text(json.dumps(summary, indent=1) + "\n")
     return rel
 
 
 # -- figures ------------------------------------------------------------------------
 
-def trajectories(res):
+def trajectories(result):
     """{label: DataFrame} of the book's run for every source, the tight reference first."""
-    runs = res["runs"]
-    out = {"tight reference": runs["reference"][1]}
-    out.update({s: runs[s][0] for s in ("book", "pinocchio", "mujoco") if isinstance(runs[s], tuple)})
+    runs = result.runs
+    out = {"tight reference": runs["reference"].twin}
+    out.update({s: runs[s].run for s in ("book", "pinocchio", "mujoco") if runs[s].ok})
     return out
 
 
-def figure_scene(res, path):
-    case = res["case"]
-    model = case.model("mujoco")
-    tight = trajectories(res)["tight reference"]
-    q = tight[list(case.coords)].to_numpy()
-    paths = np.array([model.points(t, qi)[0] for t, qi in zip(tight.index, q)])  # (time, body, xyz)
-    _, origins, parents = model.points(0.0, q[0])
-    planar = np.ptp(paths[..., 2]) < 1e-12 and np.ptp(origins[:, 2]) < 1e-12
+def figure_scene(result, case, path):
+    tight = trajectories(result)["tight reference"]
+    scene = result.drawings["scene"]
+    origins, parents = scene["origins"], scene["parents"]
+    paths = np.array([tight[[f"{body}_{axis}" for axis in "xyz"]].to_numpy() for body in case.scene["paths"]])
+    paths = paths.reshape(len(case.scene["paths"]), len(tight), 3).transpose(1, 0, 2)  # (time, body, xyz)
+    planar = np.ptp(np.concatenate([paths[..., 2].ravel(), origins[:, 2]])) < 1e-12
     fig = plt.figure(figsize=(6.4, 5.2))
     ax = fig.add_subplot(projection=None if planar else "3d")
     dims = 2 if planar else 3
@@ -173,9 +174,8 @@ def figure_scene(res, path):
         seg = chain[[parent, i + 1], :dims].T
         ax.plot(*seg, color="0.3", lw=2)
     ax.scatter(*chain[:, :dims].T, color="0.3", s=12)
-    body_ids = [model.body_id(name) for name in case.scene["paths"]]
     for b, name in enumerate(case.scene["paths"]):
-        arm = np.vstack([origins[body_ids[b] - 1], paths[0, b]])  # body origin to its point mass
+        arm = np.vstack([origins[scene["path_origins"][b]], paths[0, b]])  # body origin to its point mass
         ax.plot(*arm[:, :dims].T, color="0.3", lw=2)
         ax.plot(*paths[:, b, :dims].T, lw=0.6, label=f"{name} (tight reference, 0-{tight.index[-1]:g} s)")
         ax.scatter(*paths[0, b, :dims], s=40, marker="o", zorder=5)
@@ -186,15 +186,16 @@ def figure_scene(res, path):
     else:
         ax.set_zlabel("z [m]")
     ax.set_title(f"{case.section} {case.title}\nthe scene at t = 0 (grey) and the path in space", fontsize=9)
-    ax.legend(fontsize=7, loc="upper left")
+    if case.scene["paths"]:
+        ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def figure_series(res, columns, ylabel, title, path, log_error=False):
+def figure_series(result, columns, ylabel, title, path, log_error=False):
     """Columns over time from every source, overlaid; with log_error, |source - tight reference|."""
-    runs = trajectories(res)
+    runs = trajectories(result)
     tight = runs["tight reference"]
     fig, axes = plt.subplots(len(columns), 1, figsize=(7.5, 2.3 * len(columns)), sharex=True, squeeze=False)
     for ax, column in zip(axes[:, 0], columns):
@@ -218,9 +219,8 @@ def figure_series(res, columns, ylabel, title, path, log_error=False):
     plt.close(fig)
 
 
-def figure_energy(res, path):
-    case = res["case"]
-    runs = trajectories(res)
+def figure_energy(result, case, path):
+    runs = trajectories(result)
     driven = case.driven
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True)
     tight = runs["tight reference"]
@@ -245,15 +245,17 @@ def figure_energy(res, path):
     plt.close(fig)
 
 
-def figure_pointwise(res, path):
+def figure_pointwise(result, path):
     """Per random state, each source's deviation from `reference`, relative to the quantity's scale."""
-    values = res["sample"]["values"]
+    values = result.sample["values"]
     quantities = list(values["reference"])
     fig, axes = plt.subplots(1, len(quantities), figsize=(2.3 * len(quantities), 3.2), sharey=True)
     for ax, quantity in zip(np.atleast_1d(axes), quantities):
         ref = values["reference"][quantity]
         scale = np.max(np.abs(ref)) or 1.0
         for i, source in enumerate(("book", "mujoco", "pinocchio")):
+            if source not in values:  # its evaluation failed (a failing row says where)
+                continue
             dev = np.abs(values[source][quantity] - ref) / scale
             ax.semilogy(np.full(len(dev), i) + np.linspace(-0.25, 0.25, len(dev)), dev + 1e-18, ".",
                         ms=3, color=STYLE[source]["color"])
@@ -262,18 +264,18 @@ def figure_pointwise(res, path):
         ax.set_title(quantity, fontsize=8)
         ax.set_ylim(1e-18, 10)
     np.atleast_1d(axes)[0].set_ylabel("|source - reference| / max |reference|", fontsize=8)
-    fig.suptitle(f"pointwise, {len(res['sample']['states'])} random states (dashed: tolerance)", fontsize=9)
+    fig.suptitle(f"pointwise, {len(result.sample['states'])} random states (dashed: tolerance)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def report_namespaces(res):
+def report_namespaces(result, case):
     """{source: namespace} along each source's run, for a case's own figures and values."""
-    return {label: namespace(res["case"], run) for label, run in trajectories(res).items()}
+    return {label: namespace(case, run) for label, run in trajectories(result).items()}
 
 
-def figure_extra(res, spaces, item, path):
+def figure_extra(spaces, item, path):
     """One of a case's own figures: y against x for every source, overlaid."""
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for label, names in spaces.items():
@@ -293,9 +295,9 @@ def figure_extra(res, spaces, item, path):
     plt.close(fig)
 
 
-def figure_program(res, path):
+def figure_program(result, case, path):
     """The book's program figures: left from the listing's run, right from the corrected equations."""
-    case, runs = res["case"], res["program"]
+    runs = result.program
     plots = case.spec["program"]["plots"]
     sides = (("listing", runs["listing"], "tab:red"),
              ("corrected", runs["tight"], "black"))
@@ -311,18 +313,17 @@ def figure_program(res, path):
             ax.set_title(f"{item['title']}: {label}", fontsize=8)
             ax.set_xlabel("t [s]" if item["x"] == "t" else item["x"], fontsize=8)
             ax.grid(alpha=0.3)
-    program = case.model("program")
-    fig.suptitle(f"{case.section}: the book's figures from its program ({program.integrator}, dt = {program.dt:.3g} s)"
+    fig.suptitle(f"{case.section}: the book's figures from its program ({runs['integrator']}, dt = {runs['dt']:.3g} s)"
                  " and from the corrected equations; axes as the book's", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
 
 
-def values_table(res, spaces):
+def values_table(case, spaces):
     """A case's named results (e.g. the least friction coefficient), computed for every source."""
     rows = []
-    for key, item in res["case"].spec["report"].get("values", {}).items():
+    for key, item in case.spec["report"].get("values", {}).items():
         row = {"result": item["about"], "unit": item["unit"]}
         for label, names in spaces.items():
             value = float(evaluate(item["expression"], names))
@@ -333,27 +334,21 @@ def values_table(res, spaces):
 
 # -- pages --------------------------------------------------------------------------
 
-def status_of(rows):
-    return "PASS" if all(r["status"] in OK_STATUSES for r in rows) else "FAIL"
-
-
 def worst_engine_error(rows):
     """Largest pointwise error among reference, MuJoCo and Pinocchio."""
-    errors = [r["error"] for r in rows if r["check"] == "pointwise"
-              and all(s in ENGINES for s in r["sources"].split(" vs "))]
+    errors = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= set(ENGINES)]
     return max(errors, default=float("nan"))
 
 
-def random_tried(res):
+def random_tried(result, case):
     """What the random pointwise checks tried: states at the case's parameters, parameter sets and
     states at each, their seeds, and whether reference and both engines agreed at all of them."""
-    case, rows = res["case"], res["rows"]
     sample, params = case.spec["sample"], case.spec["sample"].get("params", {})
-    engine_rows = [r for r in rows if r["check"] in ("pointwise", "random parameters")
-                   and all(s in ENGINES for s in r["sources"].split(" vs "))]
+    engine_rows = [r for r in result.rows if r.check in ("pointwise", "random parameters")
+                   and set(r.sources) <= set(ENGINES)]
     return {"states": sample["count"], "seed": sample["seed"], "parameter_sets": params.get("sets", 0),
             "states_per_set": params.get("states", 0), "parameter_seed": params.get("seed"),
-            "agreed": all(r["status"] == "pass" for r in engine_rows)}
+            "agreed": all(r.status == Status.PASS for r in engine_rows)}
 
 
 def random_sentence(tried):
@@ -370,7 +365,9 @@ def markdown_table(frame):
 
 def summary_table(rows):
     """One line per (check, comparison): how many quantities, their statuses, the worst error/tolerance."""
-    frame = pd.DataFrame(rows)
+    frame = pd.DataFrame([{"check": r.check, "sources": r.comparison, "quantity": r.quantity, "status": str(r.status),
+                           "error": np.nan if r.error is None else r.error,
+                           "tolerance": np.nan if r.tolerance is None else r.tolerance} for r in rows])
     out = []
     for (check, sources), group in frame.groupby(["check", "sources"], sort=False):
         judged = group.dropna(subset=["error", "tolerance"])
@@ -396,58 +393,61 @@ def scene_table(case):
     return markdown_table(pd.DataFrame(rows))
 
 
-def write_case_page(res, tmp):
-    case, rows = res["case"], res["rows"]
+def write_case_page(result, case, tmp):
+    rows = result.rows
     name = case.name
     coord_unit = dict(zip(case.coords, case.spec["coord_units"]))
     plots = {  # figure -> how to draw it; the coordinate plots only where there are coordinates
-        "scene": lambda path: figure_scene(res, path),
-        "coordinates": lambda path: figure_series(res, state_columns(case)[::2], lambda c: f"{c} [{coord_unit[c]}]",
+        "scene": lambda path: figure_scene(result, case, path),
+        "coordinates": lambda path: figure_series(result, state_columns(case)[::2],
+                                                  lambda c: f"{c} [{coord_unit[c]}]",
                                                   "coordinates over time, every source overlaid", path),
-        "errors": lambda path: figure_series(res, state_columns(case), lambda c: f"|{c} error|",
+        "errors": lambda path: figure_series(result, state_columns(case), lambda c: f"|{c} error|",
                                              "error against the tight reference solution", path, log_error=True),
-        "energy": lambda path: figure_energy(res, path),
-        "reactions": lambda path: figure_series(res, list(case.reaction_names), lambda c: f"{c} [N]",
+        "energy": lambda path: figure_energy(result, case, path),
+        "reactions": lambda path: figure_series(result, list(case.reaction_names), lambda c: f"{c} [N]",
                                                 "reactions over time, every source", path),
-        "pointwise": lambda path: figure_pointwise(res, path),
+        "pointwise": lambda path: figure_pointwise(result, path),
     }
+    if "reference" not in result.sample["values"]:  # nothing to measure the deviations from
+        del plots["pointwise"]
     if not case.coords:
         del plots["coordinates"], plots["errors"]
-    if res["program"] and case.spec.get("program", {}).get("plots"):
-        plots["program"] = lambda path: figure_program(res, path)
-    along_runs = isinstance(res["runs"]["reference"], tuple)
+    if not case.reaction_names:
+        del plots["reactions"]
+    if result.program.get("listing") is not None and case.spec.get("program", {}).get("plots"):
+        plots["program"] = lambda path: figure_program(result, case, path)
+    along_runs = result.runs["reference"].ok
     if not along_runs:  # the reference run blew up (see the unstable rows): nothing to draw along it
         plots = {kind: draw for kind, draw in plots.items() if kind in ("pointwise", "program")}
     extras = case.spec["report"].get("figures", {}) if along_runs else {}
     values = case.spec["report"].get("values") if along_runs else None
-    spaces = report_namespaces(res) if extras or values else {}
+    spaces = report_namespaces(result, case) if extras or values else {}
     for key, item in extras.items():
-        plots[key] = lambda path, item=item: figure_extra(res, spaces, item, path)
+        plots[key] = lambda path, item=item: figure_extra(spaces, item, path)
     figures = {}
     for kind, draw in plots.items():
         figures[kind] = f"figures/{name}_{kind}.png"
         draw(tmp / figures[kind])
-    units = case.units
 
-    params = pd.DataFrame([{"parameter": k, "value": f"{v:.10g}", "unit": units[k],
-                            "meaning": case.spec["params"][k]["about"]
-                            + (" (overridden)" if k in case.overrides else "")}
-                           for k, v in case.params.items()])
+    params = pd.DataFrame([{"parameter": p.name, "value": f"{p.value:.10g}", "unit": p.unit,
+                            "meaning": p.about + (" (overridden)" if p.name in case.overrides else "")}
+                           for p in case.parameters])
     q0, v0, t_end = case.initial
-    counts = pd.Series([r["status"] for r in rows]).value_counts()
+    counts = pd.Series([str(r.status) for r in rows]).value_counts()
     table = format_rows(rows)
-    table["finding"] = [r["finding"] or "" for r in rows]
-    findings = findings_of(res)
-    runs = res["runs"]
+    table["finding"] = [r.finding or "" for r in rows]
+    findings = result.findings
+    runs = result.runs
     cost = pd.DataFrame([{"source": s, "method": run.attrs["method"],
                           "setting": f"dt = {run.attrs['dt']:g} s" if run.attrs["dt"] else f"rtol = {run.attrs['rtol']:g}",
                           "wall time [s]": f"{run.attrs['wall']:.3f}", "evaluations": run.attrs["evaluations"]}
-                         for s in ("reference", "book", "pinocchio", "mujoco") if isinstance(runs[s], tuple)
-                         for run in runs[s]])
+                         for s in ("reference", "book", "pinocchio", "mujoco") if runs[s].ok
+                         for run in (runs[s].run, runs[s].twin)])
     lines = [
         f"# {case.section} {case.title}",
         "",
-        f"**{status_of(rows)}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
+        f"**{result.status}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
         + f"; worst pointwise error among reference, MuJoCo and Pinocchio: {worst_engine_error(rows):.1e}"
         + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md), [errata](errata.md)"
         + (f"  \nParameters overridden: {case.overrides}" if case.overrides else ""),
@@ -473,10 +473,10 @@ def write_case_page(res, tmp):
         scene_table(case),
         "",
         *(["## Results", "", "Computed along each source's run of the book's initial conditions.", "",
-           values_table(res, spaces), ""] if values else []),
+           values_table(case, spaces), ""] if values else []),
         "## Checks",
         "",
-        f"Random states tried: {random_sentence(random_tried(res))}.",
+        f"Random states tried: {random_sentence(random_tried(result, case))}.",
         "",
         "Errors are relative: pointwise to the largest magnitude of the quantity over the random states,"
         " trajectories to the largest magnitude of the coordinate over the run, energy to the largest"
@@ -496,15 +496,14 @@ def write_case_page(res, tmp):
     if findings:
         lines += ["## Findings: where the book is wrong", ""]
         for f in findings:
-            spec = next(x for x in case.findings if x["id"] == f["id"])
-            lines += [f"### {f['id']}: {f['title']}", "",
-                      f"*Where:* {spec['where']}.  *Largest relative error:* {f['error']:.3g}"
-                      f" (quantities {', '.join(f['quantity'])}; comparisons: {', '.join(f['sources'])};"
-                      f" {f['established']})."
-                      + (f"  {f['effect']}" if f["effect"] else ""), "",
+            lines += [f"### {f.id}: {f.title}", "",
+                      f"*Where:* {f.where}.  *Largest relative error:* {f.error:.3g}"
+                      f" (quantities {', '.join(f.quantities)}; comparisons: {', '.join(f.sources)};"
+                      f" {f.established})."
+                      + (f"  {f.effect}" if f.effect else ""), "",
                       f"*Localised automatically* (edits of the printed expression searched until one agrees"
-                      f" with the engines): {f['localised']}.", "", f["explanation"], ""]
-    sections, study_files = study_sections(res, tmp)
+                      f" with the engines): {f.localised}.", "", f.explanation, ""]
+    sections, study_files = study_sections(result, case, tmp)
     lines += sections + [
         "## Figures",
         "",
@@ -516,17 +515,17 @@ def write_case_page(res, tmp):
         value = f"{tol['value']:g}" if "value" in tol else f"safety factor {tol['safety']:g}"
         lines += [f"- **{kind}** ({value}): " + " ".join(tol["why"].split())]
     lines += ["", "## Cost of the runs", "", markdown_table(cost), "",
-              f"All checks of this case took {res['wall']:.1f} s.", ""]
+              f"All checks of this case took {result.wall:.1f} s.", ""]
     page = f"{name}.md"
     (tmp / page).write_text("\n".join(lines))
     return [page] + list(figures.values()) + study_files
 
 
-def study_sections(res, tmp):
+def study_sections(result, case, tmp):
     """The page's speed-against-accuracy, convergence and stability sections, and the files they use.
-    res["studies"] is None when `dyncheck report --no-studies` left them out."""
-    case, studies = res["case"], res.get("studies")
-    convergence = [r for r in res["rows"] if r["check"] == "convergence"]
+    result.studies is None when `dyncheck report --no-studies` left them out."""
+    studies = result.studies
+    convergence = [r for r in result.rows if r.check == "convergence"]
     lines, files = ["## Speed against accuracy", ""], []
     if studies is None:
         lines += ["Not run this time (`dyncheck report --no-studies`).", ""]
@@ -559,23 +558,24 @@ def study_sections(res, tmp):
     if convergence:
         lines += ["Observed order of each fixed-step method, from runs at h, h/2, h/4 (checks; tolerance from"
                   " the next term of the error expansion, see the case file):", "",
-                  markdown_table(pd.DataFrame([{"method": r["quantity"], "source": r["sources"],
-                                                "|observed - expected|": f"{r['error']:.3f}" if r["error"] is not None else "-",
-                                                "tolerance": f"{r['tolerance']:.3f}" if r["tolerance"] is not None else "-",
-                                                "status": r["status"], "detail": r["detail"]} for r in convergence])), ""]
+                  markdown_table(pd.DataFrame([{"method": r.quantity, "source": r.comparison,
+                                                "|observed - expected|": "-" if r.error is None else f"{r.error:.3f}",
+                                                "tolerance": "-" if r.tolerance is None else f"{r.tolerance:.3f}",
+                                                "status": str(r.status), "detail": r.detail} for r in convergence])),
+                  ""]
     else:
         lines += [work_precision.NO_SWEEP if not case.coords else "No fixed-step method is checked for this case.", ""]
     if studies and studies["stability"]:
         lines += ["## Stability: where methods fail", ""]
-        for result in studies["stability"]:
-            chart = f"figures/{case.name}_{result['study']}.png"
-            stability.figure(result, tmp / chart)
+        for study in studies["stability"]:
+            chart = f"figures/{case.name}_{study.study}.png"
+            stability.figure(case, study, tmp / chart)
             files.append(chart)
-            lines += [f"### {result['title']}", "", *[f"- {sentence}" for sentence in result["findings"]], "",
-                      f"![{result['study']}]({chart})", "",
-                      f"*How:* {result['why']} (this study took {result['wall']:.0f} s.)", "",
-                      f"<details><summary>The numbers ({len(result['table'])} rows)</summary>", "",
-                      markdown_table(result["table"]), "", "</details>", ""]
+            lines += [f"### {study.title}", "", *[f"- {sentence}" for sentence in study.findings], "",
+                      f"![{study.study}]({chart})", "",
+                      f"*How:* {study.why} (this study took {study.wall:.0f} s.)", "",
+                      f"<details><summary>The numbers ({len(study.table)} rows)</summary>", "",
+                      markdown_table(study.table), "", "</details>", ""]
     return lines, files
 
 
@@ -663,7 +663,7 @@ def write_index(tmp, cases):
         rows.append({
             "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"], "title": case["title"],
             "status": case["status"], "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
-            "worst engine error": f"{case['worst_engine_error']:.1e}",
+            "worst engine error": "-" if case["worst_engine_error"] is None else f"{case['worst_engine_error']:.1e}",
             "findings": ", ".join(f"{f['id']} ({f['error']:.2g})" for f in case["findings"]) or "none"})
     tried = [c["random"] for c in cases]
     states = sum(t["states"] + t["parameter_sets"] * t["states_per_set"] for t in tried)

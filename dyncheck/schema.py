@@ -2,24 +2,33 @@
 
 Three checks, in the order a case is loaded (dyncheck.case.Case):
 `validate(spec, file)` the parsed file's keys, types, units and cross-references;
-`check_params(...)` the parameter values after overrides (positive masses, a realisable top, ...);
+`check_params(...)` the parameter values after overrides (positive masses, each parameter's bounds, the
+case's constraints);
 `check_values(...)` every number that may be an expression, evaluated at those parameters.
 Each raises one ValueError naming the file, the field (a dotted path such as `integration.rtol`,
 or `override m` for an override) and the value.
+docs/case-file.md, the reference of the case file, is `markdown()`.
 """
 
-import difflib
 import importlib.util
 import math
+import operator
+import re
+from pathlib import Path
 
-from dyncheck import ceilings
+import numpy as np
+
+from dyncheck import ceilings, expressions
+from dyncheck.expressions import evaluate
+from dyncheck.messages import suggest
 
 # -- the schema -----------------------------------------------------------------------------------
 # A type is a string: "str", "int", "bool", "number" (a TOML integer or float), "expr" (a number,
 # or an expression of the parameters and pi in quotes), optionally with a condition: "int > 0",
 # "number >= 0", "expr != 0"; or a tuple: ("list", item), ("pair", item) a list of two,
 # ("one of", *values), ("map", item) a table whose keys are names (of parameters, joints, ...),
-# ("table", {key: type}) a table of these keys, "key?" optional, or FREE.
+# ("table", {key: type}) a table of these keys, "key?" optional, or FREE.  What each key means is in
+# MEANINGS below, its unit (where it has one) in KEY_UNITS.
 
 FREE = ("free",)  # a table whose contents the module that reads it checks
 RANGE = ("pair", "number")
@@ -31,10 +40,14 @@ SCHEMA = ("table", {
     "section": "str",
     "title": "str",
     "summary": "str",
+    "derivation": "str",
     "coords": ("list", "str"),
     "reactions": ("list", "str"),
     "coord_units": ("list", ("one of", "rad", "m")),
-    "params": ("map", ("table", {"value": "number", "unit": "str", "about": "str"})),
+    "params": ("map", ("table", {"value": "number", "unit": "str", "about": "str", "minimum?": "number",
+                                 "exclusive_minimum?": "number", "maximum?": "number",
+                                 "exclusive_maximum?": "number"})),
+    "constraints?": ("list", ("table", {"expression": "str", "strict?": "bool", "why": "str"})),
     "initial": ("table", {"q": ("list", "expr"), "v": ("list", "expr"), "t_end": "expr > 0"}),
     "sample": ("table", {
         "count": "int > 0", "seed": "int >= 0", "t": ("pair", "expr"),
@@ -94,24 +107,15 @@ BINDABLE = {("body", "mass"): 1, ("body", "pos"): 3, ("body", "ipos"): 3, ("body
             ("joint", "stiffness"): 1, ("option", None): 3}
 
 # -- parameters ---------------------------------------------------------------------------------
-# The unit of each parameter name the cases use, in every case.
-UNITS = {"m": "kg", "m1": "kg", "m2": "kg", "k": "N/m", "Ixx": "kg m^2", "Izz": "kg m^2", "Mz": "N m",
-         "g": "m/s^2", "L_acc": "m/s^2", "L_rate": "m/s", "theta_acc": "rad/s^2",
-         **dict.fromkeys(("a", "b", "c", "r", "h", "l", "l0", "l1", "l2", "L0", "thickness"), "m"),
-         **dict.fromkeys(("alpha0", "beta0", "psi", "theta0"), "rad"),
-         **dict.fromkeys(("alpha_rate", "beta_rate", "theta_rate"), "rad/s")}
-# Units whose every value must be positive.
+# The units a parameter may have (params.<name>.unit).
+UNITS = ("N m", "N/m", "kg", "kg m^2", "m", "m/s", "m/s^2", "rad", "rad/s", "rad/s^2")
+# Units whose every value must be positive, in every case.  Whatever else a parameter must satisfy
+# depends on the case (a length may be a body's size, > 0, or a position, of any sign): its bounds
+# in [params] and the case's [[constraints]].
 POSITIVE_UNITS = {"kg": "a mass", "N/m": "a stiffness", "kg m^2": "a moment of inertia"}
-# Lengths are sizes of bodies (> 0) or positions of hinges and centres of mass (any sign, or zero:
-# the disk's hinge may sit on its axis, the top's centre of mass below its tip).  The same name
-# may be either (r: a hinge's radius on the 1.8 disks, the top's disk radius), hence per case.
-SIZES = {"double_pendulum": {"l1", "l2"}, "piston": {"L0"}, "rotating_particle": {"l"},
-         "rotating_pendulum": {"l"}, "spring_pendulum": {"l0"}, "spinning_top": {"r", "thickness"}}
-# A rigid body's moments of inertia about its centre of mass satisfy A + B >= C.  For the top,
-# A = B = Ixx - m h^2, C = Izz.  The book's printed pair breaks it by 3.7e-6 kg m^2 (finding
-# 1.10-data); scene.xml carries up to 1e-5 kg m^2 of it by its armature identity (see there), so
-# that much is allowed and MuJoCo's compiler never has to refuse an override.
-TOP_SLACK = 1e-5  # kg m^2
+# The bound keys of params.<name> (JSON Schema's words) and the relation each demands of the value.
+BOUNDS = {"minimum": ">=", "exclusive_minimum": ">", "maximum": "<=", "exclusive_maximum": "<"}
+RELATIONS = {">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt}
 
 
 def validate(spec, file):
@@ -124,21 +128,30 @@ def check_params(spec, params, overrides, file):
     """The parameter values (defaults and `overrides` applied): physical, or ValueError."""
     field = lambda p: f"override {p}" if p in overrides else f"params.{p}.value"
     for p, x in params.items():
-        demand = _demand(spec["name"], p, spec["params"][p]["unit"])
-        if demand and not demand[0](x):
-            raise _error(file, field(p), x, demand[1])
-    if {"Ixx", "Izz", "m", "h"} <= set(params):  # the top: Ixx (= Iyy) and Izz about its tip
-        named = lambda *names: ", ".join(f"{p} = {params[p]!r}" + (" (override)" if p in overrides else "")
-                                         for p in names)
-        a, c = params["Ixx"] - params["m"] * params["h"] * params["h"], params["Izz"]
-        if a <= 0:
-            raise ValueError(f"{file}: {named('Ixx', 'm', 'h')} give the top a moment of inertia about its centre "
-                             f"of mass A = Ixx - m h^2 = {a:.4g} kg m^2, not > 0; no rigid body has it")
-        if 2 * a - c < -TOP_SLACK:
-            raise ValueError(f"{file}: {named('Ixx', 'Izz', 'm', 'h')} break the triangle inequality A + B >= C "
-                             f"of the top's moments of inertia about its centre of mass (A = B = Ixx - m h^2 = "
-                             f"{a:.4g}, C = Izz): A + B - C = {2 * a - c:.3g} kg m^2, beyond the -{TOP_SLACK:g} "
-                             "that the scene can carry; no rigid body has these inertias")
+        for relation, bound, reason in _demands(spec["params"][p], p):
+            if not RELATIONS[relation](x, bound):
+                raise _error(file, field(p), x, f"must be {relation} {bound:g} ({reason})")
+    _check_constraints(spec.get("constraints", []), params, overrides, file)
+
+
+def _check_constraints(constraints, params, overrides, file):
+    """Each constraint's expression >= 0 (> 0 if strict) at `params`, or ValueError naming it."""
+    names = {**params, "pi": math.pi}  # as dyncheck.case.Case.value evaluates the file's numbers
+    for i, constraint in enumerate(constraints):
+        field, expression = f"constraints[{i}]", constraint["expression"]
+        try:
+            x = evaluate(expression, names)
+        except ValueError as error:
+            raise _error(file, f"{field}.expression", expression, f"cannot be evaluated: {error}") from None
+        if isinstance(x, (bool, np.bool_)):  # a comparison would pass as 0 or 1, whatever it says
+            raise _error(file, f"{field}.expression", expression, "is a comparison; a constraint is an expression "
+                         "that must be >= 0 (> 0 with strict = true): write a >= b as a - b")
+        strict = constraint.get("strict", False)
+        if not (x > 0 if strict else x >= 0):  # also refuses a NaN
+            involved = [p for p in dict.fromkeys(re.findall(r"[A-Za-z_]\w*", expression)) if p in params]
+            values = ", ".join(f"{p} = {params[p]!r}" + (" (override)" if p in overrides else "") for p in involved)
+            raise _error(file, field, expression, f"is {x:.4g} at {values or 'any parameters'}, not "
+                         f"{'>' if strict else '>='} 0: {' '.join(constraint['why'].split())}")
 
 
 def check_values(spec, file, value):
@@ -168,10 +181,12 @@ def check_values(spec, file, value):
         lo, hi = values[f"{field}[0]"], values[f"{field}[1]"]
         if lo > hi:
             raise _error(file, field, bounds, f"is not an interval lo <= hi ({lo:g} > {hi:g})")
-    for p, bounds in ranges.items():  # the random parameter sets must be physical too
-        demand = _demand(spec["name"], p, spec["params"][p]["unit"])
-        if demand and not all(demand[0](values[f"sample.params.ranges.{p}[{i}]"]) for i in (0, 1)):
-            raise _error(file, f"sample.params.ranges.{p}", bounds, f"leaves the physical values: {p} " + demand[1])
+    # The random parameter sets must be physical too: an interval is within bounds when both its ends are.
+    for p, bounds in ranges.items():
+        for relation, bound, reason in _demands(spec["params"][p], p):
+            if not all(RELATIONS[relation](values[f"sample.params.ranges.{p}[{i}]"], bound) for i in (0, 1)):
+                raise _error(file, f"sample.params.ranges.{p}", bounds,
+                             f"leaves the physical values: {p} must be {relation} {bound:g} ({reason})")
 
 
 # How much work one case file may ask for, so that a run ends in minutes (dyncheck.simulate bounds
@@ -266,8 +281,9 @@ def _expressions(x, kind, field):
 def _cross_references(spec, file):
     """What the types do not say: names that must refer to each other, lengths, units."""
     name, coords, params, scene = spec["name"], spec["coords"], spec["params"], spec["scene"]
-    if not name.isidentifier() or importlib.util.find_spec(f"reference.{name}") is None:
-        raise _error(file, "name", name, "names no module in reference/ (the case's equations)")
+    if not name.isidentifier():
+        raise _error(file, "name", name, "is not an identifier (letters, digits and _, not starting with a digit)")
+    _derivation(spec["derivation"], file)
     for key in ("coords", "reactions"):
         twice = [x for x in spec[key] if spec[key].count(x) > 1]
         if twice:
@@ -280,11 +296,12 @@ def _cross_references(spec, file):
             raise _error(file, field, values, f"has length {len(values)}, not {len(coords)} "
                                               f"(one per coordinate: {', '.join(coords) or 'none'})")
     for p, item in params.items():
-        unit, known = item["unit"], sorted(set(UNITS.values()))
-        if p in UNITS and unit != UNITS[p]:
-            raise _error(file, f"params.{p}.unit", unit, f"is not the unit of {p}, {UNITS[p]!r}")
-        if unit not in known:
-            raise _error(file, f"params.{p}.unit", unit, "is not a known unit" + _hint(unit, known))
+        if item["unit"] not in UNITS:
+            raise _error(file, f"params.{p}.unit", item["unit"], "is not a known unit" + _hint(item["unit"], UNITS))
+        for key, relation in BOUNDS.items():  # overrides and ranges are checked later; the default here
+            if key in item and not RELATIONS[relation](item["value"], item[key]):
+                raise _error(file, f"params.{p}.{key}", item[key], f"excludes the default params.{p}.value = "
+                             f"{item['value']!r}: {p} must be {relation} {item[key]:g}")
 
     euler = scene.get("euler", {}).get("coords", [])
     if "euler" in scene and len(euler) != 3:
@@ -320,6 +337,24 @@ def _cross_references(spec, file):
         lo, hi = figure["range"]
         if not lo < hi:
             raise _error(file, f"program.figures.{key}.range", figure["range"], "is not an interval lo < hi")
+
+
+def _derivation(derivation, file):
+    """The case's equations: a module importable from the checkout, or a .py file in the case's folder."""
+    if derivation.endswith(".py"):
+        found = (Path(file).parent / derivation).is_file()
+    elif all(part.isidentifier() for part in derivation.split(".")):
+        try:
+            found = importlib.util.find_spec(derivation) is not None
+        except ImportError:  # a parent package that does not exist, or is a module
+            found = False
+    else:
+        raise _error(file, "derivation", derivation,
+                     "is neither a module name (dotted identifiers) nor a path ending in .py")
+    if not found:
+        raise _error(file, "derivation", derivation,
+                     f"names no {'file in the case folder' if derivation.endswith('.py') else 'importable module'}"
+                     " (where the case's equations live)")
 
 
 def _of_the_book(source):
@@ -360,15 +395,12 @@ def _binding(location, field, params, file):
                          + _hint(depend, params))
 
 
-def _demand(case, name, unit):
-    """What a parameter's value must satisfy beyond being finite: (test, text), or None."""
-    if unit in POSITIVE_UNITS:
-        return (lambda x: x > 0), f"must be > 0 ({name} is {POSITIVE_UNITS[unit]}, in {unit})"
-    if name in SIZES.get(case, ()):
-        return (lambda x: x > 0), f"must be > 0 ({name} is a length, in m)"
-    if name == "g":
-        return (lambda x: x >= 0), "must be >= 0 (g is the magnitude of gravity; the scene gives its direction)"
-    return None
+def _demands(item, name):
+    """What the value of parameter `name` (its table `item` in [params]) must satisfy beyond being finite:
+    a list of (relation, bound, reason)."""
+    unit = item["unit"]
+    demands = [(">", 0, f"{name} is {POSITIVE_UNITS[unit]}, in {unit}")] if unit in POSITIVE_UNITS else []
+    return demands + [(relation, item[key], f"params.{name}.{key}") for key, relation in BOUNDS.items() if key in item]
 
 
 # -- messages -----------------------------------------------------------------------------------
@@ -376,12 +408,6 @@ def _demand(case, name, unit):
 def _error(file, field, value, problem):
     text = repr(value)
     return ValueError(f"{file}: {field} = {text if len(text) <= 80 else text[:77] + '...'} {problem}")
-
-
-def suggest(word, choices):
-    """" (did you mean 'x'?)" for the choice closest to a misspelt word, or ""."""
-    close = difflib.get_close_matches(word, list(choices), n=1)
-    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def _hint(word, choices):
@@ -404,3 +430,260 @@ def _describe(kind):
         return SCALARS[base][1] + (f", {condition}" if condition else "")
     return {"list": "an array", "pair": "a pair [lo, hi]", "map": "a table", "table": "a table",
             "free": "a table"}.get(kind[0], "one of " + ", ".join(map(repr, kind[1:])))
+
+
+# -- the reference: docs/case-file.md ---------------------------------------------------------------
+# What each key of SCHEMA means, by its dotted path: `<name>` stands for any key of a table whose keys
+# are names, `[i]` for any item of an array.  A test demands one meaning per key, and no other.
+
+ALONG_RUN = "an expression along the run (see Expressions)"
+MEANINGS = {
+    "name": "The case's name, an identifier; the reports and the JSON output call the case by it.",
+    "section": "The book's section of the example, e.g. 1.8.3.",
+    "title": "The example's title in the reports.",
+    "summary": "The example in a paragraph: the scene, its coordinates, what moves it; it opens the case's report.",
+    "derivation": "Where the case's equations live: a module importable from the checkout (e.g. "
+                  "`reference.<case>`), or a path ending in .py relative to the case's folder.  It defines the "
+                  "sources `Book`, `Reference` and, if the book prints a program, `Program`.",
+    "coords": "The generalized coordinates, in the order of the book's equations; their rates are `<coord>_rate`.",
+    "reactions": "The reactions (force components) the book computes, by name; compared between the sources.",
+    "coord_units": "The unit of each coordinate, in the order of `coords`: rad (an angle) or m (a length).",
+    "params": "The case's parameters, by name: the one source of its numbers, for the equations and both scene "
+              "files alike.  `--set NAME=VALUE` overrides one.",
+    "params.<name>.value": "Its default value.",
+    "params.<name>.unit": "Its unit, one of the known units (see Parameters).",
+    "params.<name>.about": "What it is and where the book gives it; shown in the report.",
+    "params.<name>.minimum": "Its value (default, override, random range) must be >= this.",
+    "params.<name>.exclusive_minimum": "Its value (default, override, random range) must be > this.",
+    "params.<name>.maximum": "Its value (default, override, random range) must be <= this.",
+    "params.<name>.exclusive_maximum": "Its value (default, override, random range) must be < this.",
+    "constraints": "What the parameters must satisfy together, beyond each one's bounds (see Constraints).",
+    "constraints[i].expression": "An expression of the parameters and pi that must be >= 0 (> 0 if strict).",
+    "constraints[i].strict": "true: the expression must be > 0, not only >= 0.  Absent: false.",
+    "constraints[i].why": "What the constraint means and why it holds; the error shows it.",
+    "initial": "The initial conditions of the integrated runs.",
+    "initial.q": "The coordinates at t = 0, one per coordinate.",
+    "initial.v": "Their rates at t = 0, one per coordinate.",
+    "initial.t_end": "The end of the runs, which start at t = 0.",
+    "sample": "The random states of the pointwise check, at which every source is evaluated.",
+    "sample.count": f"How many random states (at most {MAX_STATES}).",
+    "sample.seed": "The seed of their random generator: two runs draw the same states.",
+    "sample.t": "The interval of the random times.",
+    "sample.q": "The interval of each coordinate's random values, one per coordinate.",
+    "sample.v": "The interval of each coordinate's random rates, one per coordinate.",
+    "sample.params": "Random parameter sets of the check \"random parameters\": reference and both engines must "
+                     "agree at each.",
+    "sample.params.sets": f"How many parameter sets (at most {MAX_SETS}).",
+    "sample.params.states": f"Random states per set (sets times states at most {MAX_STATES}).",
+    "sample.params.seed": "The seed of the sets' and their states' random generator.",
+    "sample.params.ranges": "The parameters that vary, by name, each drawn uniformly from its interval; the "
+                            "others keep their values.  Each interval must lie within the parameter's bounds; a "
+                            "set that breaks a constraint is drawn again.",
+    "work_precision": "The work-precision study of `dyncheck report` (methods, steps, tolerances, the solution "
+                      "they are measured against); validated by dyncheck/work_precision.py.",
+    "integration": "How the checks integrate the equations.",
+    "integration.output_step": "The interval between a run's output rows; a multiple of mujoco_step.",
+    "integration.rtol": "The relative and absolute tolerance of scipy's DOP853 for the runs of reference, book and "
+                        "Pinocchio.",
+    "integration.tight_rtol": "The tolerance of the tight solution the runs are compared with; below rtol.",
+    "integration.mujoco_step": "MuJoCo's fixed time step.",
+    "tolerance": "The allowed errors of the checks, each with its argument.",
+    "tolerance.pointwise": "The pointwise check: every source at the random states.",
+    "tolerance.pointwise.value": f"The largest allowed relative error (at most {ceilings.POINTWISE:g}, above which "
+                                 "a comparison proves nothing).",
+    "tolerance.pointwise.force_scale": "The least scale a reaction is judged against (e.g. the weight m * g), so "
+                                       "that a reaction that vanishes is not judged by rounding noise.",
+    "tolerance.pointwise.why": "The argument for the value: rounding, modelling differences, margin.",
+    "tolerance.trajectory": "The trajectory check: each integrated run against the tight solution.",
+    "tolerance.trajectory.safety": f"The allowed error is this times the run's own error estimate (at most "
+                                   f"{ceilings.SAFETY:g}).",
+    "tolerance.trajectory.why": "The argument for the factor.",
+    "tolerance.energy": "The work-energy balance check along each run.",
+    "tolerance.energy.safety": f"The allowed residual is this times the balance's own error estimate (at most "
+                               f"{ceilings.SAFETY:g}).",
+    "tolerance.energy.why": "The argument for the factor.",
+    "report": "What the case's report page says beside the checks.",
+    "report.modelling": "How each source models the example: the book's equations, the reference's corrections, "
+                        "the engines' scenes.",
+    "report.stop": f"Where the book's program stops: {ALONG_RUN} that cuts the report's values and figures at the "
+                   "first time it holds.",
+    "report.values": "Values computed along every source's run, by name, shown side by side.",
+    "report.values.<name>.expression": f"The value: {ALONG_RUN}, e.g. max(Rz) or first(nutation > 1).",
+    "report.values.<name>.unit": "Its unit as shown (free text).",
+    "report.values.<name>.about": "What it is.",
+    "report.figures": "Figures drawn from every source's run, by name.",
+    "report.figures.<name>.x": f"The abscissa: {ALONG_RUN}.",
+    "report.figures.<name>.y": f"The ordinate: {ALONG_RUN}.",
+    "report.figures.<name>.title": "The figure's title.",
+    "report.figures.<name>.xlabel": "The x axis's label.",
+    "report.figures.<name>.ylabel": "The y axis's label.",
+    "report.figures.<name>.xlim": "The x axis's range.  Absent: the data's.",
+    "report.figures.<name>.ylim": "The y axis's range.  Absent: the data's.",
+    "report.figures.<name>.equal": "true: the same scale on both axes.",
+    "scene": "How the scene files (scene.xml for MuJoCo, scene.urdf for Pinocchio) map to the case.",
+    "scene.coords": "Each coordinate of a hinge or slide joint, by name: that joint's name in the scene files.",
+    "scene.euler": "A ball joint whose orientation the book writes in Euler angles.",
+    "scene.euler.joint": "The ball joint's name in the scene files.",
+    "scene.euler.coords": "The three coordinates that are its Euler angles, in the order of the book's rotations.",
+    "scene.driven": "Joints that a prescribed motion moves (they are not coordinates), by name in the scene files.",
+    "scene.driven.<name>.angle": "Its position at t = 0.  Absent: 0.",
+    "scene.driven.<name>.rate": "Its rate at t = 0.  Absent: 0.",
+    "scene.driven.<name>.acc": "Its acceleration, constant.  Absent: 0.",
+    "scene.applied": "Generalized forces on joints, by name in the scene files: one per degree of freedom of the "
+                     "joint (a ball joint's: moments about its local axes).",
+    "scene.paths": "Bodies whose centre of mass the runs trace: the columns <body>_x, <body>_y, <body>_z of the "
+                   "run (see Expressions).",
+    "scene.reactions": "Where the engines read each reaction of `reactions`, by its name.",
+    "scene.reactions.<name>.body": "The body the force acts on.",
+    "scene.reactions.<name>.sensor": "The MJCF force sensor that measures it.",
+    "scene.reactions.<name>.axis": "Its component: 0, 1 or 2 (x, y, z).",
+    "scene.reactions.<name>.frame": "The frame of the component: the body's or the world's.",
+    "scene.points": "Kinematic vectors of a body compared between the sources, by name: the quantities "
+                    "<name>_x, <name>_y, <name>_z.",
+    "scene.points.<name>.body": "The body.",
+    "scene.points.<name>.frame": "The frame of the components: the body's or the world's.",
+    "scene.points.<name>.kind": "What vector: the acceleration of the body frame's origin, of the centre of mass, "
+                                "the angular velocity or acceleration.  Absent: acceleration.",
+    "scene.urdf_root_joint": "URDF has no ball joint: Pinocchio loads scene.urdf's root link on this joint.",
+    "scene.urdf_root_joint.name": "The joint's name.",
+    "scene.urdf_root_joint.type": "The joint's type.",
+    "scene.bindings": "Where each parameter lives in the scene files, by its name: on load the engines' models "
+                      "are checked against the parameter's value, and an override is written into them.",
+    "scene.bindings.<name>[i].element": "The kind of element: a body, a joint, or the option (gravity).",
+    "scene.bindings.<name>[i].name": "The element's name in the scene files; gravity for the option.",
+    "scene.bindings.<name>[i].attribute": "The attribute: a body's " + ", ".join(
+        a for e, a in BINDABLE if e == "body") + "; a joint's " + ", ".join(
+        a for e, a in BINDABLE if e == "joint") + "; none for the option.",
+    "scene.bindings.<name>[i].index": "The component of a vector attribute.  Absent: 0.",
+    "scene.bindings.<name>[i].scale": "The attribute is the parameter times this (e.g. -1 for gravity along -z).  "
+                                      "Absent: 1.",
+    "scene.bindings.<name>[i].depends": "Other parameters the attribute depends on (an inertia about the origin "
+                                        "on the mass and the centre of mass): it is rewritten after them when "
+                                        "they change.",
+    "program": "The book's printed program (`Program` of the derivation) and its figures.",
+    "program.figures": "The ranges the book's figures show, by name: the program's run and the tight solution "
+                       "must stay inside.",
+    "program.figures.<name>.expression": f"What the figure shows: {ALONG_RUN}.",
+    "program.figures.<name>.range": "The figure's axis range.",
+    "program.figures.<name>.where": "Where the book shows the figure.",
+    "program.plots": "The book's figures redrawn from the program's run and the tight solution.",
+    "program.plots[i].x": f"The abscissa: {ALONG_RUN}.",
+    "program.plots[i].y": f"The ordinate: {ALONG_RUN}.",
+    "program.plots[i].title": "The plot's title.",
+    "program.plots[i].xlim": "The x axis's range (the book's).  Absent: the data's.",
+    "program.plots[i].ylim": "The y axis's range (the book's).  Absent: the data's.",
+    "findings": "Errors of the book that the checks establish: a failing check that a finding covers is "
+                "reported as the finding, not as a failure.",
+    "findings[i].id": "A unique id, e.g. 1.8.3-R.",
+    "findings[i].title": "The error in a line.",
+    "findings[i].where": "Where the book has it.",
+    "findings[i].effect": "What it changes in the book's results, where the checks cannot compute that.",
+    "findings[i].sources": "The comparisons it covers: book, program, or a comparison `X vs Y` with one of them; "
+                           "never an engine's or the reference's alone.",
+    "findings[i].quantities": "The quantities it covers.",
+    "findings[i].explanation": "The evidence: what is printed, what is right, by how much.",
+    "data": "The book's printed numbers against its own formulas.",
+    "data[i].name": "The quantity's name in the report.",
+    "data[i].printed": "The printed value.",
+    "data[i].formula": "The value of the book's formula; the difference is relative to it.",
+    "data[i].where": "Where the book prints them.",
+    "data[i].tolerance": f"The allowed relative difference, e.g. half a unit of the last printed digit (at most "
+                         f"{ceilings.DATA:g}).",
+    "data[i].relation": "equal: printed = formula; at most: printed <= formula.  Absent: equal.",
+    "stability": "The stability studies of `dyncheck report`, each in a sub-table named after it; `module` names "
+                 "a .py file in the case's folder with the case's own studies.  Validated by dyncheck/stability.",
+}
+# The unit of a key's numbers, where it has one.
+KEY_UNITS = {
+    **dict.fromkeys(["params.<name>.value", *(f"params.<name>.{key}" for key in BOUNDS), "sample.params.ranges"],
+                    "params.<name>.unit"),
+    **dict.fromkeys(["initial.q", "sample.q"], "coord_units"),
+    **dict.fromkeys(["initial.v", "sample.v"], "coord_units per s"),
+    **dict.fromkeys(["initial.t_end", "sample.t", "integration.output_step", "integration.mujoco_step"], "s"),
+    "tolerance.pointwise.force_scale": "N",
+    "scene.driven.<name>.angle": "rad or m (the joint's)",
+    "scene.driven.<name>.rate": "rad/s or m/s",
+    "scene.driven.<name>.acc": "rad/s^2 or m/s^2",
+    "scene.applied": "N m or N (the joint's)",
+}
+
+
+def keys(kind=SCHEMA, path=""):
+    """(dotted path, type, optional) of every key of the schema, each table's keys after it."""
+    tag = kind[0] if isinstance(kind, tuple) else None
+    if tag == "table":
+        for declared, item in kind[1].items():
+            key = _join(path, declared.rstrip("?"))
+            yield key, item, declared.endswith("?")
+            yield from keys(item, key)
+    elif tag == "map":
+        yield from keys(kind[1], f"{path}.<name>")
+    elif tag == "list":
+        yield from keys(kind[1], f"{path}[i]")
+
+
+def _words(kind):
+    """A type of the schema in words."""
+    if isinstance(kind, str) or kind[0] == "one of":
+        return _describe(kind)
+    tag, *rest = kind
+    return {"list": lambda: "an array, each item " + _words(rest[0]),
+            "pair": lambda: "a pair [lo, hi], each " + _words(rest[0]),
+            "map": lambda: "a table of names, each " + _words(rest[0]),
+            "table": lambda: "a table (its keys below)",
+            "free": lambda: "a table (see its meaning)"}[tag]()
+
+
+def markdown():
+    """docs/case-file.md: the case file's reference."""
+    lines = ["# The case file", "",
+             "Generated by `dyncheck.schema.markdown()` from `dyncheck.schema.SCHEMA` and `MEANINGS`; a test checks "
+             "that it is current.", "",
+             "Each case is a folder of `cases/` with its `case.toml`, `scene.xml` (MJCF, for MuJoCo) and `scene.urdf` "
+             "(for Pinocchio).  Loading checks the file in this order: its keys and types (a misspelt key is refused, "
+             "not taken for an absent optional one), units and cross-references; then the parameters, overrides "
+             "applied, against their bounds and the constraints; then every number that may be an expression, "
+             "evaluated at those parameters.  A problem gives one error naming the file, the field (a dotted path "
+             "as below, or `override NAME`) and the value, and exit code 2.", "",
+             "## Keys", "",
+             "`<name>` stands for any key of a table whose keys are names, `[i]` for any item of an array.  A number "
+             "of type \"a number or an expression in quotes\" may be written as an expression of the parameters "
+             "(see Expressions); its condition (such as `> 0`) holds for its value.", "",
+             "| key | required | type | unit | meaning |", "|---|---|---|---|---|"]
+    lines += [f"| `{key}` | {'no' if optional else 'yes'} | {_words(kind)} | {KEY_UNITS.get(key, '')} | "
+              f"{MEANINGS[key]} |" for key, kind, optional in keys()]
+    lines += ["", "## Parameters", "",
+              "Known units: " + ", ".join(f"`{unit}`" for unit in UNITS) + ".", "",
+              "A parameter in " + ", ".join(f"`{unit}` ({what})" for unit, what in POSITIVE_UNITS.items())
+              + " must be > 0 in every case.  Anything else a value must satisfy depends on the case and is "
+              "written next to it, in JSON Schema's words:", ""]
+    lines += [f"- `{key} = x`: the value must be {relation} x" for key, relation in BOUNDS.items()]
+    lines += ["", "The default `value` must lie within its bounds; so must every override (`--set`) and both "
+              "ends of the parameter's interval in `sample.params.ranges`.  For example "
+              "`l = { value = 0.1, unit = \"m\", exclusive_minimum = 0.0, about = \"rod length\" }`.", "",
+              "## Constraints", "",
+              "What no bound of one parameter can say: each `[[constraints]]` entry's `expression`, an expression "
+              "of the parameters and pi, must be >= 0, or > 0 with `strict = true`.  They are checked after "
+              "overrides, and at every random parameter set (a set that breaks one is drawn again).  A comparison "
+              "is refused (it would pass as 0 or 1): write a >= b as `a - b`.  The error names the file, "
+              "`constraints[i]`, the expression, its value, the parameters in it (marked `(override)` where "
+              "overridden) and the `why`.  For example:", "",
+              "```toml", "[[constraints]]", "expression = \"Ixx - m*h**2\"", "strict = true",
+              "why = \"the moment of inertia about the centre of mass across the axis must be > 0\"", "```", "",
+              "## Expressions", "",
+              "An expression is text in quotes, parsed and evaluated by `dyncheck.expressions` (never by Python's "
+              "eval).  It may hold only numbers, names, unary + and -, the operators + - * / **, one comparison "
+              "(< <= > >= == !=, not a chain) and calls of "
+              + ", ".join(f"`{name}`" for name in expressions.CALLABLE) + ".  Every number is a float; an "
+              f"exponent beyond +-{expressions.MAX_EXPONENT} is refused, and so is an expression longer than "
+              f"{expressions.MAX_LENGTH} characters or nested deeper than {expressions.MAX_DEPTH} levels.", "",
+              "The names depend on where the expression is:", "",
+              "- the file's numbers of type \"a number or an expression in quotes\" and `constraints[i].expression`: "
+              "the parameters and `pi`, no functions;",
+              "- along a run (`report.stop`, `report.values`, `report.figures`, `program.figures`, `program.plots`): "
+              "the run's columns, arrays over its output times (each coordinate, its rate `<coord>_rate`, each "
+              "reaction, `energy`, `work`, and `<body>_x`, `<body>_y`, `<body>_z` of each body of `scene.paths`), "
+              "`t`, the parameters, `pi`, numpy's " + ", ".join(f"`{name}`" for name in expressions.FUNCTIONS)
+              + ", and `first(condition)`, the first time the condition holds (NaN if never).  With a "
+              "`report.stop`, every array ends where it first holds."]
+    return "\n".join(lines) + "\n"

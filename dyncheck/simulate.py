@@ -2,15 +2,35 @@
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 from scipy.integrate import DOP853, LSODA, RK45, Radau, cumulative_simpson
 
-SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
-FIXED_METHODS = ("explicit Euler", "semi-implicit Euler", "RK4")  # the book's programs use the Eulers
-MUJOCO_METHODS = ("mujoco:Euler", "mujoco:implicitfast", "mujoco:RK4")
-METHODS = SCIPY_METHODS + FIXED_METHODS + MUJOCO_METHODS
+from dyncheck.results import Failure
+
+
+
+@dataclass(frozen=True)
+class Method:
+    """An integration method as case files and pages name it, and who steps it."""
+    name: str
+    stepper: str  # "scipy": adaptive, to a tolerance rtol; "python": fixed step dt, stepped here; "mujoco": fixed
+    #               step dt, MuJoCo's own integrator stepping its own scene
+    engine_name: str  # the stepper's name for it: scipy's solver, MuJoCo's integrator
+    evaluations: int = 1  # right-hand sides per step (fixed steps)
+
+
+METHODS = {m.name: m for m in (
+    Method("RK45", "scipy", "RK45"), Method("DOP853", "scipy", "DOP853"), Method("Radau", "scipy", "Radau"),
+    Method("LSODA", "scipy", "LSODA"),
+    Method("explicit Euler", "python", "explicit Euler"),  # the book's programs use the Eulers
+    Method("semi-implicit Euler", "python", "semi-implicit Euler"), Method("RK4", "python", "RK4", evaluations=4),
+    Method("mujoco:Euler", "mujoco", "Euler"), Method("mujoco:implicitfast", "mujoco", "implicitfast"),
+    Method("mujoco:RK4", "mujoco", "RK4"))}
+SCIPY_METHODS, FIXED_METHODS, MUJOCO_METHODS = (tuple(n for n, m in METHODS.items() if m.stepper == stepper)
+                                                for stepper in ("scipy", "python", "mujoco"))
 SCIPY_SOLVERS = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "LSODA": LSODA}
 
 
@@ -22,6 +42,22 @@ class Unstable(Exception):
         super().__init__(f"{method} unstable at t = {t:.6g} s" + (f" (step {step})" if step is not None else "")
                          + f": {why}")
         self.method, self.t, self.step, self.why = method, t, step, why
+
+    @property
+    def failure(self):
+        """The blow-up as a value, for the results."""
+        return Failure(self.method, None if self.t is None else float(self.t),
+                       None if self.step is None else int(self.step), str(self.why))
+
+
+def state_columns(case):
+    """A trajectory's state columns in the book's order: each coordinate, then its rate."""
+    return [c for name in case.coords for c in (name, name + "_rate")]
+
+
+def energy_residual(run):
+    """E(t) - E(0) - W(t): zero for exact dynamics (W = 0 when nothing is driven)."""
+    return run["energy"] - run["energy"].iloc[0] - run["work"]
 
 
 # -- budgets: no integration runs unbounded --------------------------------------------------------
@@ -201,7 +237,7 @@ def _fixed(model, q0, v0, grid, method, dt, every, work, budget):
 
 def _mujoco(model, q0, v0, grid, method, dt, every, work, budget):
     # MuJoCo steps in C, out of reach of the budget's clock: its steps are bounded before it starts (Budget).
-    run = model.step(q0, v0, grid[-1], dt, method.split(":")[1])
+    run = model.step(q0, v0, grid[-1], dt, METHODS[method].engine_name)
     t, q, v = run["t"], run["q"], run["v"]
     check_mujoco_run(run, method, dt)
     # Work of the prescribed motions: drive power at every step, Simpson's rule (error ~ dt^4).

@@ -9,18 +9,16 @@ method as check rows.  Both read the case file's [work_precision] table.
 import math
 import time
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from dyncheck import ceilings  # noqa: E402
-from dyncheck.checks import ROUNDING_FLOOR, energy_residual, row, state_columns, unstable_row  # noqa: E402
-from dyncheck.schema import MAX_OUTPUTS  # noqa: E402
-from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,  # noqa: E402
-                               fastest_frequency, simulate)
+from dyncheck import ceilings
+from dyncheck.ceilings import ROUNDING_FLOOR
+from dyncheck.results import no_number, row
+from dyncheck.schema import MAX_OUTPUTS
+from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
+                               energy_residual, fastest_frequency, simulate, state_columns)
+from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, plt
 
 COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "evaluations",
            "steps", "status", "resolved", "detail"]
@@ -262,15 +260,6 @@ def cheapest(frame, levels=LEVELS):
 
 # -- the chart ---------------------------------------------------------------------------------
 
-# Colour: the integration scheme (MuJoCo's Euler is the semi-implicit Euler, its RK4 the classical
-# RK4: same colour); marker and line: the source that evaluates the dynamics.
-COLOURS = {"explicit Euler": "tab:red", "semi-implicit Euler": "tab:orange", "mujoco:Euler": "tab:orange",
-           "mujoco:implicitfast": "tab:pink", "RK4": "tab:brown", "mujoco:RK4": "tab:brown",
-           "RK45": "tab:blue", "DOP853": "tab:purple", "Radau": "tab:green", "LSODA": "tab:olive"}
-SOURCE_STYLE = {"reference": dict(marker="o", ls="-"), "pinocchio": dict(marker="s", ls="--"),
-                "mujoco": dict(marker="^", ls=":")}
-
-
 def figure(frame, case, path):
     """Error against cost, log-log: trajectory error (top) and energy error (bottom) against median
     wall time (left) and right-hand-side evaluations (right); hollow markers for points the reference
@@ -282,7 +271,7 @@ def figure(frame, case, path):
     drawn = {}  # label -> errors by step or tolerance, to name a line that hides another
     for (source, method), points in ok.groupby(["source", "method"], sort=False):
         points = points.sort_values("value", ascending=False)  # along the sweep: loose to tight
-        style = dict(color=COLOURS[method], ms=5, lw=1.1, **SOURCE_STYLE[source])
+        style = dict(color=METHOD_COLOUR[method], ms=5, lw=1.1, **SWEEP_STYLE[source])
         label = f"{method} ({source})" if source != "reference" or method in SCIPY_METHODS else method
         errors = points.set_index("value")["error"]
         same = [other for other, e in drawn.items() if e.index.equals(errors.index) and np.array_equal(e, errors)]
@@ -369,7 +358,7 @@ def convergence(case):
             runs = [simulate(model, (q0, v0), t_end, method, dt=h / 2**i, output_step=every * h,
                              work=False)[columns] for i in range(3)]
         except Unstable as failure:
-            rows.append(unstable_row("convergence", method, source, failure))
+            rows.append(no_number("convergence", method, (source,), failure))
             continue
         scale = runs[2].abs().max()
         d1, d2 = ((runs[i] - runs[i + 1]).abs().max().div(scale).max() for i in range(2))
@@ -378,7 +367,7 @@ def convergence(case):
                              f"h/2 and h/4 differ by {d2:.1e}, within rounding ({ROUNDING_FLOOR:.1e}); choose a larger step")
         observed = math.log2(d1 / d2)
         expected = EXPECTED_ORDER[method]
-        rows.append(row("convergence", method, source, abs(observed - expected), omega * h * (1 + omega * t_end),
+        rows.append(row("convergence", method, (source,), abs(observed - expected), omega * h * (1 + omega * t_end),
                         f"observed order {observed:.3f} (expected {expected}) from dt = {h:g}, {h / 2:g}, "
                         f"{h / 4:g} s over {t_end:g} s; differences {d1:.2e}, {d2:.2e}; allowed "
                         f"omega h (1 + omega T) with omega = {omega:g} rad/s", ceiling=ceilings.CONVERGENCE))

@@ -22,6 +22,10 @@ import numpy as np
 from engines import euler, scene as scene_rules
 from engines.scene import Body
 
+# MuJoCo prints a line for each run that blows up, and the studies blow runs up on purpose: each
+# is reported instead as an unstable row, from the warnings MuJoCo counts in its data.
+mujoco.set_mju_user_warning(lambda message: None)
+
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
                "RK4": mujoco.mjtIntegrator.mjINT_RK4}
@@ -206,6 +210,13 @@ class MujocoModel:
         self.d.qacc[:] = self._solve(t, q, v)[3]
         mujoco.mj_inverse(self.m, self.d)
 
+    def _ball_joint(self, method):
+        """(qpos address, dof address) of the ball joint of a scene that has no other joint."""
+        if [kind for kind, _, _ in self.layout] != ["euler"] or self.driven:
+            raise ValueError(f"{self.path}: {method} needs a scene whose only joint is a ball joint; this one "
+                             f"has {len(self.layout)} free joints and {len(self.driven)} driven")
+        return self.layout[0][1]
+
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
         qacc = self._solve(t, q, v)[3]
@@ -266,6 +277,16 @@ class MujocoModel:
         dofs = self._driven_dofs
         return np.sum(inverse[..., dofs] * qvel[..., dofs], axis=-1) + qvel @ self.applied
 
+    def ball_joint_acceleration(self, quaternion, omega):
+        """The body's angular acceleration, in its own frame, of the scene's ball joint from MuJoCo's own
+        state: the joint's (w, x, y, z) quaternion and the body's angular velocity, under the scene's applied
+        forces.  No Euler angles, so no singularity at zero nutation."""
+        qadr, dof = self._ball_joint("ball_joint_acceleration")
+        self.d.qpos[qadr:qadr + 4], self.d.qvel[dof:dof + 3] = quaternion, omega
+        self.d.qfrc_applied[:] = self.applied
+        mujoco.mj_forward(self.m, self.d)
+        return self.d.qacc[dof:dof + 3].copy()
+
     def points(self, t, q):
         """World positions of the traced bodies' centres of mass, and the chain of body origins."""
         self._set_state(t, q, np.zeros(len(q)))
@@ -293,16 +314,8 @@ class MujocoModel:
 
     def step(self, q0, v0, t_end, dt, integrator):
         """mj_step with `integrator` from (q0, v0); times, book q and v of every step, and the cost."""
-        m, d, state0, forces = self.stepping(q0, v0, dt, integrator)
-        nstep = int(round(t_end / dt))
-        start = time.perf_counter()
-        states, _ = mujoco.rollout.rollout(m, d, state0[None], forces[None, None], nstep=nstep,
-                                           control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
-        wall = time.perf_counter() - start
-        states = np.concatenate([state0[None], states[0]])
-        times = states[:, 0]
-        qpos = states[:, 1:1 + m.nq]
-        qvel = states[:, 1 + m.nq:1 + m.nq + m.nv]
+        times, qpos, qvel, wall, warnings = self._rollout(q0, v0, t_end, dt, integrator)
+        nstep = len(times) - 1
         q, v = self._book_states(qpos, qvel, q0)
         # How well the armatures held the prescribed rates, relative to the largest prescribed
         # rate (a joint may be held at rate 0).
@@ -310,11 +323,28 @@ class MujocoModel:
         drift = np.max(np.abs(qvel[:, self._driven_dofs] - prescribed), initial=0.0)
         scale = np.max(np.abs(prescribed), initial=0.0)
         driven_error = float(drift / scale if scale > 0 else drift)
-        # MuJoCo counts its warnings (a NaN or huge state, which it answers by resetting) in the data
-        # the rollout stepped.
-        warnings = {mujoco.mjtWarning(i).name: (w.number, w.lastinfo) for i, w in enumerate(d.warning) if w.number}
         return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep, "warnings": warnings,
                 "evaluations": nstep * (4 if integrator == "RK4" else 1), "driven_rate_error": driven_error}
+
+    def ball_joint_quaternions(self, q0, v0, t_end, dt, integrator):
+        """The (w, x, y, z) quaternion of the scene's ball joint at every step of `step`'s run from (q0, v0),
+        the start included: MuJoCo's own orientation, free of the Euler angles' singularity."""
+        qadr, _ = self._ball_joint("ball_joint_quaternions")
+        return self._rollout(q0, v0, t_end, dt, integrator)[1][:, qadr:qadr + 4]
+
+    def _rollout(self, q0, v0, t_end, dt, integrator):
+        """mj_step with `integrator` from the book's (q0, v0) to t_end, in MuJoCo's own coordinates: times,
+        qpos and qvel of every step (the start included), the rollout's wall time, and the warnings MuJoCo
+        counted (a NaN or huge state, which it answers by resetting) in the data the rollout stepped."""
+        m, d, state0, forces = self.stepping(q0, v0, dt, integrator)
+        nstep = int(round(t_end / dt))
+        start = time.perf_counter()
+        states, _ = mujoco.rollout.rollout(m, d, state0[None], forces[None, None], nstep=nstep,
+                                           control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
+        wall = time.perf_counter() - start
+        states = np.concatenate([state0[None], states[0]])
+        warnings = {mujoco.mjtWarning(i).name: (w.number, w.lastinfo) for i, w in enumerate(d.warning) if w.number}
+        return states[:, 0], states[:, 1:1 + m.nq], states[:, 1 + m.nq:1 + m.nq + m.nv], wall, warnings
 
     def _book_states(self, qpos, qvel, q0):
         q = np.zeros((len(qpos), len(self.coords)))

@@ -132,7 +132,9 @@ class PinocchioModel:
         bodies = []
         for j in range(1, self.m.njoints):
             joint, placement, inertia = self.m.joints[j], self.m.jointPlacements[j], self.m.inertias[j]
-            motion = pin.computeJointJacobian(self.m, self.m.createData(), self.neutral, j)[:, joint.idx_v]
+            # 6 x nv; eigenpy hands a one-column matrix (a scene of one joint) back as a vector
+            jacobian = np.reshape(pin.computeJointJacobian(self.m, self.m.createData(), self.neutral, j), (6, -1))
+            motion = jacobian[:, joint.idx_v]
             if joint.nv == 1:  # motion = (linear, angular) per unit rate, in the joint's frame
                 kind, axis = ("hinge", motion[3:]) if np.any(motion[3:]) else ("slide", motion[:3])
             else:  # the root joint that the case names (spherical: the top)
@@ -159,7 +161,7 @@ class PinocchioModel:
         return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
 
     # -- state -------------------------------------------------------------
-    def _state(self, t, q, v):
+    def engine_state(self, t, q, v):
         """Pinocchio's configuration and velocity at the book's state (t, q, v).  A loop over the few
         joints: on one state, scalar writes cost less than index arrays."""
         config, velocity = self.neutral.copy(), np.zeros(self.m.nv)
@@ -178,9 +180,14 @@ class PinocchioModel:
                 velocity[iv:iv + 3] = euler.angular_velocity(q[idx], v[idx])
         return config, velocity
 
-    def _engine(self, config, velocity):
+    @property
+    def algorithm(self):
+        """The Pinocchio algorithms that `engine_dynamics` runs on this scene."""
+        return "aba" if len(self.free) == self.m.nv else "rnea+crba" if len(self.free) else "rnea"
+
+    def engine_dynamics(self, config, velocity):
         """Pinocchio alone, on its own configuration and velocity: every dof's acceleration, and the
-        inverse-dynamics forces M acc + nle that give it."""
+        inverse-dynamics forces M acc + nle that give it (`algorithm` names the branch it takes)."""
         force = self.applied.copy()
         for iq, iv, k in self.springs:
             force[iv] -= k * config[iq]
@@ -200,8 +207,8 @@ class PinocchioModel:
 
     @functools.lru_cache(maxsize=1)  # an integrator asks for the accelerations, then the drive power, of one state
     def _dynamics_at(self, t, q, v):
-        config, velocity = self._state(t, np.array(q), np.array(v))
-        return (config, velocity, *self._engine(config, velocity))
+        config, velocity = self.engine_state(t, np.array(q), np.array(v))
+        return (config, velocity, *self.engine_dynamics(config, velocity))
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
@@ -245,8 +252,25 @@ class PinocchioModel:
             out[name] = vector.copy()
         return out
 
+    def ball_joint_acceleration(self, quaternion, omega):
+        """The body's angular acceleration, in its own frame, of the scene's ball joint from Pinocchio's own
+        state: the joint's quaternion, given (w, x, y, z) as MuJoCo orders it, and the body's angular
+        velocity, under the scene's applied forces.  No Euler angles, so no singularity at zero nutation."""
+        joint = self._ball_joint("ball_joint_acceleration")
+        config, velocity = self.neutral.copy(), np.zeros(self.m.nv)
+        config[joint.idx_q:joint.idx_q + 4] = np.roll(quaternion, -1)  # Pinocchio's order: (x, y, z, w)
+        velocity[joint.idx_v:joint.idx_v + 3] = omega
+        return self.engine_dynamics(config, velocity)[0][joint.idx_v:joint.idx_v + 3]
+
+    def _ball_joint(self, method):
+        """The ball (spherical) joint of a scene that has no other joint."""
+        if [kind for kind, _, _ in self.layout] != ["euler"] or self.driven:
+            raise ValueError(f"{self.path}: {method} needs a scene whose only joint is a ball joint; this one "
+                             f"has {len(self.layout)} free joints and {len(self.driven)} driven")
+        return self.layout[0][1]
+
     def energy(self, t, q, v):
-        config, velocity = self._state(t, q, v)
+        config, velocity = self.engine_state(t, q, v)
         kinetic = pin.computeKineticEnergy(self.m, self.d, config, velocity)
         potential = pin.computePotentialEnergy(self.m, self.d, config)
         springs = sum(0.5 * k * config[iq] ** 2 for iq, _, k in self.springs)

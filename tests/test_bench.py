@@ -1,10 +1,12 @@
 """The batched paths the benchmark measures give what the state-by-state ones give; the bench's table."""
 
 import numpy as np
+import pytest
 
 import dyncheck
 from dyncheck.bench import bench_case
 from engines import euler
+from engines.bench import MujocoLoops, pinocchio_rhs, pinocchio_steps
 
 
 def test_drive_powers_of_a_run_equal_drive_power_state_by_state():
@@ -29,6 +31,45 @@ def test_euler_conversions_of_many_states_equal_those_of_each():
         np.testing.assert_array_equal(euler.quaternion(angles)[i], euler.quaternion(angles[i]))
         np.testing.assert_allclose(euler.euler_accelerations(angles, rates, w_dot)[i],
                                    euler.euler_accelerations(angles[i], rates[i], w_dot[i]), rtol=1e-14, atol=1e-12)
+
+
+def test_the_bare_mujoco_loops_step_the_harness_scene():
+    case = dyncheck.load_case("spinning_top")
+    model, (q0, v0, _), dt = case.model("mujoco"), case.initial, case.integration["mujoco_step"]
+    bare = MujocoLoops(model, q0, v0, dt, "RK4")
+    bare.mj_step(100)
+    # the top's qpos is its quaternion; mj_step and rollout step alike, to rounding
+    np.testing.assert_allclose(bare.d.qpos, model.ball_joint_quaternions(q0, v0, 100 * dt, dt, "RK4")[-1],
+                               rtol=0, atol=1e-12)
+
+
+def assert_equal_to_rounding(actual, expected):
+    # the same Pinocchio calls on the same numbers, reached by other arithmetic
+    scale = np.max(np.abs(expected), initial=1.0)
+    np.testing.assert_allclose(actual, expected, rtol=0, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize("name", dyncheck.case_names())
+def test_the_bare_pinocchio_loops_do_the_harness_work(name):
+    """The bare right-hand side and engine step give the harness's accelerations and drive power."""
+    case = dyncheck.load_case(name)
+    model, (q0, v0, _) = case.model("pinocchio"), case.initial
+    rhs, y0 = pinocchio_rhs(model, q0, v0, work=case.driven)
+    dy = rhs(0.0, y0)
+    if name == "spinning_top":  # the bare state is Pinocchio's quaternion and the body's angular velocity
+        w = euler.angular_velocity(q0, v0)
+        expected = model.ball_joint_acceleration(euler.quaternion(q0), w)
+        assert_equal_to_rounding(dy[4:7], expected)
+    else:  # the bare state is the book's: its coordinates are the free joints' positions
+        n = len(q0)
+        np.testing.assert_allclose(dy[:n], v0, rtol=0, atol=0)
+        expected = model.accelerations(0.0, q0, v0)
+        assert_equal_to_rounding(dy[n:2 * n], expected)
+    power = model.drive_power(0.0, q0, v0) if case.driven else 0.0
+    assert_equal_to_rounding(dy[-1], power)
+    config, velocity = model.engine_state(0.0, q0, v0)
+    (acc, _), = pinocchio_steps(model, [(config, velocity)])
+    np.testing.assert_array_equal(acc, model.engine_dynamics(config, velocity)[0])
 
 
 def test_the_bench_table_names_each_rows_bare_loop():

@@ -74,8 +74,8 @@ def test_an_overflow_at_the_random_states_is_a_failing_row_with_its_reason():
     with pytest.raises(ArithmeticError, match="book: accelerations at random state 0: OverflowError"):
         evaluate(case, "book", case.sample_states())
     rows, _ = pointwise(case)
-    failed = [r for r in rows if "book" in r["sources"]]
-    assert failed and all(r["status"] == "fail" and "OverflowError" in r["detail"] and r["error"] is None
+    failed = [r for r in rows if "book" in r.sources]
+    assert failed and all(r.status == "fail" and "OverflowError" in r.detail and r.error is None
                           for r in failed)
 
 
@@ -87,14 +87,14 @@ def test_random_parameter_sets_are_physical_beside_an_override(ixx):
     assert missing == 0 and len(sets) == case.spec["sample"]["params"]["sets"]
     assert all("Ixx" not in s for s in sets)  # the override is not a random value
     rows = random_parameters(case)
-    assert rows and all(r["status"] == "pass" for r in rows)
+    assert rows and all(r.status == "pass" for r in rows)
 
 
 def test_random_sets_that_cannot_be_drawn_are_a_failing_row(monkeypatch):
     monkeypatch.setattr("dyncheck.checks.DRAWS", 1)
     case = load_case("spinning_top", Ixx=0.0029393)
     rows = random_parameters(case)
-    assert rows[0]["status"] == "fail" and "not physical in 1 draws" in rows[0]["detail"]
+    assert rows[0].status == "fail" and "not physical in 1 draws" in rows[0].detail
 
 
 @pytest.mark.parametrize("field, text, message", [

@@ -6,19 +6,20 @@ import pytest
 
 from dyncheck import case as case_module
 from dyncheck import ceilings
-from dyncheck.checks import row, run_sources, trajectory
+from dyncheck.checks import run_sources, trajectory
+from dyncheck.results import row
 
 
 @pytest.mark.parametrize("error", [0.0, 0.5, 2.0])
 def test_a_row_whose_tolerance_is_above_its_ceiling_is_inconclusive_whatever_its_error(error):
-    r = row("trajectory", "psi", "mujoco vs tight reference", error, 21.0, "MuJoCo RK4", ceiling=ceilings.RUN)
-    assert r["status"] == "inconclusive"
-    assert "above the ceiling 1e-03" in r["detail"] and r["detail"].endswith("MuJoCo RK4")
+    r = row("trajectory", "psi", ("mujoco", "tight reference"), error, 21.0, "MuJoCo RK4", ceiling=ceilings.RUN)
+    assert r.status == "inconclusive"
+    assert "above the ceiling 1e-03" in r.detail and r.detail.endswith("MuJoCo RK4")
 
 
 def test_a_row_at_its_ceiling_is_judged():
-    assert row("energy", "drift", "mujoco", 2e-3, 1e-3, ceiling=1e-3)["status"] == "fail"
-    assert row("energy", "drift", "mujoco", 5e-4, 1e-3, ceiling=1e-3)["status"] == "pass"
+    assert row("energy", "drift", ("mujoco",), 2e-3, 1e-3, ceiling=1e-3).status == "fail"
+    assert row("energy", "drift", ("mujoco",), 5e-4, 1e-3, ceiling=1e-3).status == "pass"
 
 
 def test_a_mujoco_step_too_coarse_to_prove_anything_is_not_a_pass(tmp_path):
@@ -32,23 +33,23 @@ def test_a_mujoco_step_too_coarse_to_prove_anything_is_not_a_pass(tmp_path):
         text = text.replace(old, new, 1)
     (folder / "case.toml").write_text(text)
     case = case_module.Case(folder)
-    rows = [r for r in trajectory(case, run_sources(case)) if r["sources"] == "mujoco vs tight reference"]
-    assert rows and max(r["error"] for r in rows) > 0.1  # the run is far off, as the issue measured
-    assert not any(r["status"] == "pass" for r in rows), rows
-    assert {r["status"] for r in rows} <= {"inconclusive", "fail"}
+    rows = [r for r in trajectory(case, run_sources(case)) if r.comparison == "mujoco vs tight reference"]
+    assert rows and max(r.error for r in rows) > 0.1  # the run is far off, as the issue measured
+    assert not any(r.status == "pass" for r in rows), rows
+    assert {r.status for r in rows} <= {"inconclusive", "fail"}
 
 
 def test_the_book_s_listing_runs_are_judged_at_a_figure_s_resolution(results):
     """'program vs tight reference' once passed with tolerances of 2 to 42 (relative): its rows are now
     judged at LISTING, and the listings that stray are registered findings."""
-    rows = [r for res in results.values() for r in res["rows"] if r["sources"] == "program vs tight reference"]
-    assert rows and all(r["tolerance"] == ceilings.LISTING for r in rows)
-    strayed = {r["case"] for r in rows if r["error"] > ceilings.LISTING}
+    rows = [(name, r) for name, res in results.items() for r in res.rows if r.comparison == "program vs tight reference"]
+    assert rows and all(r.tolerance == ceilings.LISTING for _, r in rows)
+    strayed = {name for name, r in rows if r.error > ceilings.LISTING}
     assert strayed == {"spring_pendulum", "double_pendulum", "spinning_top"}
-    assert all(r["status"] == "finding" for r in rows if r["error"] > ceilings.LISTING)
+    assert all(r.status == "finding" for _, r in rows if r.error > ceilings.LISTING)
 
 
 def test_no_row_of_the_book_s_cases_passes_above_its_ceiling(results):
-    rows = [r for res in results.values() for r in res["rows"] if r["tolerance"] is not None]
-    assert rows and all(r["tolerance"] <= r["ceiling"] for r in rows if r["status"] == "pass")
-    assert not [r for r in rows if r["status"] == "inconclusive"]
+    rows = [r for res in results.values() for r in res.rows if r.tolerance is not None]
+    assert rows and all(r.tolerance <= r.ceiling for r in rows if r.status == "pass")
+    assert not [r for r in rows if r.status == "inconclusive"]

@@ -11,22 +11,22 @@ from reference import spring_pendulum
 
 def test_every_check_passes_or_is_a_registered_finding(results):
     for name, res in results.items():
-        bad = [r for r in res["rows"] if r["status"] not in ("pass", "finding")]
+        bad = [r for r in res.rows if r.status not in ("pass", "finding")]
         assert not bad, bad
 
 
 def test_engines_and_reference_agree_pointwise_to_1e9(results):
     for res in results.values():
-        rows = [r for r in res["rows"] if r["check"] == "pointwise" and "book" not in r["sources"]]
-        assert rows and all(r["error"] <= 1e-9 for r in rows)
+        rows = [r for r in res.rows if r.check == "pointwise" and "book" not in r.sources]
+        assert rows and all(r.error <= 1e-9 for r in rows)
 
 
 def test_the_books_reaction_is_a_finding_of_the_size_of_the_missing_term(results):
-    rows = [r for r in results["spring_pendulum"]["rows"] if r["finding"] == "1.8.3-R"]
-    assert {r["quantity"] for r in rows} == {"R", "a_E_x", "drive_power", "work-energy balance"}
-    assert all(r["status"] == "finding" for r in rows)
+    rows = [r for r in results["spring_pendulum"].rows if r.finding == "1.8.3-R"]
+    assert {r.quantity for r in rows} == {"R", "a_E_x", "drive_power", "work-energy balance"}
+    assert all(r.status == "finding" for r in rows)
     # The missing term m L psi' Omega cos(psi) is a large part of R over the random states.
-    assert all(r["error"] > 0.1 for r in rows if r["quantity"] == "R")
+    assert all(r.error > 0.1 for r in rows if r.quantity == "R")
 
 
 def test_a_finding_that_stops_reproducing_fails(monkeypatch):
@@ -38,17 +38,17 @@ def test_a_finding_that_stops_reproducing_fails(monkeypatch):
     case = dyncheck.load_case("spring_pendulum")
     rows, _ = pointwise(case)
     rows = apply_findings(case, rows)
-    stale = [r for r in rows if r["finding"] == "1.8.3-R"]
-    assert stale and all(r["status"] == "fail" and "no longer reproduces" in r["detail"] for r in stale)
+    stale = [r for r in rows if r.finding == "1.8.3-R"]
+    assert stale and all(r.status == "fail" and "no longer reproduces" in r.detail for r in stale)
 
 
 def test_every_source_gives_the_same_trajectory_and_mujoco_holds_the_drive(results):
     res = results["spring_pendulum"]
-    driven = [r for r in res["rows"] if r["quantity"] == "driven rate"]
-    assert driven and driven[0]["status"] == "pass"
-    tight = res["runs"]["reference"][1]
+    driven = [r for r in res.rows if r.quantity == "driven rate"]
+    assert driven and driven[0].status == "pass"
+    tight = res.runs["reference"].twin
     for source in ("book", "pinocchio", "mujoco"):
-        run = res["runs"][source][0]
+        run = res.runs[source].run
         assert np.max(np.abs(run["psi"] - tight["psi"])) < 1e-7
 
 
@@ -68,16 +68,16 @@ def test_unknown_method_is_named():
 
 
 def test_the_programs_are_checked_against_their_own_equations_and_figures(results):
-    rows = {(r["case"], r["check"], r["quantity"], r["sources"]): r for res in results.values() for r in res["rows"]}
+    rows = {(name, r.check, r.quantity, r.comparison): r for name, res in results.items() for r in res.rows}
     same = "program vs book equations, same integrator"
     # The Pascal double pendulum computes with the book's closed forms: its run is the book's, bit for bit.
-    assert rows[("double_pendulum", "program", "theta2", same)]["error"] == 0.0
+    assert rows[("double_pendulum", "program", "theta2", same)].error == 0.0
     # The Matlab listing's bracket slip shows in its l'' and, integrated, in its run: a registered finding.
-    assert rows[("spring_pendulum", "program", "l_acc", "program vs reference")]["status"] == "finding"
-    assert rows[("spring_pendulum", "program", "l", same)]["status"] == "finding"
+    assert rows[("spring_pendulum", "program", "l_acc", "program vs reference")].status == "finding"
+    assert rows[("spring_pendulum", "program", "l", same)].status == "finding"
     # The book's double-pendulum figure holds the listing's run but not the exact motion.
-    assert rows[("double_pendulum", "figure", "theta2", "program vs book figure")]["status"] == "pass"
-    assert rows[("double_pendulum", "figure", "theta2", "tight reference vs book figure")]["status"] == "finding"
+    assert rows[("double_pendulum", "figure", "theta2", "program vs book figure")].status == "pass"
+    assert rows[("double_pendulum", "figure", "theta2", "tight reference vs book figure")].status == "finding"
 
 
 def test_a_case_without_a_program_says_so():
@@ -89,8 +89,8 @@ def test_an_override_that_hides_a_finding_passes_with_a_note():
     """Without the spin (Omega = 0) the missing Coriolis term vanishes: the book's R is then right."""
     case = dyncheck.load_case("spring_pendulum", alpha_rate=0.0, beta_rate=0.0)
     rows = apply_findings(case, pointwise(case)[0])
-    hidden = [r for r in rows if r["finding"] == "1.8.3-R" and r["quantity"] == "R"]
-    assert hidden and all(r["status"] == "pass" and "does not show" in r["detail"] for r in hidden)
+    hidden = [r for r in rows if r.finding == "1.8.3-R" and r.quantity == "R"]
+    assert hidden and all(r.status == "pass" and "does not show" in r.detail for r in hidden)
 
 
 def test_two_runs_give_identical_json(results):
@@ -98,15 +98,15 @@ def test_two_runs_give_identical_json(results):
     import json
 
     from dyncheck.checks import run_case
-    from dyncheck.cli import to_json
+    from dyncheck.results import to_json
     again = run_case(dyncheck.load_case("double_pendulum"))
     assert json.dumps(to_json([again])) == json.dumps(to_json([results["double_pendulum"]]))
 
 
 def test_random_parameter_sets_agree_and_say_what_was_tried(results):
-    rows = [r for r in results["spring_pendulum"]["rows"] if r["check"] == "random parameters"]
-    assert {r["sources"] for r in rows} == {"reference vs mujoco", "reference vs pinocchio", "mujoco vs pinocchio"}
-    assert all(r["status"] == "pass" and "20 parameter sets (seed 31) x 20 states" in r["detail"] for r in rows)
+    rows = [r for r in results["spring_pendulum"].rows if r.check == "random parameters"]
+    assert {r.comparison for r in rows} == {"reference vs mujoco", "reference vs pinocchio", "mujoco vs pinocchio"}
+    assert all(r.status == "pass" and "20 parameter sets (seed 31) x 20 states" in r.detail for r in rows)
 
 
 def test_a_listing_that_blows_up_gives_unstable_rows_not_a_crash():
@@ -116,11 +116,11 @@ def test_a_listing_that_blows_up_gives_unstable_rows_not_a_crash():
     case = dyncheck.load_case("spring_pendulum", k=1e5)
     rows, runs = program_checks(case, pointwise(case)[1])
     rows = apply_findings(case, rows)
-    unstable = [r for r in rows if r["status"] == "unstable"]
-    assert runs == {} and {r["quantity"] for r in unstable} == {"psi", "psi_rate", "l", "l_rate"}
-    assert all("unstable: state not finite at t = " in r["detail"] and "(step " in r["detail"] for r in unstable)
+    unstable = [r for r in rows if r.status == "unstable"]
+    assert runs == {} and {r.quantity for r in unstable} == {"psi", "psi_rate", "l", "l_rate"}
+    assert all("unstable: state not finite at t = " in r.detail and "(step " in r.detail for r in unstable)
     # its formulas are still checked, with the listing's registered slips
-    assert {r["status"] for r in rows if r not in unstable} == {"pass", "finding"}
+    assert {r.status for r in rows if r not in unstable} == {"pass", "finding"}
 
 
 def test_a_scene_at_rest_is_judged_in_si_units_and_an_unmeasurable_order_says_so():
@@ -128,7 +128,7 @@ def test_a_scene_at_rest_is_judged_in_si_units_and_an_unmeasurable_order_says_so
     row passes (errors in SI units, not 0/0), and the convergence order, which cannot be measured
     (omega = 0), is a failing row that says why rather than a crash."""
     from dyncheck.checks import run_case
-    rows = run_case(dyncheck.load_case("double_pendulum", g=0.0))["rows"]
-    bad = [r for r in rows if r["status"] != "pass"]
-    assert [(r["check"], r["status"]) for r in bad] == [("convergence", "fail")]
-    assert "not measured" in bad[0]["detail"] and "omega" in bad[0]["detail"]
+    rows = run_case(dyncheck.load_case("double_pendulum", g=0.0)).rows
+    bad = [r for r in rows if r.status != "pass"]
+    assert [(r.check, r.status) for r in bad] == [("convergence", "fail")]
+    assert "not measured" in bad[0].detail and "omega" in bad[0].detail

@@ -1,19 +1,22 @@
 """The command line: exit codes, the table, JSON and reports."""
 
 import json
+from dataclasses import replace
 
 import pandas as pd
 import pytest
 
 import dyncheck
 from dyncheck import cli, stability, work_precision
+from dyncheck.stability import long_runs
+from dyncheck.results import RESULTS_VERSION, Status
 
 
 @pytest.fixture
 def canned(monkeypatch, results):
     """`run_case` answering from the session's results, and no studies (minutes; their page is
     tested below), so CLI tests cost no simulation."""
-    monkeypatch.setattr(cli, "run_case", lambda case: {**results[case.name], "case": case})
+    monkeypatch.setattr(cli, "run_case", lambda case: results[case.name])
     monkeypatch.setattr(cli, "study_case", lambda case: {
         "work_precision": pd.DataFrame(columns=work_precision.COLUMNS), "stability": []})
 
@@ -30,7 +33,8 @@ def test_run_exits_0_and_writes_the_json_of_the_design(canned, tmp_path, capsys)
     assert "finding" in capsys.readouterr().out
     data = json.loads(path.read_text())
     spring = next(c for c in data["cases"] if c["case"] == "spring_pendulum")
-    assert set(spring) == {"case", "section", "params", "checks", "findings"}
+    assert data["version"] == RESULTS_VERSION
+    assert set(spring) == {"case", "section", "params", "overrides", "checks", "findings"}
     assert set(spring["checks"][0]) == {"check", "quantity", "sources", "error", "tolerance", "ceiling", "status", "finding",
                                        "detail"}
     finding = next(f for f in spring["findings"] if f["id"] == "1.8.3-R")
@@ -42,9 +46,7 @@ def test_run_exits_0_and_writes_the_json_of_the_design(canned, tmp_path, capsys)
 def test_run_exits_1_when_a_check_fails(monkeypatch, results):
     def failing(case):
         res = results[case.name]
-        rows = [dict(r) for r in res["rows"]]
-        rows[0]["status"] = "fail"
-        return {**res, "case": case, "rows": rows}
+        return replace(res, rows=(replace(res.rows[0], status=Status.FAIL),) + res.rows[1:])
     monkeypatch.setattr(cli, "run_case", failing)
     assert cli.main(["run", "double_pendulum"]) == 1
 
@@ -63,7 +65,7 @@ def test_bad_input_exits_2_with_a_message(argv, message, capsys):
 
 def test_overrides_reach_the_run(monkeypatch, results):
     seen = []
-    monkeypatch.setattr(cli, "run_case", lambda case: seen.append(case) or {**results[case.name], "case": case})
+    monkeypatch.setattr(cli, "run_case", lambda case: seen.append(case) or results[case.name])
     assert cli.main(["run", "--set", "g=3.5"]) == 0
     assert {c.name for c in seen} == set(dyncheck.case_names())
     assert all(c.params["g"] == 3.5 and c.overrides == {"g": 3.5} for c in seen)
@@ -91,8 +93,7 @@ def test_a_scene_that_disagrees_with_its_case_exits_2(monkeypatch, tmp_path, cap
     shutil.copytree(case_module.CASES_DIR, tmp_path / "cases")
     scene = tmp_path / "cases" / "double_pendulum" / "scene.xml"
     scene.write_text(scene.read_text().replace('mass="0.46"', 'mass="0.5"'))
-    monkeypatch.setattr(case_module, "CASES_DIR", tmp_path / "cases")
-    assert cli.main(["run", "double_pendulum"]) == 2
+    assert cli.main(["run", "double_pendulum", "--cases", str(tmp_path / "cases")]) == 2
     assert "scene.xml of case 'double_pendulum': body 'link2' mass[0] is 0.5" in capsys.readouterr().err
 
 
@@ -107,7 +108,7 @@ def test_a_failed_report_leaves_the_previous_one_intact(canned, monkeypatch, tmp
     assert cli.main(["report", "double_pendulum", "--out", str(tmp_path)]) == 0
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
 
-    def broken(res, path):
+    def broken(result, case, path):
         path.write_text("half a figure")
         raise RuntimeError("disk full")
     monkeypatch.setattr(report, "figure_energy", broken)
@@ -124,10 +125,10 @@ def test_the_page_shows_the_studies(monkeypatch, results, tmp_path):
         case.spec["work_precision"].update(t_end=0.5, output_step=0.01, repeat=1, solution={"rtol": 1e-11, "max_step": 0.01},
                                            sweep={"reference": {"DOP853": [1e-5, 1e-8], "RK4": [1e-2]},
                                                   "mujoco": {"mujoco:RK4": [1e-2, 5e-3]}})
-        drift = {**stability._settings(case, "energy_drift"), "methods": ["explicit Euler", "semi-implicit Euler"],
+        drift = {**stability.settings_of(case, "energy_drift"), "methods": ["explicit Euler", "semi-implicit Euler"],
                  "dt": 0.02, "horizon": 2.0, "output_step": 0.02}
-        return {"work_precision": work_precision.sweep(case), "stability": [stability.energy_drift(case, drift)]}
-    monkeypatch.setattr(cli, "run_case", lambda case: {**results[case.name], "case": case})
+        return {"work_precision": work_precision.sweep(case), "stability": [long_runs.energy_drift(case, drift)]}
+    monkeypatch.setattr(cli, "run_case", lambda case: results[case.name])
     monkeypatch.setattr(cli, "study_case", small_studies)
     assert cli.main(["report", "double_pendulum", "--out", str(tmp_path)]) == 0
     page = (tmp_path / "double_pendulum.md").read_text()
@@ -142,9 +143,10 @@ def test_the_page_shows_the_studies(monkeypatch, results, tmp_path):
         assert (tmp_path / link).stat().st_size > 10_000, link
 
 
-def test_no_cases_folder_exits_2_saying_where_it_looked(monkeypatch, tmp_path, capsys):
+def test_no_cases_folder_exits_2_saying_where_it_looked(tmp_path, capsys):
     """A non-editable install copies the code but not cases/: say so, never run nothing and pass."""
-    from dyncheck import case as case_module
-    monkeypatch.setattr(case_module, "CASES_DIR", tmp_path / "cases")
-    assert cli.main(["run"]) == 2 and cli.main(["list"]) == 2
+    (tmp_path / "empty").mkdir()
+    assert cli.main(["run", "--cases", str(tmp_path / "missing")]) == 2
+    assert "no such folder" in capsys.readouterr().err
+    assert cli.main(["run", "--cases", str(tmp_path / "empty")]) == 2 and cli.main(["list", "--cases", str(tmp_path / "empty")]) == 2
     assert "no cases in" in capsys.readouterr().err

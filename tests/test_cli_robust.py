@@ -1,6 +1,7 @@
 """The command line and the files it writes, under bad paths, Ctrl-C, failures and concurrent writers."""
 
 import json
+from dataclasses import replace
 import multiprocessing
 import os
 import shutil
@@ -13,13 +14,14 @@ from dyncheck import cli, report
 from dyncheck.case import Case
 
 PISTON_FILES = {"piston.md", "index.md", "errata.md", "data/piston.json", "figures/piston_scene.png",
-                "figures/piston_energy.png", "figures/piston_reactions.png", "figures/piston_pointwise.png"}
+                "figures/piston_energy.png", "figures/piston_reactions.png", "figures/piston_pointwise.png",
+                "results/piston/value.json", "results/piston/arrays.npz"}
 
 
 @pytest.fixture
 def canned(monkeypatch, results):
     """`run_case` answering from the session's results, without studies (see tests/test_cli.py)."""
-    monkeypatch.setattr(cli, "run_case", lambda case: {**results[case.name], "case": case})
+    monkeypatch.setattr(cli, "run_case", lambda case: replace(results[case.name], overrides=dict(case.overrides)))
 
 
 @pytest.fixture
@@ -31,7 +33,7 @@ def quick_figures(monkeypatch):
 
 def result(results, name):
     """The session's results of case `name`, as the report takes them without studies."""
-    return {**results[name], "studies": None}
+    return results[name]
 
 
 def main_interrupted(argv):
@@ -93,7 +95,7 @@ def test_run_json_replaces_the_previous_file_whole_or_not_at_all(canned, monkeyp
 
 def test_a_case_named_twice_runs_once(monkeypatch, results, capsys):
     ran = []
-    monkeypatch.setattr(cli, "run_case", lambda case: ran.append(case.name) or {**results[case.name], "case": case})
+    monkeypatch.setattr(cli, "run_case", lambda case: ran.append(case.name) or results[case.name])
     assert cli.main(["run", "piston", "piston"]) == 0
     assert ran == ["piston"] and capsys.readouterr().out.count("== piston") == 1
 
@@ -115,7 +117,7 @@ def test_ctrl_c_during_run_prints_what_finished_and_exits_130(monkeypatch, resul
     def interrupted_on_the_second(case):
         if case.name != "piston":
             raise KeyboardInterrupt
-        return {**results[case.name], "case": case}
+        return results[case.name]
     monkeypatch.setattr(cli, "run_case", interrupted_on_the_second)
     path = tmp_path / "out.json"
     assert main_interrupted(["run", "piston", "rotating_particle", "spinning_top", "--json", str(path)]) == 130
@@ -145,7 +147,7 @@ def test_a_section_of_any_form_is_sorted_and_reported(section, position, results
     shutil.copytree(case_module.CASES_DIR / "piston", folder)
     toml = folder / "case.toml"
     toml.write_text(toml.read_text().replace('section = "1.7"', f'section = "{section}"', 1))
-    res = {**results["piston"], "case": Case(folder), "studies": None}
+    res = replace(results["piston"], folder=str(folder), spec=Case(folder).spec)
     out = tmp_path / "out"
     shutil.copytree(case_module.CASES_DIR.parent / "reports" / "data", out / "data",
                     ignore=shutil.ignore_patterns("piston.json"))  # the other five cases, 1.8.1 to 1.10

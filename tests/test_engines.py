@@ -2,7 +2,10 @@
 
 import shutil
 
+import mujoco
+import mujoco.rollout
 import numpy as np
+import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -10,6 +13,7 @@ from hypothesis import strategies as st
 import dyncheck
 from dyncheck.case import Case
 from dyncheck.checks import compare, evaluate
+from engines import euler
 
 TOL = 1e-9  # the cases' pointwise tolerance (see case.toml for its derivation)
 
@@ -108,3 +112,65 @@ def test_a_bad_expression_in_a_case_file_is_named(tmp_path):
     (folder / "case.toml").write_text(text)
     with pytest.raises(ValueError, match=r"case.toml: cannot evaluate 'pi/sixth': name 'sixth' is not defined"):
         Case(folder).initial
+
+
+def top_states(count=8):
+    """(quaternion (w, x, y, z), body angular velocity) pairs of the top, upright ones among them."""
+    rng = np.random.default_rng(3)
+    quaternions = np.vstack([[1.0, 0.0, 0.0, 0.0], euler.quaternion([0.3, 1e-9, 2.0]), rng.normal(size=(count, 4))])
+    quaternions /= np.linalg.norm(quaternions, axis=1)[:, None]
+    return list(zip(quaternions, rng.uniform(-50, 50, (len(quaternions), 3))))
+
+
+def top_applied(case):
+    return np.array([0.0, 0.0, case.params["Mz"]])  # case.toml's [scene] applied: Mz about the top's axis
+
+
+def assert_close(engine, adapter):
+    # The same engine call on the same numbers: equal to rounding.
+    np.testing.assert_allclose(adapter, engine, rtol=0, atol=1e-12 * max(1.0, np.max(np.abs(engine))))
+
+
+def test_mujoco_ball_joint_acceleration_is_mj_forward():
+    case = dyncheck.load_case("spinning_top")
+    m = mujoco.MjModel.from_xml_path(str(case.folder / "scene.xml"))
+    d = mujoco.MjData(m)
+    for quaternion, omega in top_states():
+        d.qpos[:], d.qvel[:], d.qfrc_applied[:] = quaternion, omega, top_applied(case)
+        mujoco.mj_forward(m, d)
+        assert_close(d.qacc, case.model("mujoco").ball_joint_acceleration(quaternion, omega))
+
+
+def test_pinocchio_ball_joint_acceleration_is_aba():
+    case = dyncheck.load_case("spinning_top")
+    m = pin.buildModelFromUrdf(str(case.folder / "scene.urdf"), pin.JointModelSpherical(), "tip")
+    m.gravity.linear[:] = [0.0, 0.0, -case.params["g"]]  # URDF has no gravity
+    d = m.createData()
+    for quaternion, omega in top_states():
+        acc = pin.aba(m, d, np.roll(quaternion, -1), omega, top_applied(case))  # Pinocchio's (x, y, z, w)
+        assert_close(acc, case.model("pinocchio").ball_joint_acceleration(quaternion, omega))
+
+
+def test_mujoco_ball_joint_quaternions_are_mujoco_rollout():
+    case = dyncheck.load_case("spinning_top")
+    q0, v0, _ = case.initial
+    dt, nstep = case.integration["mujoco_step"], 200
+    m = mujoco.MjModel.from_xml_path(str(case.folder / "scene.xml"))
+    m.opt.timestep, m.opt.integrator = dt, mujoco.mjtIntegrator.mjINT_RK4
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = euler.quaternion(q0), euler.angular_velocity(q0, v0)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    start = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, d, start, spec)
+    states, _ = mujoco.rollout.rollout(m, d, start[None], top_applied(case)[None, None], nstep=nstep,
+                                       control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
+    quaternions = case.model("mujoco").ball_joint_quaternions(q0, v0, nstep * dt, dt, "RK4")
+    assert quaternions.shape == (nstep + 1, 4)
+    assert_close(np.vstack([start, states[0]])[:, 1:1 + m.nq], quaternions)  # time, qpos, qvel, ...
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pinocchio"])
+def test_ball_joint_methods_refuse_a_scene_of_other_joints(engine):
+    model = dyncheck.load_case("piston").model(engine)
+    with pytest.raises(ValueError, match=r"scene\.(xml|urdf): ball_joint_acceleration needs a scene whose only joint"):
+        model.ball_joint_acceleration(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3))

@@ -64,8 +64,7 @@ def test_a_hostile_case_file_exits_2_and_runs_nothing(tmp_path, monkeypatch, cap
     folder = plant(tmp_path, "spring_pendulum", 'q = ["pi/6", 0.0]', f'q = ["{ESCAPE.format(marker=marker)}", 0.0]')
     with pytest.raises(ValueError, match=r"case.toml: cannot evaluate .*is not allowed.*\(at initial.q\[0\]\)$"):
         Case(folder)
-    monkeypatch.setattr(dyncheck.case, "CASES_DIR", tmp_path)
-    assert main(["list"]) == 2
+    assert main(["list", "--cases", str(tmp_path)]) == 2
     assert "dyncheck: error: " in capsys.readouterr().err
     assert not marker.exists()
 
@@ -148,7 +147,8 @@ def test_every_expression_along_a_run_evaluates_as_before(name):
     case = dyncheck.load_case(name)
     t = np.linspace(0.0, 1.0, 41)
     rng = np.random.default_rng(0)
-    columns = list(case.coords) + [f"{c}_rate" for c in case.coords] + list(case.reaction_names) + ["energy", "work"]
+    columns = list(case.coords) + [f"{c}_rate" for c in case.coords] + list(case.reaction_names) + ["energy", "work"] \
+        + [f"{body}_{axis}" for body in case.scene["paths"] for axis in "xyz"]  # dyncheck.checks.with_paths
     run = pd.DataFrame({c: rng.uniform(-1.0, 1.0, t.size) for c in columns}, index=pd.Index(t, name="t"))
     names = namespace(case, run)
     report, program = case.spec["report"], case.spec.get("program", {})

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dyncheck.checks import findings_of
+
 from dyncheck.localise import edits, localise
 
 RNG = np.random.default_rng(7)
@@ -37,7 +37,7 @@ def test_an_unrelated_expression_is_reported_unexplained():
 
 
 def test_the_books_errors_are_localised(results):
-    localised = {f["id"]: f["localised"] for res in results.values() for f in findings_of(res)}
+    localised = {f.id: f.localised for res in results.values() for f in res.findings}
     assert localised["1.8.3-R"].startswith("R: `L * psi_rate * Omega * cos(psi)` x 2")
     assert "close the bracket before `sin(psi)` so that it leaves out `g * cos(psi)`" in localised["1.8.3-listing-ldd"]
     assert "swap sin/cos in `sin(th)` in `2 * Ld * w * sin(th)`" in localised["1.7-eq1.24"]

@@ -5,6 +5,7 @@ import json
 import re
 import shutil
 import tomllib
+from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
@@ -15,6 +16,8 @@ from dyncheck import case as case_module
 from dyncheck import cli, schema
 from dyncheck.case import Case
 
+DOCS = Path(__file__).resolve().parent.parent / "docs" / "case-file.md"
+
 
 def test_every_case_file_validates():
     for name in dyncheck.case_names():
@@ -24,10 +27,9 @@ def test_every_case_file_validates():
 
 
 @pytest.fixture
-def cases(monkeypatch, tmp_path):
-    """A copy of the cases folder that the command line reads instead of the real one."""
+def cases(tmp_path):
+    """A copy of the cases folder, for the command line's `--cases`."""
     shutil.copytree(case_module.CASES_DIR, tmp_path / "cases")
-    monkeypatch.setattr(case_module, "CASES_DIR", tmp_path / "cases")
     return tmp_path / "cases"
 
 
@@ -46,8 +48,9 @@ BAD_CASE_FILES = [
     ("spring_pendulum", "t_end = 3.0\n", "", "initial.t_end is missing (a number or an expression in quotes, > 0)"),
     ("spring_pendulum", "count = 100", 'count = "100"', "sample.count = '100' is a string, not an integer"),
     ("spring_pendulum", 'coords = ["psi", "l"]', 'coords = "psi, l"', "coords = 'psi, l' is a string, not an array"),
-    ("spring_pendulum", 'unit = "kg"', 'unit = "g"', "params.m.unit = 'g' is not the unit of m, 'kg'"),
-    ("spring_pendulum", 'unit = "N/m"', 'unit = "N/mm"', "params.k.unit = 'N/mm' is not the unit of k, 'N/m'"),
+    ("spring_pendulum", 'unit = "kg"', 'unit = "g"', "params.m.unit = 'g' is not a known unit"),
+    ("spring_pendulum", 'unit = "N/m"', 'unit = "N/mm"',
+     "params.k.unit = 'N/mm' is not a known unit (did you mean 'N/m'?)"),
     ("spring_pendulum", "m = { value = 0.2,", "m = { value = 0.0,",
      "params.m.value = 0.0 must be > 0 (m is a mass, in kg)"),
     ("spring_pendulum", "m = { value = 0.2,", "m = { value = -1,",
@@ -55,12 +58,13 @@ BAD_CASE_FILES = [
     ("spring_pendulum", "k = { value = 2000.0,", "k = { value = 0.0,",
      "params.k.value = 0.0 must be > 0 (k is a stiffness, in N/m)"),
     ("rotating_pendulum", "l = { value = 0.1,", "l = { value = -0.1,",
-     "params.l.value = -0.1 must be > 0 (l is a length, in m)"),
+     "params.l.exclusive_minimum = 0.0 excludes the default params.l.value = -0.1: l must be > 0"),
     ("spinning_top", "Izz = { value = 0.002258,", "Izz = { value = 0.0023,",
-     "Ixx = 0.0029393, Izz = 0.0023, m = 0.582, h = 0.0558 break the triangle inequality A + B >= C"),
+     "constraints[1] = '2*(Ixx - m*h**2) - Izz + 1e-5' is -3.568e-05 at Ixx = 0.0029393, m = 0.582, h = 0.0558, "
+     "Izz = 0.0023, not >= 0: the triangle inequality A + B >= C"),
     ("spinning_top", "Ixx = { value = 0.0029393,", "Ixx = { value = 0.0018,",
-     "Ixx = 0.0018, m = 0.582, h = 0.0558 give the top a moment of inertia about its centre of mass "
-     "A = Ixx - m h^2 = -1.214e-05 kg m^2, not > 0"),
+     "constraints[0] = 'Ixx - m*h**2' is -1.214e-05 at Ixx = 0.0018, m = 0.582, h = 0.0558, not > 0: the top's "
+     "moment of inertia about its centre of mass"),
     ("spring_pendulum", "rtol = 1e-10", "rtol = inf", "integration.rtol = inf is not finite"),
     ("spring_pendulum", "output_step = 1e-3", "output_step = 0.0", "integration.output_step = 0.0 must be > 0"),
     ("spring_pendulum", "output_step = 1e-3", "output_step = 1.5e-4",
@@ -100,7 +104,7 @@ BAD_CASE_FILES = [
 @pytest.mark.parametrize("name, old, new, message", BAD_CASE_FILES)
 def test_a_bad_case_file_exits_2_naming_file_field_and_value(cases, capsys, name, old, new, message):
     edit(cases / name, "case.toml", old, new)
-    assert cli.main(["run", name]) == 2
+    assert cli.main(["run", name, "--cases", str(cases)]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"dyncheck: error: {cases / name / 'case.toml'}: ") and err.count("\n") == 1, err
     assert all(part in err for part in ((message,) if isinstance(message, str) else message)), err
@@ -110,11 +114,13 @@ BAD_COMMAND_LINES = [
     (["run", "spring_pendulum", "--set", "g=nan"], "spring_pendulum/case.toml: override g = nan is not finite"),
     (["run", "spring_pendulum", "--set", "m=abc"], "spring_pendulum/case.toml: override m = 'abc' is not a number"),
     (["run", "spring_pendulum", "--set", "m=0"], "override m = 0.0 must be > 0 (m is a mass, in kg)"),
-    (["run", "spring_pendulum", "--set", "g=-9.81"], "override g = -9.81 must be >= 0 (g is the magnitude of gravity"),
-    (["run", "rotating_pendulum", "--set", "l=-0.1"], "override l = -0.1 must be > 0 (l is a length, in m)"),
+    (["run", "spring_pendulum", "--set", "g=-9.81"], "override g = -9.81 must be >= 0 (params.g.minimum)"),
+    (["run", "rotating_pendulum", "--set", "l=-0.1"], "override l = -0.1 must be > 0 (params.l.exclusive_minimum)"),
     (["run", "spinning_top", "--set", "Ixx=0.0028"],
-     "Ixx = 0.0028 (override), Izz = 0.002258, m = 0.582, h = 0.0558 break the triangle inequality A + B >= C"),
-    (["run", "spinning_top", "--set", "h=0.08"], "Ixx = 0.0029393, m = 0.582, h = 0.08 (override) give the top"),
+     "constraints[1] = '2*(Ixx - m*h**2) - Izz + 1e-5' is -0.0002723 at Ixx = 0.0028 (override), m = 0.582, "
+     "h = 0.0558, Izz = 0.002258, not >= 0: the triangle inequality A + B >= C"),
+    (["run", "spinning_top", "--set", "h=0.08"],
+     "constraints[0] = 'Ixx - m*h**2' is -0.0007855 at Ixx = 0.0029393, m = 0.582, h = 0.08 (override), not > 0"),
     (["run", "spring_pendulum", "--set", "mm=1"],
      "--set mm: no selected case has a parameter 'mm' (did you mean 'm'?)"),
     (["run", "spring_pendulm"], "unknown case 'spring_pendulm' (did you mean 'spring_pendulum'?); known cases: "),
@@ -135,8 +141,125 @@ def test_the_book_s_unrealisable_inertias_load_and_the_scene_s_margin_is_the_lim
     top = dyncheck.load_case("spinning_top")
     a = top.params["Ixx"] - top.params["m"] * top.params["h"] ** 2
     dyncheck.load_case("spinning_top", Izz=2 * a + 0.99e-5).model("mujoco")
-    with pytest.raises(ValueError, match="break the triangle inequality"):
+    with pytest.raises(ValueError, match="the triangle inequality"):
         dyncheck.load_case("spinning_top", Izz=2 * a + 1.01e-5)
+
+
+# -- bounds, constraints and the derivation of a case file ----------------------------------------
+
+L0 = 'l0 = { value = 0.1, unit = "m", exclusive_minimum = 0.0,'  # spring_pendulum's spring length
+
+
+@pytest.mark.parametrize("key, bound, within, beyond, relation", [
+    ("minimum", 0.05, 0.05, 0.04, ">="), ("exclusive_minimum", 0.05, 0.051, 0.05, ">"),
+    ("maximum", 0.5, 0.5, 0.51, "<="), ("exclusive_maximum", 0.5, 0.49, 0.5, "<"),
+])
+def test_a_bound_refuses_an_override_beyond_it(cases, key, bound, within, beyond, relation):
+    edit(cases / "spring_pendulum", "case.toml", L0, f'l0 = {{ value = 0.1, unit = "m", {key} = {bound},')
+    Case(cases / "spring_pendulum", {"l0": within})
+    with pytest.raises(ValueError) as error:
+        Case(cases / "spring_pendulum", {"l0": beyond})
+    assert str(error.value) == (f"{cases / 'spring_pendulum' / 'case.toml'}: override l0 = {beyond!r} must be "
+                                f"{relation} {bound:g} (params.l0.{key})")
+
+
+def test_a_bound_refuses_a_random_range_beyond_it(cases):
+    edit(cases / "spring_pendulum", "case.toml", "l0 = [0.1, 0.3]", "l0 = [0.0, 0.3]")
+    with pytest.raises(ValueError, match=re.escape("sample.params.ranges.l0 = [0.0, 0.3] leaves the physical "
+                                                   "values: l0 must be > 0 (params.l0.exclusive_minimum)")):
+        Case(cases / "spring_pendulum")
+
+
+@pytest.mark.parametrize("bound, message", [
+    ("maximum = 0.05", "params.l0.maximum = 0.05 excludes the default params.l0.value = 0.1: l0 must be <= 0.05"),
+    ("exclusive_minimum = 0.1", "params.l0.exclusive_minimum = 0.1 excludes the default params.l0.value = 0.1: "
+                                "l0 must be > 0.1"),
+])
+def test_a_bound_that_excludes_the_default_is_refused(cases, bound, message):
+    edit(cases / "spring_pendulum", "case.toml", L0, f'l0 = {{ value = 0.1, unit = "m", {bound},')
+    with pytest.raises(ValueError, match=re.escape(message)):
+        Case(cases / "spring_pendulum")
+
+
+def with_constraint(folder, expression, strict=False):
+    """The case in `folder` with one [[constraints]] entry appended."""
+    text = (folder / "case.toml").read_text()
+    (folder / "case.toml").write_text(text + f'\n[[constraints]]\nexpression = "{expression}"\n'
+                                      + ("strict = true\n" if strict else "") + 'why = "the spring is long"\n')
+
+
+def test_a_constraint_refuses_an_override_naming_it_its_value_and_its_parameters(cases):
+    with_constraint(cases / "spring_pendulum", "l0 - 2*r")  # l0 = 0.1, r = 0.1: -0.1
+    with pytest.raises(ValueError) as error:
+        Case(cases / "spring_pendulum", {"l0": 0.15})
+    assert str(error.value) == (f"{cases / 'spring_pendulum' / 'case.toml'}: constraints[0] = 'l0 - 2*r' is "
+                                "-0.05 at l0 = 0.15 (override), r = 0.1, not >= 0: the spring is long")
+    Case(cases / "spring_pendulum", {"l0": 0.2})
+
+
+@pytest.mark.parametrize("strict", [False, True])
+def test_a_strict_constraint_refuses_zero(cases, strict):
+    with_constraint(cases / "spring_pendulum", "l0 - 0.1", strict)  # exactly 0 at the default l0 = 0.1
+    if not strict:
+        Case(cases / "spring_pendulum")
+        return
+    with pytest.raises(ValueError, match=re.escape("constraints[0] = 'l0 - 0.1' is 0 at l0 = 0.1, not > 0: the "
+                                                   "spring is long")):
+        Case(cases / "spring_pendulum")
+
+
+@pytest.mark.parametrize("expression, message", [
+    ("l0 - l00", "constraints[0].expression = 'l0 - l00' cannot be evaluated: name 'l00' is not defined "
+                 "(did you mean 'l0'?)"),
+    ("l0 -", "constraints[0].expression = 'l0 -' cannot be evaluated: invalid syntax"),
+    ("l0 / (r - 0.1)", "constraints[0].expression = 'l0 / (r - 0.1)' cannot be evaluated: float division by zero"),
+    ("l0 > r", "constraints[0].expression = 'l0 > r' is a comparison"),
+])
+def test_a_bad_constraint_gives_a_clean_error(cases, capsys, expression, message):
+    with_constraint(cases / "spring_pendulum", expression)
+    assert cli.main(["run", "spring_pendulum", "--cases", str(cases)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"dyncheck: error: {cases / 'spring_pendulum' / 'case.toml'}: {message}"), err
+
+
+@pytest.mark.parametrize("derivation, message", [
+    ("reference.spring_pendulm", "derivation = 'reference.spring_pendulm' names no importable module"),
+    ("nowhere.spring_pendulum", "derivation = 'nowhere.spring_pendulum' names no importable module"),
+    ("reference.spring_pendulum.x", "derivation = 'reference.spring_pendulum.x' names no importable module"),
+    ("equations.py", "derivation = 'equations.py' names no file in the case folder"),
+    ("reference/spring_pendulum", "derivation = 'reference/spring_pendulum' is neither a module name"),
+])
+def test_a_derivation_that_is_not_there_is_refused(cases, derivation, message):
+    edit(cases / "spring_pendulum", "case.toml", 'derivation = "reference.spring_pendulum"',
+         f'derivation = "{derivation}"')
+    with pytest.raises(ValueError, match=re.escape(message)):
+        Case(cases / "spring_pendulum")
+
+
+def test_a_derivation_may_be_a_file_in_the_case_folder(cases):
+    edit(cases / "spring_pendulum", "case.toml", 'derivation = "reference.spring_pendulum"',
+         'derivation = "equations.py"')
+    (cases / "spring_pendulum" / "equations.py").write_text("")
+    schema.validate(tomllib.loads((cases / "spring_pendulum" / "case.toml").read_text()),
+                    cases / "spring_pendulum" / "case.toml")
+
+
+def test_the_schema_names_no_case():
+    """Everything about one case is in its folder: the schema knows no case by name."""
+    text = Path(schema.__file__).read_text()
+    assert not [name for name in dyncheck.case_names() if name in text]
+
+
+def test_every_key_has_a_meaning():
+    keys = {key for key, _, _ in schema.keys()}
+    assert not keys - set(schema.MEANINGS), f"keys without a meaning in schema.MEANINGS: {keys - set(schema.MEANINGS)}"
+    assert not set(schema.MEANINGS) - keys, f"meanings of no key: {set(schema.MEANINGS) - keys}"
+    assert set(schema.KEY_UNITS) <= keys, f"units of no key: {set(schema.KEY_UNITS) - keys}"
+
+
+def test_the_case_file_reference_is_current():
+    assert DOCS.read_text() == schema.markdown(), \
+        "regenerate: python -c 'import dyncheck.schema as s; print(s.markdown(), end=\"\")' > docs/case-file.md"
 
 
 @pytest.mark.parametrize("scene, text, message", [
@@ -151,7 +274,7 @@ def test_a_scene_file_that_fails_to_load_exits_2(cases, capsys, scene, text, mes
         path.unlink()
     else:
         path.write_text(text)
-    assert cli.main(["run", "double_pendulum"]) == 2
+    assert cli.main(["run", "double_pendulum", "--cases", str(cases)]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"dyncheck: error: {path}") and message in err and err.count("\n") == 1, err
 

@@ -1,4 +1,4 @@
-"""Stability studies (dyncheck/stability.py): theory, the measured limits against it, blow-ups as data.
+"""Stability studies (dyncheck/stability/, and the cases' own studies.py): theory, the measured limits against it, blow-ups as data.
 
 Fast by default (a few seconds each): each test runs one study on a reduced set of its numbers.
 `pytest -m slow` runs every study of every case as the report does and draws the figures.
@@ -12,11 +12,12 @@ import pytest
 
 import dyncheck
 from dyncheck import stability
+from dyncheck.stability import common, long_runs
 from dyncheck.simulate import Unstable
 
 
 def settings(case, study, **changes):
-    out = stability._settings(case, study)
+    out = stability.settings_of(case, study)
     out.update(changes)
     return out
 
@@ -27,16 +28,16 @@ def test_linear_limits_of_the_schemes():
     """On x'' = -omega^2 x: semi-implicit Euler stable to omega h = 2, RK4 to 2 sqrt(2) (imaginary
     axis), explicit Euler never; over a finite horizon the limits move up by the growth allowed."""
     omega = 100.0
-    assert stability.spectral_radius("semi-implicit Euler", 1.999) == 1.0
-    assert stability.spectral_radius("semi-implicit Euler", 2.001) > 1.0
-    assert stability.spectral_radius("RK4", 2 * math.sqrt(2) - 1e-6) < 1.0 < stability.spectral_radius("RK4", 2.83)
-    assert np.all(stability.spectral_radius("explicit Euler", np.geomspace(1e-6, 3, 20)) > 1.0)
+    assert common.spectral_radius("semi-implicit Euler", 1.999) == 1.0
+    assert common.spectral_radius("semi-implicit Euler", 2.001) > 1.0
+    assert common.spectral_radius("RK4", 2 * math.sqrt(2) - 1e-6) < 1.0 < common.spectral_radius("RK4", 2.83)
+    assert np.all(common.spectral_radius("explicit Euler", np.geomspace(1e-6, 3, 20)) > 1.0)
     # Long horizon: the sharp limits; explicit Euler h = 2 ln(G) / (omega^2 span) for small omega h.
     span, growth = 1e4 / omega, 10.0
-    assert stability.limit_step("semi-implicit Euler", omega, span, growth) * omega == pytest.approx(2.0, rel=1e-4)
-    assert stability.limit_step("mujoco:implicitfast", omega, span, growth) * omega == pytest.approx(2.0, rel=1e-4)
-    assert stability.limit_step("RK4", omega, span, growth) * omega == pytest.approx(2 * math.sqrt(2), rel=1e-3)
-    h = stability.limit_step("explicit Euler", omega, span, growth)
+    assert common.limit_step("semi-implicit Euler", omega, span, growth) * omega == pytest.approx(2.0, rel=1e-4)
+    assert common.limit_step("mujoco:implicitfast", omega, span, growth) * omega == pytest.approx(2.0, rel=1e-4)
+    assert common.limit_step("RK4", omega, span, growth) * omega == pytest.approx(2 * math.sqrt(2), rel=1e-3)
+    h = common.limit_step("explicit Euler", omega, span, growth)
     assert h == pytest.approx(2 * math.log(growth) / (omega**2 * span), rel=1e-3)
 
 
@@ -46,11 +47,11 @@ def test_spring_softened_by_the_spin_and_k_crit():
     case = dyncheck.load_case("spring_pendulum")
     p = case.params
     omega = p["alpha_rate"] + p["beta_rate"]
-    psi, _, _, fast = stability.spring_linearisation(case, 1e5)
+    psi, _, _, fast = stability.case_module(case).spring_linearisation(case, 1e5)
     assert fast == pytest.approx(math.sqrt(1e5 / p["m"] - omega**2 * math.sin(psi) ** 2), rel=1e-6)
     k_crit = p["m"] * omega**2
-    assert stability.spring_linearisation(case, 0.99 * k_crit) is None
-    assert stability.spring_linearisation(case, 1.05 * k_crit)[1] > 10 * p["l0"]  # out at l -> infinity
+    assert stability.case_module(case).spring_linearisation(case, 0.99 * k_crit) is None
+    assert stability.case_module(case).spring_linearisation(case, 1.05 * k_crit)[1] > 10 * p["l0"]  # out at l -> infinity
 
 
 # -- 1. spring pendulum --------------------------------------------------------------------------
@@ -61,17 +62,17 @@ def stiff_spring():
     case = dyncheck.load_case("spring_pendulum")
     s = settings(case, "stable_step", k=[100.0, 1e5], methods=["semi-implicit Euler", "RK4", "mujoco:Euler"])
     start = time.perf_counter()
-    result = stability.stable_step(case, s)
+    result = stability.case_module(case).stable_step(case, s)
     return result, s, time.perf_counter() - start
 
 
 def test_semi_implicit_euler_blows_up_at_2_over_omega_within_the_bisection(stiff_spring):
     result, s, wall = stiff_spring
-    data = result["data"]
+    data = result.data
     for method in ("semi-implicit Euler", "mujoco:Euler", "RK4"):
         row = data[(data["k"] == 1e5) & (data["method"] == method)].iloc[0]
         assert row["status"] == "measured"
-        limit = stability.SHARP[method] / row["omega_fast"]
+        limit = common.SHARP[method] / row["omega_fast"]
         assert row["h_limit"] == pytest.approx(limit)
         # The theory (with the horizon's hair) lies in the bracket [no blow-up, blow-up], which is as
         # narrow as the bisection's resolution (plus one step of the grid T / integer).
@@ -87,16 +88,16 @@ def test_semi_implicit_euler_blows_up_at_2_over_omega_within_the_bisection(stiff
 
 def test_below_k_crit_the_exact_solution_runs_away_too(stiff_spring):
     result, _, _ = stiff_spring
-    data = result["data"]
+    data = result.data
     soft = data[data["k"] == 100.0]
     assert set(soft["status"]) == {"physical runaway"}
     exact = soft[soft["method"] == "exact (DOP853)"].iloc[0]
     assert 0 < exact["t_fail"] < 1.0
     for _, row in soft[soft["method"] != "exact (DOP853)"].iterrows():
         assert row["t_fail"] == pytest.approx(exact["t_fail"], abs=0.05)  # together with the physics
-    crit = result["series"]["crit"]
+    crit = result.series["crit"]
     assert crit["lo"] < crit["hi"] and abs(crit["hi"] / crit["theory"] - 1) < 0.02
-    assert any("k_crit = 159.9 N/m" in f for f in result["findings"])
+    assert any("k_crit = 159.9 N/m" in f for f in result.findings)
 
 
 def test_a_blown_up_run_is_recorded_with_time_and_step():
@@ -104,13 +105,13 @@ def test_a_blown_up_run_is_recorded_with_time_and_step():
     the bound; `attempt` turns both into data."""
     case = dyncheck.load_case("spring_pendulum", k=1e5)
     for method in ("semi-implicit Euler", "mujoco:RK4"):
-        out, fail = stability.attempt(lambda: stability.run_fixed(case, "book", method, 0.01, 0.5,
+        out, fail = common.attempt(lambda: common.run_fixed(case, "book", method, 0.01, 0.5,
                                                                   bound=100.0, index=1))
         assert out is None and fail["status"] == "unstable"
         assert 0 < fail["t"] <= 0.5 and fail["step"] > 0 and fail["why"]
-        assert "unstable at t = " in stability.describe(fail)
+        assert "unstable at t = " in common.describe(fail)
     with pytest.raises(Unstable):  # outside `attempt` it is the simulator's own exception
-        stability.run_fixed(case, "book", "RK4", 0.01, 0.5, bound=100.0, index=1)
+        common.run_fixed(case, "book", "RK4", 0.01, 0.5, bound=100.0, index=1)
 
 
 # -- 2. double pendulum --------------------------------------------------------------------------
@@ -118,24 +119,24 @@ def test_a_blown_up_run_is_recorded_with_time_and_step():
 def test_agreement_horizon_is_finite_positive_and_cheap():
     case = dyncheck.load_case("double_pendulum")
     start = time.perf_counter()
-    horizon, details = stability.agreement_horizon(case)
+    horizon, details = long_runs.agreement_horizon(case)
     assert time.perf_counter() - start < 4.0  # < 2 s on an idle machine
     assert math.isfinite(horizon) and horizon > 0
     assert details["within"] == (horizon >= case.initial[2])
     assert details["amplification"] > 1 and details["eps0"] * details["amplification"] < details["tol"]
     assert "agreement horizon" in details["sentence"]
     # A case without [stability.lyapunov] sets no limit.
-    horizon, details = stability.agreement_horizon(dyncheck.load_case("piston"))
+    horizon, details = long_runs.agreement_horizon(dyncheck.load_case("piston"))
     assert horizon == math.inf and details["within"]
 
 
 def test_lyapunov_exponent_tells_chaos_from_regular_motion():
     case = dyncheck.load_case("double_pendulum")
     chaotic = np.array([math.pi / 2, math.pi / 2])
-    t, logs = stability.benettin(case, chaotic, np.zeros(2), 8.0, 0.1, 1e-8, 1e-9)
+    t, logs = long_runs.benettin(case, chaotic, np.zeros(2), 8.0, 0.1, 1e-8, 1e-9)
     assert 5.0 < logs[-1] / t[-1] < 11.0  # ~7.6 1/s over 30 s
     q0, v0, _ = case.initial
-    t, logs = stability.benettin(case, q0, v0, 8.0, 0.1, 1e-8, 1e-9)
+    t, logs = long_runs.benettin(case, q0, v0, 8.0, 0.1, 1e-8, 1e-9)
     assert logs[-1] / t[-1] < 1.5  # regular: ln(stretch) stays ~6
 
 
@@ -143,16 +144,16 @@ def test_energy_drift_records_a_blow_up_as_data_and_shows_no_nan():
     case = dyncheck.load_case("double_pendulum")
     s = settings(case, "energy_drift", methods=["explicit Euler", "semi-implicit Euler", "mujoco:Euler"],
                  dt=0.02, horizon=2.0, output_step=0.02)
-    result = stability.energy_drift(case, s)
-    data = result["data"].set_index("method")
+    result = long_runs.energy_drift(case, s)
+    data = result.data.set_index("method")
     assert data.loc["explicit Euler", "status"] == "unstable"  # NaN at this step
     assert 0 < data.loc["explicit Euler", "t_fail"] <= 2.0 and data.loc["explicit Euler", "step_fail"] > 0
     assert data.loc["semi-implicit Euler", "status"] == "ran"
-    text = result["table"].to_string().lower()
+    text = result.table.to_string().lower()
     assert "nan" not in text and "unstable at t = " in text
-    assert any("explicit Euler: unstable at t = " in f for f in result["findings"])
+    assert any("explicit Euler: unstable at t = " in f for f in result.findings)
     # MuJoCo's Euler is the textbook semi-implicit Euler
-    assert any("mujoco:Euler = semi-implicit Euler" in f for f in result["findings"])
+    assert any("mujoco:Euler = semi-implicit Euler" in f for f in result.findings)
 
 
 # -- 3. spinning top -------------------------------------------------------------------------------
@@ -160,8 +161,8 @@ def test_energy_drift_records_a_blow_up_as_data_and_shows_no_nan():
 def test_euler_angle_error_grows_toward_zero_nutation_while_engines_stay_exact():
     case = dyncheck.load_case("spinning_top")
     s = settings(case, "euler_singularity", nutation=[1e-1, 1e-3, 1e-5, 1e-7], miss=[])
-    result = stability.euler_singularity(case, s)
-    data = result["data"]
+    result = stability.case_module(case).euler_singularity(case, s)
+    data = result.data
     ref = data[data["source"] == "reference (Euler angles)"].set_index("nutation")["error"]
     assert ref[1e-1] < 1e-14 and ref[1e-5] > 1e-10 and ref[1e-7] > 1e-5
     assert np.all(np.diff(ref.to_numpy()) > 0)  # grows as the nutation falls
@@ -171,12 +172,12 @@ def test_euler_angle_error_grows_toward_zero_nutation_while_engines_stay_exact()
 
 def test_sleeping_threshold_agrees_with_the_criterion_within_its_resolution():
     case = dyncheck.load_case("spinning_top")
-    result = stability.sleeping_top(case, settings(case, "sleeping_top"))
-    s = result["series"]
+    result = stability.case_module(case).sleeping_top(case, settings(case, "sleeping_top"))
+    s = result.series
     p = case.params
     criterion = 2 * math.sqrt(p["Ixx"] * p["m"] * p["g"] * p["h"]) / p["Izz"]
     assert s["criterion"] == pytest.approx(criterion)
-    resolution, bound = result["settings"]["resolution"], result["settings"]["bound"]
+    resolution, bound = result.settings["resolution"], result.settings["bound"]
     assert s["hi"] - s["lo"] <= resolution * criterion * 1.001
     # The first integrals' threshold for this bound and horizon lies in MuJoCo's bracket ...
     assert s["lo"] <= s["finite"] <= s["hi"]
@@ -194,7 +195,7 @@ def test_studies_follow_the_case_file():
     case.spec["stability"] = {"why": "x", "sleeping": {"why": "typo"}}
     with pytest.raises(ValueError, match="stability.sleeping is not a known study"):
         stability.studies(case)
-    case.spec["stability"] = {"sleeping_top": {"why": "no numbers"}}
+    case.spec["stability"] = {"module": "studies.py", "sleeping_top": {"why": "no numbers"}}
     with pytest.raises(ValueError, match="stability.sleeping_top lacks"):
         stability.validate(case)
 
@@ -208,8 +209,8 @@ def test_every_study_runs_in_budget_and_draws(name, tmp_path):
     assert time.perf_counter() - start < 90
     assert results
     for result in results:
-        assert result["findings"] and not result["data"].empty
-        assert "nan" not in result["table"].to_string().lower()
-        path = tmp_path / f"{name}_{result['study']}.png"
-        stability.figure(result, path)
+        assert result.findings and not result.data.empty
+        assert "nan" not in result.table.to_string().lower()
+        path = tmp_path / f"{name}_{result.study}.png"
+        stability.figure(case, result, path)
         assert path.stat().st_size > 10_000

@@ -12,9 +12,9 @@ from dyncheck.simulate import simulate as real_simulate
 def test_convergence_observes_the_orders():
     for name in ("double_pendulum", "spinning_top"):
         rows = work_precision.convergence(dyncheck.load_case(name))
-        assert [r["quantity"] for r in rows] == list(work_precision.EXPECTED_ORDER)
-        assert all(r["check"] == "convergence" and r["status"] == "pass" for r in rows), rows
-        assert all(0 < r["tolerance"] <= 0.25 for r in rows)  # an order off by one must fail
+        assert [r.quantity for r in rows] == list(work_precision.EXPECTED_ORDER)
+        assert all(r.check == "convergence" and r.status == "pass" for r in rows), rows
+        assert all(0 < r.tolerance <= 0.25 for r in rows)  # an order off by one must fail
 
 
 def test_convergence_fails_for_a_wrong_order(monkeypatch):
@@ -23,14 +23,14 @@ def test_convergence_fails_for_a_wrong_order(monkeypatch):
     swapped = lambda model, ic, t_end, method, **kw: real_simulate(
         model, ic, t_end, "explicit Euler" if method == "RK4" else method, **kw)
     monkeypatch.setattr(work_precision, "simulate", swapped)
-    rows = {r["quantity"]: r for r in work_precision.convergence(case)}
-    assert rows["RK4"]["status"] == "fail" and rows["RK4"]["error"] > 2.5
-    assert rows["explicit Euler"]["status"] == "pass"
+    rows = {r.quantity: r for r in work_precision.convergence(case)}
+    assert rows["RK4"].status == "fail" and rows["RK4"].error > 2.5
+    assert rows["explicit Euler"].status == "pass"
     # A wrong expectation fails too.
     monkeypatch.setattr(work_precision, "simulate", real_simulate)
     monkeypatch.setitem(work_precision.EXPECTED_ORDER, "semi-implicit Euler", 2)
-    rows = {r["quantity"]: r for r in work_precision.convergence(case)}
-    assert rows["semi-implicit Euler"]["status"] == "fail"
+    rows = {r.quantity: r for r in work_precision.convergence(case)}
+    assert rows["semi-implicit Euler"].status == "fail"
 
 
 def test_convergence_refuses_differences_at_rounding_level():

@@ -1,63 +1,59 @@
 """Stability studies: where integration methods fail, where the physics itself runs away, where the
-book's formulation is singular, how long a chaotic trajectory can be trusted (DESIGN.md, "Studies").
+book's formulation is singular, how long a chaotic trajectory can be trusted.
 
 Each case says in its `[stability]` table which studies it gets and with what numbers, each study
-in a sub-table named after it with a `why`; the studies of a case live in the module named after it,
-what they share in `common`:
+in a sub-table named after it with a `why`.  Studies that apply to any scene are here
+(`long_runs`: the finite-time Lyapunov exponent and agreement horizon, the long-run energy drift);
+a case's own studies live in the file its table names as `module`, whose `STUDIES` maps names to
+`common.Study` (run, figure, required keys), as the book's spring pendulum (the largest stable step
+against the stiffness) and top (the Euler-angle singularity, the sleeping top) do.
 
-    spring_pendulum   [stability.stable_step]        largest stable step of each method against k
-    double_pendulum   [stability.lyapunov]           finite-time Lyapunov exponent, agreement horizon
-                      [stability.energy_drift]       long-run energy error of each method
-    spinning_top      [stability.euler_singularity]  the Euler-angle equations near zero nutation
-                      [stability.sleeping_top]       the least spin of a stable upright top
+`studies(case)` runs them and returns one dyncheck.results.StudyResult per study; `figure(case,
+result, path)` draws one.  `validate(case)` checks the table at load.  A run that blows up (NaN, a
+state beyond its physical bound, MuJoCo resetting the simulation) is data: status "unstable" with
+time and step, never an exception out of a study and never a NaN in its table.
 
-`studies(case)` runs them and returns one result per study, a dict:
-
-    case, study, title, why      names and the case file's reason for the study's numbers
-    data                         tidy DataFrame of every number measured (NaN only where a status
-                                 column says why there is no number)
-    table                        the same for display: strings, no NaN ("unstable at t = ... (step n)")
-    findings                     plain-English sentences with the numbers, for the report page
-    series                       what the figure draws (arrays, theory curves)
-    settings                     the study's settings as used (expressions evaluated)
-    wall                         seconds the study took
-    data_passages                (euler_singularity only) the trajectories through the near-upright
-
-and `figure(result, path)` draws its PNG.  `validate(case)` checks the table (studies() calls it).
-A run that blows up (NaN, a state beyond its physical bound, MuJoCo resetting the simulation) is data: status "unstable" with time and step, never an
-exception out of a study and never a NaN in `table`.
-
-`agreement_horizon(case)` is for the trajectory check: how long two sources that differ by the
+`long_runs.agreement_horizon(case)` is for the trajectory check: how long two sources that differ by the
 integrators' error level can be expected to agree to a tolerance, from the finite-time growth of
 perturbations along the book's initial conditions (cheap: five trajectories over the case's horizon).
 """
 
 from dyncheck import ceilings
 
-# The package's interface: the studies, their figures, and the pieces the tests and checks call.
-from dyncheck.stability.common import SHARP, _settings, attempt, describe, limit_step, run_fixed, spectral_radius  # noqa: F401
-from dyncheck.stability.double_pendulum import (agreement_horizon, benettin, energy_drift, figure_energy_drift,  # noqa: F401
-                                                figure_lyapunov, lyapunov)
-from dyncheck.stability.spinning_top import euler_singularity, figure_euler_singularity, figure_sleeping_top, sleeping_top
-from dyncheck.stability.spring_pendulum import figure_stable_step, spring_linearisation, stable_step  # noqa: F401
+from dyncheck.case import load_file
+from dyncheck.stability.common import Study, settings_of
+from dyncheck.stability.long_runs import energy_drift, figure_energy_drift, figure_lyapunov, lyapunov
 
-
-# -- dispatch -----------------------------------------------------------------------------------
-
-STUDIES = {"stable_step": stable_step, "lyapunov": lyapunov, "energy_drift": energy_drift,
-           "euler_singularity": euler_singularity, "sleeping_top": sleeping_top}
-
-
-REQUIRED = {
-    "stable_step": ("k", "methods", "horizon", "growth", "resolution", "escape", "max_steps", "rtol", "k_resolution",
-                    "output_rows"),
-    "lyapunov": ("initial", "horizon", "renormalise", "d0", "rtol", "eps0", "tol", "check_rtol"),
-    "energy_drift": ("methods", "horizon", "dt", "rtol", "output_step"),
-    "euler_singularity": ("nutation", "precession", "spin_angle", "spin", "transverse", "direction", "passage_spin",
-                          "start_nutation", "miss", "passage_horizon", "passage_output", "mujoco_step", "rtol"),
-    "sleeping_top": ("start_nutation", "bound", "horizon", "mujoco_step", "bracket", "resolution"),
+# The studies any case may name.
+GENERIC = {
+    "lyapunov": Study(lyapunov, figure_lyapunov, ("initial", "horizon", "renormalise", "d0", "rtol", "eps0", "tol",
+                                                  "check_rtol", "rate_scale")),
+    "energy_drift": Study(energy_drift, figure_energy_drift, ("methods", "horizon", "dt", "rtol", "output_step")),
 }
-"""The keys each study's table must have (besides `why`); optional: `source`, `overrides`, `method`, `k_stiff`."""
+NOT_STUDIES = ("why", "module")  # the table's own keys
+
+
+def case_module(case):
+    """The case's own study module ([stability] module, a .py file in its folder; case.load_file); None
+    for a case without one."""
+    module = case.spec.get("stability", {}).get("module")
+    if module is None:
+        return None
+    path = case.folder / module
+    if not path.is_file():
+        raise ValueError(f"{case.file}: stability.module = {module!r}: no such Python file {path}")
+    return load_file(path)
+
+
+def available(case):
+    """The studies `case` may name: the generic ones and those of its own module."""
+    module = case_module(case)
+    if module is None:
+        return GENERIC
+    own = getattr(module, "STUDIES", None)
+    if not isinstance(own, dict) or not all(isinstance(s, Study) for s in own.values()):
+        raise ValueError(f"{module.__file__}: defines no STUDIES, a dict of dyncheck.stability.common.Study")
+    return {**GENERIC, **own}
 
 
 def validate(case):
@@ -67,14 +63,17 @@ def validate(case):
     table = case.spec.get("stability", {})
     if not isinstance(table, dict):
         raise ValueError(f"{case.file}: stability is not a table")
+    if not isinstance(table.get("module", ""), str):
+        raise ValueError(f"{case.file}: stability.module = {table['module']!r} is not a file name")
+    studies = available(case)
     for key, value in table.items():
-        if key == "why":
+        if key in NOT_STUDIES:
             continue
-        if key not in STUDIES:
-            raise ValueError(f"{case.file}: stability.{key} is not a known study; studies are {', '.join(STUDIES)}")
+        if key not in studies:
+            raise ValueError(f"{case.file}: stability.{key} is not a known study; studies are {', '.join(studies)}")
         if not isinstance(value, dict) or not isinstance(value.get("why"), str):
             raise ValueError(f"{case.file}: stability.{key} needs a `why` string")
-        missing = [k for k in REQUIRED[key] if k not in value]
+        missing = [k for k in studies[key].keys if k not in value]
         if missing:
             raise ValueError(f"{case.file}: stability.{key} lacks {', '.join(missing)}")
         for method in value.get("methods", []) + ([value["method"]] if "method" in value else []):
@@ -83,7 +82,7 @@ def validate(case):
         for name, override in value.get("overrides", {}).items():
             if name not in case.params:
                 raise ValueError(f"{case.file}: stability.{key}.overrides: no parameter '{name}'")
-        settings = _settings(case, key)  # a ValueError names the file and the field
+        settings = settings_of(case, key)  # a ValueError names the file and the field
         if key == "lyapunov":
             _agreement_settings(case.file, settings)
 
@@ -104,20 +103,20 @@ def _agreement_settings(file, settings):
 def studies(case, progress=None):
     """Every study the case's [stability] table declares, in its order: a list of results (see the module)."""
     validate(case)
+    studies = available(case)
     out = []
     for name in case.spec.get("stability", {}):
-        if name == "why":
+        if name in NOT_STUDIES:
             continue
         if progress:
             progress(f"{case.name}: stability study {name}")
-        out.append(STUDIES[name](case, _settings(case, name), progress))
+        out.append(studies[name].run(case, settings_of(case, name), progress))
     return out
 
 
 # -- figures ------------------------------------------------------------------------------------
 
-def figure(result, path):
+def figure(case, result, path):
     """Draw a study's result to the PNG `path`."""
-    {"stable_step": figure_stable_step, "lyapunov": figure_lyapunov, "energy_drift": figure_energy_drift,
-     "euler_singularity": figure_euler_singularity, "sleeping_top": figure_sleeping_top}[result["study"]](result, path)
+    available(case)[result.study].figure(result, path)
     return path

@@ -3,12 +3,14 @@ of one-step schemes; a study's settings and result; the figures' style."""
 
 import math
 import time
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 from scipy.optimize import brentq
 
-from dyncheck.case import load_case
-from dyncheck.simulate import FIXED_METHODS, MUJOCO_METHODS, Unstable, check_mujoco_run, simulate
+from dyncheck.results import StudyResult
+from dyncheck.simulate import METHODS, MUJOCO_METHODS, Unstable, check_mujoco_run, simulate
 
 SHARP = {"semi-implicit Euler": 2.0, "mujoco:Euler": 2.0, "mujoco:implicitfast": 2.0,
          "RK4": 2 * math.sqrt(2.0), "mujoco:RK4": 2 * math.sqrt(2.0)}
@@ -77,10 +79,6 @@ class Guarded:
         return self.model.drive_power(t, q, v)
 
 
-def evaluations_per_step(method):
-    return {"RK4": 4}.get(method, 1) if method in FIXED_METHODS else 1
-
-
 def grid_step(dt_target, t_end, max_out=1000):
     """(dt, steps, every): the largest step dt <= dt_target that divides t_end, output every `every`
     steps, at most `max_out` rows."""
@@ -101,14 +99,14 @@ def run_fixed(case, source, method, dt_target, t_end, *, bound=None, index=None,
     else:
         model = case.model(source)
         if bound is not None:
-            model = Guarded(model, index, bound, method, evaluations_per_step(method))
+            model = Guarded(model, index, bound, method, METHODS[method].evaluations)
     run = simulate(model, case.initial[:2], t_end, method, dt=dt, output_step=every * dt, work=False)
     return run, dt, steps  # simulate raises Unstable at a non-finite state or a MuJoCo reset
 
 
 def _mujoco_bound(model, ic, t_end, dt, method, bound, index):
     """Raise Unstable at MuJoCo's first step beyond `bound` on coordinate `index`, non-finite, or reset."""
-    run = model.step(ic[0], ic[1], t_end, dt, method.split(":")[1])
+    run = model.step(ic[0], ic[1], t_end, dt, METHODS[method].engine_name)
     check_mujoco_run(run, method, dt, (model.coords[index], index, bound))
 
 
@@ -153,7 +151,7 @@ def limit_step(method, omega, span, growth):
 
 # -- common -------------------------------------------------------------------------------------
 
-def _settings(case, name):
+def settings_of(case, name):
     """The study's sub-table with its expressions evaluated (numbers stay numbers)."""
     raw = case.spec["stability"][name]
     out = {}
@@ -167,51 +165,29 @@ def _settings(case, name):
     return out
 
 
-def _variant(case, **params):
-    """The case with further parameter overrides (on top of the case's own)."""
-    return load_case(case.name, **{**case.overrides, **params})
-
-
-def _fmt(x, spec=".3g", none="-"):
+def fmt(x, spec=".3g", none="-"):
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return none
     return format(x, spec)
 
 
-def _result(case, study, title, settings, data, table, findings, series, start):
+def study_result(case, study, title, settings, data, table, findings, series, start):
     table = table.astype(object).where(table.notna(), "-").astype(str)
-    return {"case": case.name, "study": study, "title": title, "why": " ".join(settings.get("why", "").split()),
-            "data": data, "table": table, "findings": findings, "series": series,
-            "settings": {k: v for k, v in settings.items() if k != "why"}, "wall": time.perf_counter() - start}
+    return StudyResult(case=case.name, study=study, title=title, why=" ".join(settings.get("why", "").split()),
+                       data=data, table=table, findings=tuple(findings), series=series,
+                       settings={k: v for k, v in settings.items() if k != "why"}, wall=time.perf_counter() - start)
 
 
-def _rms(x):
+def rms(x):
     x = np.asarray(x, dtype=float)
     return float(np.sqrt(np.mean(x * x))) if x.size else float("nan")
 
 
-# -- figures ---
-
-def _plt():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
-
-
-METHOD_STYLE = {
-    "explicit Euler": dict(color="tab:red", marker="o"),
-    "semi-implicit Euler": dict(color="tab:blue", marker="s"),
-    "RK4": dict(color="tab:green", marker="^"),
-    "DOP853": dict(color="black", marker="D"),
-    "mujoco:Euler": dict(color="tab:cyan", marker="x"),
-    "mujoco:implicitfast": dict(color="tab:purple", marker="+"),
-    "mujoco:RK4": dict(color="tab:olive", marker="1"),
-}
-
-
-def _style(label):
-    for key, style in METHOD_STYLE.items():
-        if label.startswith(key) and (key != "RK4" or label == "RK4"):
-            return dict(style)
-    return {}
+@dataclass(frozen=True)
+class Study:
+    """A study a case's [stability] table may name: how to run it ((case, settings, progress) ->
+    StudyResult), how to draw its result ((result, path)), and the keys its table must have besides
+    `why` (optional ones: `source`, `overrides`, `method`, `k_stiff`)."""
+    run: Callable
+    figure: Callable
+    keys: tuple

@@ -8,14 +8,16 @@ import pandas as pd
 from scipy.integrate import solve_ivp
 
 from dyncheck.simulate import MUJOCO_METHODS, SCIPY_METHODS, Unstable, fastest_frequency, simulate
-from dyncheck.stability.common import EPS, _fmt, _plt, _result, _settings, _style, attempt, describe
+from dyncheck.stability.common import EPS, fmt, study_result, settings_of, attempt, describe
+from dyncheck.style import method_style, plt
 
 
 def _scale(case):
-    """Weights of the state (angles, rates) in the distance: rates divided by sqrt(g / l1)."""
+    """Weights of the state (coordinates, rates) in the distance: rates divided by the case's
+    [stability.lyapunov] rate_scale (a frequency of the motion, so that both halves count alike)."""
     n = len(case.coords)
-    w0 = math.sqrt(case.params["g"] / case.params.get("l1", 1.0))
-    return np.concatenate([np.ones(n), np.full(n, 1.0 / w0)])
+    rate_scale = settings_of(case, "lyapunov")["rate_scale"]
+    return np.concatenate([np.ones(n), np.full(n, 1.0 / rate_scale)])
 
 
 def _copies_rhs(model, n, copies):
@@ -94,7 +96,7 @@ def agreement_horizon(case):
     if spec is None:
         return math.inf, {"t_end": t_end, "within": True,
                           "sentence": "no agreement horizon: the case declares no [stability.lyapunov]"}
-    s = _settings(case, "lyapunov")
+    s = settings_of(case, "lyapunov")
     eps0, tol = s["eps0"], s["tol"]
     start = time.perf_counter()
     result, fail = attempt(lambda: amplification(case, t_end, s["check_rtol"], delta=1e-6))
@@ -154,14 +156,14 @@ def lyapunov(case, settings, progress=None):
     table = pd.DataFrame([{
         "initial conditions": r["initial"],
         "motion": r["status"],
-        f"lambda at {settings['horizon']:g} s [1/s]": _fmt(r.get("lambda")),
-        f"lambda at {settings['horizon'] / 2:g} s [1/s]": _fmt(r.get("lambda_half")),
-        f"agreement horizon, {eps0:g} -> {tol:g} [s]": (_fmt(r.get("horizon_integrators"), ".3g")
+        f"lambda at {settings['horizon']:g} s [1/s]": fmt(r.get("lambda")),
+        f"lambda at {settings['horizon'] / 2:g} s [1/s]": fmt(r.get("lambda_half")),
+        f"agreement horizon, {eps0:g} -> {tol:g} [s]": (fmt(r.get("horizon_integrators"), ".3g")
                                                        if r.get("horizon_integrators") else
                                                        f"> {settings['horizon']:g} (no exponential growth)"),
         "lambda over the second half [1/s]": (f"{r['lambda_min']:.3g}-{r['lambda_max']:.3g}"
                                                if r.get("lambda_min") is not None else "-"),
-        f"agreement horizon, rounding {EPS:.1e} -> {tol:g} [s]": (_fmt(r.get("horizon_rounding"), ".3g")
+        f"agreement horizon, rounding {EPS:.1e} -> {tol:g} [s]": (fmt(r.get("horizon_rounding"), ".3g")
                                                                  if r.get("horizon_rounding")
                                                                  else f"> {settings['horizon']:g}"),
     } for r in rows])
@@ -187,7 +189,7 @@ def lyapunov(case, settings, progress=None):
     findings.append(f"Trajectory check (the book's initial conditions, reference, finite-time amplification): "
                     f"{details['sentence']}.")
     series = {"curves": curves, "rows": data, "check": details, "horizon": settings["horizon"]}
-    return _result(case, "lyapunov", "Lyapunov exponent and the agreement horizon", settings, data, table,
+    return study_result(case, "lyapunov", "Lyapunov exponent and the agreement horizon", settings, data, table,
                    findings, series, start)
 
 
@@ -239,11 +241,11 @@ def energy_drift(case, settings, progress=None):
     data = pd.DataFrame(rows)
     table = pd.DataFrame([{
         "method": r["method"],
-        "step": _fmt(r.get("dt")),
-        "max |dE|/E_swing, 1 s": _fmt(r.get("drift_1s")),
-        f"{T / 10:g} s": _fmt(r.get("drift_T10")),
-        f"{T:g} s": _fmt(r.get("drift_T")),
-        "growth exponent": _fmt(r.get("growth_exponent"), ".2f"),
+        "step": fmt(r.get("dt")),
+        "max |dE|/E_swing, 1 s": fmt(r.get("drift_1s")),
+        f"{T / 10:g} s": fmt(r.get("drift_T10")),
+        f"{T:g} s": fmt(r.get("drift_T")),
+        "growth exponent": fmt(r.get("growth_exponent"), ".2f"),
         "character": r.get("character") if r["status"] == "ran" else describe({"status": "unstable", **r,
                                                                                "t": r.get("t_fail"),
                                                                                "step": r.get("step_fail")}),
@@ -264,7 +266,7 @@ def energy_drift(case, settings, progress=None):
                      "top, and whirls")
         findings.append(text + ".")
     for _, r in (data[data["status"] == "unstable"].iterrows() if "status" in data else []):
-        findings.append(f"{r['method']}: unstable at t = {_fmt(r['t_fail'])} s (step {r['step_fail']}): {r['why']}.")
+        findings.append(f"{r['method']}: unstable at t = {fmt(r['t_fail'])} s (step {r['step_fail']}): {r['why']}.")
     pairs = [("mujoco:Euler", "semi-implicit Euler"), ("mujoco:implicitfast", "semi-implicit Euler"),
              ("mujoco:RK4", "RK4")]
     same = []
@@ -281,13 +283,12 @@ def energy_drift(case, settings, progress=None):
                         "swing's energy on average over the last tenth): the energy it sheds in the first second "
                         "is the numerical damping that the book's figures show.")
     series = {"curves": curves, "rows": data, "swing": swing, "horizon": T, "dt": dt}
-    return _result(case, "energy_drift", "Long-run energy error of each method", settings, data, table,
+    return study_result(case, "energy_drift", "Long-run energy error of each method", settings, data, table,
                    findings, series, start)
 
 
 def figure_lyapunov(result, path):
-    plt = _plt()
-    s = result["series"]
+    s = result.series
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.6))
     colors = ["tab:blue", "tab:red", "tab:green", "tab:purple"]
     for (label, (t, logs)), color in zip(s["curves"].items(), colors):
@@ -314,8 +315,7 @@ def figure_lyapunov(result, path):
 
 
 def figure_energy_drift(result, path):
-    plt = _plt()
-    s = result["series"]
+    s = result.series
     fig, ax = plt.subplots(figsize=(9, 5.4))
     widths = {"mujoco:Euler": 3.5, "mujoco:implicitfast": 1.2, "mujoco:RK4": 3.5}
     dashes = {"mujoco:Euler": "-", "mujoco:implicitfast": ":", "mujoco:RK4": "-"}
@@ -323,12 +323,12 @@ def figure_energy_drift(result, path):
     floor = 1e-16
     for label, (t, drift) in s["curves"].items():
         key = label.split(" (")[0]
-        st = _style(label)
+        st = method_style(label)
         ax.plot(t[1:], np.maximum(drift[1:], floor), color=st.get("color"), lw=widths.get(key, 1.2),
                 ls=dashes.get(key, "-"), alpha=alphas.get(key, 1.0), label=label)
     for _, r in s["rows"].iterrows():
         if r.get("status") == "unstable" and r.get("t_fail") is not None:
-            ax.axvline(r["t_fail"], color=_style(r["method"]).get("color", "k"), ls="--")
+            ax.axvline(r["t_fail"], color=method_style(r["method"]).get("color", "k"), ls="--")
             ax.text(r["t_fail"], 1, f"{r['method']} blows up", rotation=90, fontsize=8, va="top")
     ax.set_yscale("log")
     ax.set_xscale("log")

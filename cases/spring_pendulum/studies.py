@@ -8,8 +8,9 @@ import pandas as pd
 from scipy.optimize import fsolve
 
 from dyncheck.simulate import fastest_frequency, simulate
-from dyncheck.stability.common import (FAMILY, SHARP, Guarded, _fmt, _plt, _result, _rms, _style, _variant, attempt,
-                                      describe, grid_step, limit_step, run_fixed)
+from dyncheck.stability.common import (FAMILY, SHARP, Guarded, Study, attempt, describe, fmt, grid_step, limit_step, rms,
+                                      run_fixed, study_result)
+from dyncheck.style import method_style, plt
 
 
 def spring_linearisation(case, k):
@@ -52,7 +53,7 @@ def _window_ratios(frame, t_end, model):
     v = frame[[c + "_rate" for c in model.coords]].to_numpy()
     acc = np.array([model.accelerations(ti, qi, vi) for ti, qi, vi in zip(t, q, v)])
     first, last = t <= t_end / 4, t >= 3 * t_end / 4
-    return np.array([_rms(acc[last, i]) / _rms(acc[first, i]) for i in range(acc.shape[1])])
+    return np.array([rms(acc[last, i]) / rms(acc[first, i]) for i in range(acc.shape[1])])
 
 
 def _growth(run, exact_ratios, t_end, model):
@@ -113,7 +114,7 @@ def stable_step(case, settings, progress=None):
     rows, trail = [], []
 
     for k in settings["k"]:
-        variant = _variant(case, k=k)
+        variant = case.with_params(k=k)
         if progress:
             progress(f"stable step, k = {k:g} N/m")
         lin = spring_linearisation(case, k)
@@ -206,11 +207,11 @@ def stable_step(case, settings, progress=None):
     for r in rows:
         if r["status"] == "physical runaway":
             if r["method"] == "exact (DOP853)":
-                value = f"physical runaway: |l| > {escape:g} m at t = {_fmt(r['t_fail'])} s"
+                value = f"physical runaway: |l| > {escape:g} m at t = {fmt(r['t_fail'])} s"
             elif r.get("t_fail") is not None:
-                value = f"runs away with it at t = {_fmt(r['t_fail'])} s (exact: {_fmt(r.get('t_exact'))} s)"
+                value = f"runs away with it at t = {fmt(r['t_fail'])} s (exact: {fmt(r.get('t_exact'))} s)"
             else:
-                value = f"stays within the bound (the exact solution escapes at {_fmt(r.get('t_exact'))} s)"
+                value = f"stays within the bound (the exact solution escapes at {fmt(r.get('t_exact'))} s)"
             blow = "-"
         elif r["method"] == "exact (DOP853)":
             value, blow = f"bounded, |l| <= {r['l_max']:.3g} m", "-"
@@ -223,16 +224,16 @@ def stable_step(case, settings, progress=None):
             value, blow = f"{r['status']}: {r.get('why', '')}", "-"
         table_rows.append({"k [N/m]": f"{r['k']:g}", "method": r["method"],
                            "largest stable step (growth <= %g)" % G: value,
-                           "theory [s]": _fmt(r.get("h_theory")),
+                           "theory [s]": fmt(r.get("h_theory")),
                            "smallest blow-up step": blow,
-                           "linear limit [s]": _fmt(r.get("h_limit"))})
+                           "linear limit [s]": fmt(r.get("h_limit"))})
     table = pd.DataFrame(table_rows)
 
     findings = _stable_step_findings(case, settings, data, crit, listing, k_crit, span)
     series = {"rows": data, "curves": curves, "k_crit": k_crit, "crit": crit, "listing": listing,
               "trail": pd.DataFrame(trail), "horizon": T, "growth": G, "k_book": case.params["k"]}
     data = data.assign(horizon=T, growth_limit=G)
-    return _result(case, "stable_step", "Largest stable step against the spring stiffness", settings,
+    return study_result(case, "stable_step", "Largest stable step against the spring stiffness", settings,
                    data, table, findings, series, start)
 
 
@@ -241,7 +242,7 @@ def _critical_stiffness(case, settings, source, escape, horizon):
     k_crit = case.params["m"] * (case.params["alpha_rate"] + case.params["beta_rate"]) ** 2
 
     def runs_away(k):
-        variant = _variant(case, k=k)
+        variant = case.with_params(k=k)
         model = Guarded(variant.model(source), 1, escape, "DOP853", 1)
         _, fail = attempt(lambda: simulate(model, variant.initial[:2], horizon, "DOP853", rtol=settings["rtol"],
                                            output_step=horizon / 100, work=False, omega=fastest_frequency(variant)))
@@ -282,7 +283,7 @@ def _listing_growth(case, settings, source):
     return {"dt": dt, "t_end": t_end, "omega": lin[3], "whole_run": math.exp(lin[3] ** 2 * dt * t_end / 2),
             "l_error": float(np.max(np.abs(out["l"].to_numpy() - exact["l"].to_numpy()))),
             "l_range": float(exact["l"].max() - exact["l"].min()),
-            "acc_ratio": _rms(acc(out)[last, 1]) / _rms(acc(exact)[last, 1])}
+            "acc_ratio": rms(acc(out)[last, 1]) / rms(acc(exact)[last, 1])}
 
 
 def _stable_step_findings(case, settings, data, crit, listing, k_crit, span):
@@ -340,7 +341,7 @@ def _stable_step_findings(case, settings, data, crit, listing, k_crit, span):
         out.append(f"Semi-implicit Euler does not stay stable up to its linear limit 2/omega while the pendulum "
                    f"swings: at k = {', '.join(f'{k:g}' for k in early['k'])} N/m the spring's oscillation grows "
                    f"more than {G:g}-fold already at {early['ratio'].min():.2f}-{early['ratio'].max():.2f} x 2/omega "
-                   f"(k = {r0['k']:g}: stable to {r0['h_stable']:.3g} s, blow-up at {_fmt(r0['h_blowup'])} s): the "
+                   f"(k = {r0['k']:g}: stable to {r0['h_stable']:.3g} s, blow-up at {fmt(r0['h_blowup'])} s): the "
                    "swing's energy leaks into the spring (the swing dies down while the spring's oscillation grows). "
                    "The likely cause: the scheme takes the coupling terms, Coriolis -2 l' psi' / L and centrifugal "
                    "L psi'^2, explicitly and, the mass matrix depending on l, is not symplectic in these coordinates"
@@ -393,8 +394,7 @@ def _stable_step_findings(case, settings, data, crit, listing, k_crit, span):
 
 
 def figure_stable_step(result, path):
-    plt = _plt()
-    s = result["series"]
+    s = result.series
     rows, curves = s["rows"], s["curves"]
     measured = rows[rows["status"] == "measured"]
     kmin = min(rows["k"].min(), s["k_crit"]) / 1.5
@@ -411,13 +411,13 @@ def figure_stable_step(result, path):
             if key in curves:
                 theory = ("theory: growth %g x over %g s" % (s["growth"], 0.75 * s["horizon"]) if not suffix
                           else "theory: " + {"semi-implicit Euler": "2/omega", "RK4": "2 sqrt(2)/omega"}[method])
-                ax.plot(curves["k"], curves[key], color=_style(method)["color"], lw=6, alpha=0.25,
+                ax.plot(curves["k"], curves[key], color=method_style(method)["color"], lw=6, alpha=0.25,
                         label=f"{theory}, {label}", solid_capstyle="butt")
         for method, group in measured.groupby("method", sort=False):
             group = group.dropna(subset=[column])
             if group.empty:
                 continue
-            st = _style(method)
+            st = method_style(method)
             filled = not method.startswith("mujoco")
             ax.plot(group["k"] * offsets.get(method, 1.0), group[column], ls="-" if filled else "none", lw=0.8,
                     ms=7 if filled else 10, marker=st["marker"], color=st["color"],
@@ -453,3 +453,7 @@ def figure_stable_step(result, path):
     fig.tight_layout(rect=(0, 0.16, 1, 1))
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+STUDIES = {"stable_step": Study(stable_step, figure_stable_step, (
+    "k", "methods", "horizon", "growth", "resolution", "escape", "max_steps", "rtol", "k_resolution", "output_rows"))}

@@ -9,7 +9,8 @@ import pandas as pd
 from scipy.optimize import brentq
 
 from dyncheck.simulate import Unstable, fastest_frequency, simulate
-from dyncheck.stability.common import EPS, _fmt, _plt, _result, _variant, attempt, describe
+from dyncheck.stability.common import EPS, Study, attempt, describe, fmt, study_result
+from dyncheck.style import plt
 
 
 def _rot_exact(angles):
@@ -64,32 +65,12 @@ def _native_angular_acceleration(model, angles, omega):
     """An engine's own answer for a ball joint in quaternion form: body angular acceleration from
     (quaternion, body angular velocity), without the adapters' Euler-angle maps."""
     from engines import euler
-    quaternion = euler.quaternion(angles)
-    kind = type(model).__name__
-    if kind == "MujocoModel":
-        import mujoco
-        (_, (qadr, dof), _), = [entry for entry in model.layout if entry[0] == "euler"]
-        d = model.d
-        d.qpos[qadr:qadr + 4] = quaternion
-        d.qvel[dof:dof + 3] = omega
-        d.qfrc_applied[:] = model.applied
-        mujoco.mj_forward(model.m, d)
-        return d.qacc[dof:dof + 3].copy()
-    if kind == "PinocchioModel":
-        import pinocchio as pin
-        (_, joint, _), = [entry for entry in model.layout if entry[0] == "euler"]
-        config = pin.neutral(model.m)
-        config[joint.idx_q:joint.idx_q + 4] = np.roll(quaternion, -1)  # (x, y, z, w)
-        velocity = np.zeros(model.m.nv)
-        velocity[joint.idx_v:joint.idx_v + 3] = omega
-        acc = pin.aba(model.m, model.d, config, velocity, model.applied.copy())
-        return np.asarray(acc[joint.idx_v:joint.idx_v + 3]).copy()
-    raise ValueError(f"no native ball-joint evaluation for {kind}")
+    return model.ball_joint_acceleration(euler.quaternion(angles), omega)
 
 
 def euler_singularity(case, settings, progress=None):
     start = time.perf_counter()
-    variant = _variant(case, **settings.get("overrides", {}))
+    variant = case.with_params(**settings.get("overrides", {}))
     reference = variant.model("reference")
     engines = {"mujoco": variant.model("mujoco"), "pinocchio": variant.model("pinocchio")}
     spin, transverse = settings["spin"], settings["transverse"]
@@ -121,20 +102,12 @@ def euler_singularity(case, settings, progress=None):
 
     # A motion through the near-upright: the axis swings through the vertical, missing it by `miss`.
     passes = _passages(variant, settings, progress)
-    data_pass = pd.DataFrame([
-        {"miss": r["miss"], "closest": r.get("closest"), "precession_rate": r["precession_rate"],
-         "integrator": label, "status": x.get("status", r["status"]),
-         **{k: x.get(k) for k in ("before", "after", "max", "evaluations")},
-         "t_fail": x.get("fail", {}).get("t"), "step_fail": x.get("fail", {}).get("step")}
-        for r in passes for label, x in (("Euler angles, DOP853", r.get("dop853", {})),
-                                         ("Euler angles, RK4 fixed step", r.get("rk4", {})),
-                                         ("MuJoCo RK4 vs half step", {"status": "ok", "max": r.get("mujoco_estimate")}))])
 
     ref = data[data["source"] == "reference (Euler angles)"]
     table = pd.DataFrame([{
         "nutation [rad]": f"{n:.0e}",
         "precession rate [rad/s]": f"{grp['precession_rate'].iloc[0]:.3g}",
-        **{src: _fmt(grp[grp["source"] == src]["error"].iloc[0], ".2e", none="not finite")
+        **{src: fmt(grp[grp["source"] == src]["error"].iloc[0], ".2e", none="not finite")
            for src in ("reference (Euler angles)", "truth at the rounded Euler rates", "mujoco (quaternion)",
                        "pinocchio (quaternion)")}} for n, grp in data.groupby("nutation", sort=False)])
     ok = ref.dropna(subset=["error"])
@@ -148,7 +121,7 @@ def euler_singularity(case, settings, progress=None):
         f"size ~ {ref['true_size'].median():.3g} rad/s^2. Compared is the body's angular acceleration, which has "
         "no singularity, against Euler's equations in the body frame evaluated exactly (rational arithmetic).",
         "Relative error of the Euler-angle reference: " + ", ".join(
-            f"{_fmt(r['error'], '.1e', 'not finite')} at n = {r['nutation']:.0e}" for _, r in ref.iterrows())
+            f"{fmt(r['error'], '.1e', 'not finite')} at n = {r['nutation']:.0e}" for _, r in ref.iterrows())
         + (f" (slope {slope:.2f} in log-log: error ~ eps / n^{-slope:.1f})" if slope is not None else "") + ".",
         f"MuJoCo and Pinocchio, fed the same state as a quaternion and a body angular velocity, stay at "
         f"{engines_worst:.1e} or better at every nutation: their formulation has no singularity."]
@@ -187,10 +160,8 @@ def euler_singularity(case, settings, progress=None):
                         f"to {ok[-1]['dop853']['evaluations']} (closest {ok[-1]['closest']:.0e} rad), as the "
                         f"precession rate peaks near w_perp / closest; a fixed step cannot.")
     series = {"rows": data, "passes": passes}
-    out = _result(case, "euler_singularity", "The Euler-angle singularity at zero nutation", settings, data, table,
-                  findings, series, start)
-    out["data_passages"] = data_pass
-    return out
+    return study_result(case, "euler_singularity", "The Euler-angle singularity at zero nutation", settings, data,
+                        table, findings, series, start)
 
 
 def _exact_angular_velocity(angles, rates):
@@ -203,14 +174,8 @@ def _exact_angular_velocity(angles, rates):
 def _mujoco_tilt(model, q0, v0, t_end, dt):
     """MuJoCo's own RK4 from the book's state (q0, v0): times and the axis tilt (x, y components of the
     symmetry axis R e_z, from the quaternion: exact near upright, where Euler angles are not)."""
-    import mujoco
-    import mujoco.rollout
-    (_, (qadr, _), _), = [entry for entry in model.layout if entry[0] == "euler"]
-    m, d, state0, forces = model.stepping(q0, v0, dt, "RK4")  # the scene as MuJoCo steps it
-    steps = int(round(t_end / dt))
-    states, _ = mujoco.rollout.rollout(m, d, state0[None], forces[None, None], nstep=steps,
-                                       control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
-    quats = np.concatenate([state0[None], states[0]])[:, 1 + qadr:1 + qadr + 4]
+    quats = model.ball_joint_quaternions(q0, v0, t_end, dt, "RK4")
+    steps = len(quats) - 1
     if not np.all(np.isfinite(quats)):
         raise Unstable("mujoco:RK4", t_end, steps, "state is not finite")
     w, x, y, z = quats.T
@@ -296,7 +261,7 @@ def _passages(case, settings, progress):
 def sleeping_top(case, settings, progress=None):
     """The least spin of a stable upright top, by bisection with MuJoCo (quaternions: no singularity upright)."""
     start = time.perf_counter()
-    variant = _variant(case, **settings.get("overrides", {}))
+    variant = case.with_params(**settings.get("overrides", {}))
     p = variant.params
     criterion = 2 * math.sqrt(p["Ixx"] * p["m"] * p["g"] * p["h"]) / p["Izz"]
     n0, bound, T = settings["start_nutation"], settings["bound"], settings["horizon"]
@@ -365,7 +330,7 @@ def sleeping_top(case, settings, progress=None):
         if bracket_ok else "No comparison (the bracket failed)."]
     series = {"trail": data, "criterion": criterion, "finite": finite, "lo": lo, "hi": hi, "n0": n0, "bound": bound,
               "horizon": T, "params": p, "method": method, "dt": dt}
-    return _result(case, "sleeping_top", "The sleeping top: least spin of a stable upright top", settings,
+    return study_result(case, "sleeping_top", "The sleeping top: least spin of a stable upright top", settings,
                    data, summary, findings, series, start)
 
 
@@ -399,8 +364,7 @@ def top_nutation(p, s, n0, T):
 
 
 def figure_euler_singularity(result, path):
-    plt = _plt()
-    s = result["series"]
+    s = result.series
     rows = s["rows"]
     passes = [p for p in s["passes"] if p.get("status") == "ok"]
     fig, axes = plt.subplots(1, 2 if passes else 1, figsize=(12, 4.8) if passes else (6.5, 4.8))
@@ -458,8 +422,7 @@ def figure_euler_singularity(result, path):
 
 
 def figure_sleeping_top(result, path):
-    plt = _plt()
-    s = result["series"]
+    s = result.series
     trail = s["trail"]
     fig, ax = plt.subplots(figsize=(8.5, 5.2))
     spins = np.linspace(0.985 * s["criterion"], 1.01 * s["criterion"], 160)
@@ -487,3 +450,12 @@ def figure_sleeping_top(result, path):
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
+
+
+STUDIES = {
+    "euler_singularity": Study(euler_singularity, figure_euler_singularity, (
+        "nutation", "precession", "spin_angle", "spin", "transverse", "direction", "passage_spin", "start_nutation",
+        "miss", "passage_horizon", "passage_output", "mujoco_step", "rtol")),
+    "sleeping_top": Study(sleeping_top, figure_sleeping_top, (
+        "start_nutation", "bound", "horizon", "mujoco_step", "bracket", "resolution")),
+}

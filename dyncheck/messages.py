@@ -1,0 +1,9 @@
+"""The words every message shares: a suggestion for a misspelt name."""
+
+import difflib
+
+
+def suggest(word, choices):
+    """" (did you mean 'x'?)" for the choice closest to a misspelt word, or ""."""
+    close = difflib.get_close_matches(word, list(choices), n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""

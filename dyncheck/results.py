@@ -1,0 +1,223 @@
+"""The values that flow from the checks to the report: rows, run outcomes, a case's and a study's results.
+
+Data flows one way: case -> models -> checks and studies -> these results -> saved (dyncheck.store)
+-> the report, which renders saved results only.  Their JSON form (`rows_json`, the `run --json`
+file) carries RESULTS_VERSION; docs/results.md describes it.
+"""
+
+import enum
+import math
+from dataclasses import dataclass, replace
+
+import pandas as pd
+
+from dyncheck import store
+
+RESULTS_VERSION = 2  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top
+
+
+@store.register
+class Status(enum.StrEnum):
+    """A row's verdict (docs/statuses.md)."""
+    PASS = "pass"
+    FINDING = "finding"  # a failure that a registered error of the book explains
+    FAIL = "fail"
+    INCONCLUSIVE = "inconclusive"  # the tolerance is above the ceiling: the comparison proves nothing
+    UNSTABLE = "unstable"  # an integration blew up: no number to compare
+
+    @property
+    def ok(self):
+        """Whether a run with this row exits 0."""
+        return self in (Status.PASS, Status.FINDING)
+
+
+@store.register
+@dataclass(frozen=True)
+class Row:
+    """One comparison of one quantity between sources (one source: a balance of that source's run)."""
+    check: str
+    quantity: str
+    sources: tuple
+    error: float | None
+    tolerance: float | None
+    ceiling: float | None
+    status: Status
+    finding: str | None = None
+    detail: str = ""
+
+    @property
+    def comparison(self):
+        return " vs ".join(self.sources)
+
+
+def row(check, quantity, sources, error, tolerance, detail="", *, ceiling):
+    """A check's row; `ceiling` (dyncheck.ceilings) is the tolerance above which the comparison proves
+    nothing: such a row is inconclusive, whatever its error."""
+    if not isinstance(sources, tuple):  # ("a", "b"); a string would pass for a tuple of its letters
+        raise TypeError(f"sources must be a tuple of source names, not {sources!r}")
+    if not (math.isfinite(error) and math.isfinite(tolerance)):  # a source gave no number: never a NaN out
+        return no_number(check, quantity, sources, f"no number to judge: error {error}, tolerance {tolerance}; "
+                         + detail, Status.FAIL)
+    if tolerance > ceiling:
+        status = Status.INCONCLUSIVE
+        detail = (f"tolerance {tolerance:.2e} is above the ceiling {ceiling:.0e} of this comparison, so it "
+                  f"proves nothing (dyncheck/ceilings.py); " + detail)
+    else:
+        status = Status.PASS if error <= tolerance else Status.FAIL
+    return Row(check, quantity, sources, float(error), float(tolerance), float(ceiling), status, None, detail)
+
+
+def no_number(check, quantity, sources, why, status=Status.UNSTABLE):
+    """A check that has no error to show: an integration blew up (`why` says when, which method, which
+    step), or (status FAIL) the check could not be made, and `why` says why."""
+    if not isinstance(sources, tuple):
+        raise TypeError(f"sources must be a tuple of source names, not {sources!r}")
+    return Row(check, quantity, sources, None, None, None, Status(status), None, str(why))
+
+
+@store.register
+@dataclass(frozen=True)
+class Failure:
+    """An integration that blew up, as a value: which method, when, which step (None: between steps), why."""
+    method: str
+    t: float | None
+    step: int | None
+    why: str
+
+    def __str__(self):
+        when = f" at t = {self.t:.6g} s" if self.t is not None else ""
+        return f"{self.method} unstable{when}" + (f" (step {self.step})" if self.step is not None else "") \
+            + f": {self.why}"
+
+
+@store.register
+@dataclass(frozen=True)
+class Outcome:
+    """A source's run of the book's initial conditions and its tighter twin, or why there is none."""
+    run: pd.DataFrame | None = None
+    twin: pd.DataFrame | None = None
+    failure: Failure | None = None
+
+    @property
+    def ok(self):
+        return self.failure is None
+
+
+@store.register
+@dataclass(frozen=True)
+class StudyResult:
+    """One study of a case (a stability study, dyncheck.stability): everything its page section draws."""
+    case: str
+    study: str
+    title: str
+    why: str
+    data: pd.DataFrame  # every number measured (NaN only where a status column says why)
+    table: pd.DataFrame  # the same for display: strings
+    findings: tuple  # sentences with the numbers
+    series: dict  # what the figure draws
+    settings: dict
+    wall: float
+
+
+@store.register
+@dataclass(frozen=True)
+class Finding:
+    """A registered error of the book with what this run measured of it."""
+    id: str
+    title: str
+    where: str
+    quantities: tuple
+    sources: tuple
+    error: float | None
+    explanation: str
+    established: str
+    effect: str
+    localised: str
+
+
+@store.register
+@dataclass(frozen=True)
+class CaseResult:
+    """Everything a case's run produced; the report reads nothing else (apart from the case file's
+    text, carried in `spec`)."""
+    folder: str  # the case folder (its study module is there)
+    spec: dict  # the case file as loaded: Case(folder, overrides, spec) rebuilds the case without reading it
+    overrides: dict
+    rows: tuple
+    findings: tuple
+    sample: dict  # states: (t, q, v) per random state; values: {source: {quantity: array}} or {source: why}
+    runs: dict  # {source: Outcome}
+    program: dict  # the book's program: {"listing", "same integrator", "tight": frames}, "integrator", "dt"
+    drawings: dict  # what the figures draw beyond the runs (dyncheck.checks.drawings)
+    wall: float
+    studies: dict | None = None  # {"work_precision": frame, "stability": [StudyResult]}; None: not run
+    version: int = RESULTS_VERSION
+
+    @property
+    def name(self):
+        return self.spec["name"]
+
+    @property
+    def status(self):
+        return "PASS" if all(r.status.ok for r in self.rows) else "FAIL"
+
+    def with_studies(self, studies):
+        return replace(self, studies=studies)
+
+
+def rows_json(rows):
+    return [{"check": r.check, "quantity": r.quantity, "sources": list(r.sources), "error": r.error,
+             "tolerance": r.tolerance, "ceiling": r.ceiling, "status": str(r.status), "finding": r.finding,
+             "detail": r.detail} for r in rows]
+
+
+def findings_json(findings):
+    return [{"id": f.id, "title": f.title, "quantity": list(f.quantities), "sources": list(f.sources),
+             "error": f.error, "explanation": f.explanation, "where": f.where, "established": f.established,
+             "effect": f.effect, "localised": f.localised} for f in findings]
+
+
+def case_json(result):
+    """A case's entry in `dyncheck run --json` and in the report's data/<case>.json."""
+    params = {name: float(p["value"]) for name, p in result.spec["params"].items()}
+    return {"case": result.name, "section": result.spec["section"], "params": {**params, **result.overrides},
+            "overrides": dict(result.overrides), "checks": rows_json(result.rows),
+            "findings": findings_json(result.findings)}
+
+
+def to_json(results):
+    return {"version": RESULTS_VERSION, "cases": [case_json(r) for r in results]}
+
+
+TABLE_COLUMNS = ["check", "quantity", "sources", "error", "tolerance", "status"]
+
+
+def format_rows(rows):
+    """The rows as a table of strings, as `dyncheck run` prints them and the pages list them."""
+    number = lambda x: "-" if x is None else f"{x:.2e}"
+    return pd.DataFrame([{"check": r.check, "quantity": r.quantity, "sources": r.comparison,
+                          "error": number(r.error), "tolerance": number(r.tolerance), "status": str(r.status)}
+                         for r in rows], columns=TABLE_COLUMNS)
+
+
+def save_results(results, folder):
+    """Each case's result into folder/<case>/ (dyncheck.store), replacing what was there of that case."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for result in results:
+        store.save(result, folder / result.name)
+
+
+def load_results(folder):
+    """The CaseResults saved in folder/<case>/, in name order; ValueError naming what is not one."""
+    folders = sorted(p.parent for p in folder.glob("*/value.json"))
+    if not folders:
+        raise ValueError(f"{folder}: holds no saved results (no <case>/value.json); `dyncheck run --results DIR` "
+                         "and `dyncheck report` (in its results/) save them")
+    results = []
+    for path in folders:
+        result = store.load(path)
+        if not isinstance(result, CaseResult):
+            raise ValueError(f"{path}: holds a {type(result).__name__}, not a case's results")
+        results.append(result)
+    return results
+

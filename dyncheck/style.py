@@ -1,0 +1,35 @@
+"""One figure style for every page: a colour per integration scheme, a line style per source, and the
+plotting backend (files only, no display)."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+
+# A source's curves over time: coinciding curves stay visible (the tight reference wide and pale).
+SOURCE_STYLE = {
+    "tight reference": dict(color="black", lw=2.6, alpha=0.35),
+    "book": dict(color="tab:red", lw=1.0, ls="--"),
+    "pinocchio": dict(color="tab:blue", lw=1.0, ls=":"),
+    "mujoco": dict(color="tab:green", lw=1.0, ls="-."),
+    "reference": dict(color="tab:orange", lw=1.0, ls=(0, (1, 3))),
+}
+# A source's points in a sweep (work-precision): marker and line.
+SWEEP_STYLE = {"reference": dict(marker="o", ls="-"), "pinocchio": dict(marker="s", ls="--"),
+               "mujoco": dict(marker="^", ls=":")}
+# The integration scheme: MuJoCo's Euler is the semi-implicit Euler and its RK4 the classical RK4, so
+# they share a colour and differ by marker.
+METHOD_COLOUR = {"explicit Euler": "tab:red", "semi-implicit Euler": "tab:orange", "mujoco:Euler": "tab:orange",
+                 "mujoco:implicitfast": "tab:pink", "RK4": "tab:brown", "mujoco:RK4": "tab:brown",
+                 "RK45": "tab:blue", "DOP853": "tab:purple", "Radau": "tab:green", "LSODA": "tab:olive"}
+METHOD_MARKER = {"explicit Euler": "o", "semi-implicit Euler": "s", "mujoco:Euler": "x", "mujoco:implicitfast": "+",
+                 "RK4": "^", "mujoco:RK4": "1", "RK45": "v", "DOP853": "D", "Radau": "P", "LSODA": "X"}
+
+
+def method_style(label):
+    """Colour and marker of the method a label starts with ("RK4 dt = ..."), {} for none."""
+    method = max((m for m in METHOD_COLOUR if label == m or label.startswith(m + " ")), key=len, default=None)
+    return {} if method is None else dict(color=METHOD_COLOUR[method], marker=METHOD_MARKER[method])
+
+
+__all__ = ["plt", "SOURCE_STYLE", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]

@@ -1,0 +1,147 @@
+"""The architecture's rules, checked on the source (docs/architecture.md): no import cycle among the
+project's modules, only engines/ imports the engines, the harness names no case, and a mechanism
+added from a folder outside the tree runs without a change to dyncheck/ or engines/."""
+
+import ast
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import dyncheck
+from dyncheck.case import Case
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGES = ("dyncheck", "engines", "reference")
+
+
+def modules():
+    """{module name: path} of every module of the project's packages."""
+    out = {}
+    for package in PACKAGES:
+        for path in sorted((ROOT / package).rglob("*.py")):
+            parts = path.relative_to(ROOT).with_suffix("").parts
+            out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return out
+
+
+def imports(path, name, known):
+    """The project's modules that the module `name` at `path` imports, anywhere in it (a function's
+    import closes a cycle as surely as the module's own)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:  # relative: from the package, up level - 1
+                base = ".".join(package.split(".")[:len(package.split(".")) - node.level + 1] + ([base] if base else []))
+            # `from package import module` imports the module; `from module import name`, the module
+            found |= {f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base for alias in node.names}
+    return {module for module in found if module in known}
+
+
+def test_no_module_imports_itself_back():
+    known = modules()
+    graph = {name: imports(path, name, known) for name, path in known.items()}
+    cycles, path, done = [], [], set()
+
+    def visit(name):
+        if name in path:
+            cycles.append(path[path.index(name):] + [name])
+            return
+        if name in done:
+            return
+        path.append(name)
+        for other in sorted(graph[name]):
+            visit(other)
+        path.pop()
+        done.add(name)
+
+    for name in sorted(graph):
+        visit(name)
+    assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles)
+
+
+def test_the_walk_sees_a_cycle(tmp_path):
+    """The test above can fail: two modules importing each other, one of them inside a function."""
+    (tmp_path / "a.py").write_text("import b\n")
+    (tmp_path / "b.py").write_text("def f():\n    from a import x\n")
+    known = {"a": tmp_path / "a.py", "b": tmp_path / "b.py"}
+    assert imports(known["a"], "a", known) == {"b"} and imports(known["b"], "b", known) == {"a"}
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pinocchio"])
+def test_only_engines_import_the_engines(engine):
+    importers = []
+    for folder in ("dyncheck", "reference", "cases"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text())):
+                names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                    [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+                if any(n == engine or n.startswith(engine + ".") for n in names):
+                    importers.append(str(path.relative_to(ROOT)))
+    assert not importers, f"{engine} imported outside engines/ by {importers}"
+
+
+def test_the_harness_names_no_case():
+    names = dyncheck.case_names()
+    named = [(str(path.relative_to(ROOT)), name) for path in sorted((ROOT / "dyncheck").rglob("*.py"))
+             for name in names if name in path.read_text() or name in path.stem]
+    assert not named, f"case names in dyncheck/: {named}"
+
+
+def test_rendering_saved_results_needs_no_engine(results, tmp_path):
+    """`report --from` in a process where importing MuJoCo or Pinocchio fails renders the same pages,
+    byte for byte, as the report that saved the results (its figures included)."""
+    full = tmp_path / "full"
+    from dyncheck.report import write_reports
+    write_reports([results["rotating_particle"], results["spring_pendulum"]], full)
+    again = tmp_path / "again"
+    code = ("import sys; sys.modules['mujoco'] = sys.modules['pinocchio'] = None\n"
+            "from dyncheck.cli import main\n"
+            f"status = main(['report', '--from', {str(full / 'results')!r}, '--out', {str(again)!r}])\n"
+            "assert not [m for m in sys.modules if m.startswith(('engines', 'mujoco', 'pinocchio')) and sys.modules[m]]\n"
+            "sys.exit(status)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    files = lambda root: {p.relative_to(root): p.read_bytes() for p in root.rglob("*") if p.is_file()}
+    assert files(again).keys() == files(full).keys()
+    differ = [str(p) for p, data in files(full).items() if files(again)[p] != data]
+    assert not differ, differ
+
+
+def doc_example():
+    """The four files of docs/model-interface.md's complete example, from its code blocks in order: the
+    example a user copies is the one this test runs."""
+    text = (ROOT / "docs" / "model-interface.md").read_text()
+    example = text[text.index("## A complete example"):]
+    blocks = re.findall(r"```(python|toml|xml)\n(.*?)```", example, re.S)
+    assert [kind for kind, _ in blocks] == ["python", "toml", "xml", "xml"], "the example's four files moved"
+    return dict(zip(("equations.py", "case.toml", "scene.xml", "scene.urdf"), (code for _, code in blocks)))
+
+
+def test_a_mechanism_from_a_folder_outside_the_tree_runs(tmp_path, capsys):
+    """The documented example, a case folder made outside the checkout with its derivation in its own
+    file: `dyncheck run --cases DIR` runs it and passes, and `report --from` renders it; nothing in
+    dyncheck/ or engines/ names it.  With a term of the derivation wrong, the same run fails."""
+    folder = tmp_path / "cases" / "oscillator"
+    folder.mkdir(parents=True)
+    files = doc_example()
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    assert Case(folder).derivation.__file__ == str(folder / "equations.py")
+    from dyncheck.cli import main
+    cases, saved = str(tmp_path / "cases"), str(tmp_path / "results")
+    assert main(["run", "--cases", cases, "--results", saved]) == 0, capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "oscillator: " in out and "pass" in out and " fail" not in out
+    assert main(["report", "--from", saved, "--out", str(tmp_path / "pages")]) == 0
+    assert "# A.1 Mass on a spring" in (tmp_path / "pages" / "oscillator.md").read_text()
+    wrong = files["equations.py"].replace('-self.p["k"] / self.p["m"]', '-self.p["k"] / 2.5')
+    assert wrong != files["equations.py"]
+    (folder / "equations.py").write_text(wrong)
+    assert main(["run", "--cases", cases]) == 1
