@@ -338,8 +338,10 @@ def data_checks(case):
     return rows
 
 
-def run_case(case):
-    """All checks of a case, the findings they establish and what the figures draw: a CaseResult."""
+def run_case(case, localise=True):
+    """All checks of a case, the findings they establish and what the figures draw: a CaseResult.
+    `localise`: search each finding's smallest edit of the printed expression (seconds per finding;
+    what is written or saved shows it, a table of rows does not need it)."""
     start = time.perf_counter()
     rows, sample = pointwise(case)
     rows += random_parameters(case)
@@ -352,10 +354,12 @@ def run_case(case):
     program_rows, program = program_checks(case, sample)
     rows += program_rows + data_checks(case)
     rows = apply_findings(case, rows)
-    runs = {source: replace(outcome, run=with_paths(case, outcome.run), twin=with_paths(case, outcome.twin))
-            if outcome.ok else outcome for source, outcome in runs.items()}
+    # What the pages draw along runs: each source's run, and the reference's tight twin (report.trajectories).
+    drawn = lambda source, outcome: replace(outcome, **({"twin": with_paths(case, outcome.twin)} if source == "reference"
+                                                        else {"run": with_paths(case, outcome.run)}))
+    runs = {source: drawn(source, outcome) if outcome.ok else outcome for source, outcome in runs.items()}
     return CaseResult(folder=str(case.folder), spec=case.spec, overrides=dict(case.overrides), rows=tuple(rows),
-                      findings=tuple(findings_of(case, rows, sample, runs)), sample=sample, runs=runs,
+                      findings=tuple(findings_of(case, rows, sample, runs, localise)), sample=sample, runs=runs,
                       program=program, drawings=drawings(case, runs), wall=time.perf_counter() - start)
 
 
@@ -526,7 +530,7 @@ def localise_finding(case, finding, sample):
     return "; ".join(parts)
 
 
-def findings_of(case, rows, sample, runs):
+def findings_of(case, rows, sample, runs, localise=True):
     """The case's registered findings with their measured size, where and how established, and effect."""
     engines = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= set(ENGINES)]
     out = []
@@ -538,5 +542,6 @@ def findings_of(case, rows, sample, runs):
             error=max(errors, default=None), explanation=" ".join(finding["explanation"].split()),
             established=f"reference, MuJoCo and Pinocchio agree with each other to {max(engines, default=0):.1e} "
                         f"at {len(sample['states'])} random states",
-            effect=finding_effect(case, finding, runs), localised=localise_finding(case, finding, sample)))
+            effect=finding_effect(case, finding, runs), localised=localise_finding(case, finding, sample) if localise else
+            "not searched in this run (`dyncheck run` searches with --json or --results)"))
     return out

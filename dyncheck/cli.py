@@ -70,7 +70,8 @@ def main(argv=None):
         print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
         return 0
     try:
-        results, interrupted = run_cases(cases)
+        # The findings' localisation (seconds each) only where it is shown: in JSON, results, pages.
+        results, interrupted = run_cases(cases, args.command == "report" or bool(args.json or args.results))
         writing = f"--out {args.out}" if args.command == "report" else None  # for a write that fails
         if args.command == "run":
             print_results(results)
@@ -106,12 +107,12 @@ def error_exit(error):
     return 2
 
 
-def run_cases(cases):
+def run_cases(cases, localise=True):
     """The results of the cases, and the name of the case that Ctrl-C stopped (None if none did)."""
     results = []
     try:
         for case in tqdm(cases, desc="checks", unit="case", disable=None, leave=False):
-            results.append(run_case(case))
+            results.append(run_case(case, localise))
     except KeyboardInterrupt:
         return results, cases[len(results)].name
     return results, None

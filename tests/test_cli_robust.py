@@ -21,7 +21,7 @@ PISTON_FILES = {"piston.md", "index.md", "errata.md", "data/piston.json", "figur
 @pytest.fixture
 def canned(monkeypatch, results):
     """`run_case` answering from the session's results, without studies (see tests/test_cli.py)."""
-    monkeypatch.setattr(cli, "run_case", lambda case: replace(results[case.name], overrides=dict(case.overrides)))
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: replace(results[case.name], overrides=dict(case.overrides)))
 
 
 @pytest.fixture
@@ -52,7 +52,7 @@ def files(folder):
 
 @pytest.fixture
 def no_run(monkeypatch):
-    monkeypatch.setattr(cli, "run_case", lambda case: pytest.fail("ran a case before checking the output"))
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: pytest.fail("ran a case before checking the output"))
 
 
 @pytest.mark.parametrize("option, where, why", [
@@ -95,7 +95,7 @@ def test_run_json_replaces_the_previous_file_whole_or_not_at_all(canned, monkeyp
 
 def test_a_case_named_twice_runs_once(monkeypatch, results, capsys):
     ran = []
-    monkeypatch.setattr(cli, "run_case", lambda case: ran.append(case.name) or results[case.name])
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: ran.append(case.name) or results[case.name])
     assert cli.main(["run", "piston", "piston"]) == 0
     assert ran == ["piston"] and capsys.readouterr().out.count("== piston") == 1
 
@@ -114,7 +114,7 @@ def test_a_repeated_or_non_ascii_set_exits_2(sets, message, no_run, capsys):
 # -- Ctrl-C ------------------------------------------------------------------------------
 
 def test_ctrl_c_during_run_prints_what_finished_and_exits_130(monkeypatch, results, tmp_path, capsys):
-    def interrupted_on_the_second(case):
+    def interrupted_on_the_second(case, localise=True):
         if case.name != "piston":
             raise KeyboardInterrupt
         return results[case.name]
@@ -130,7 +130,7 @@ def test_ctrl_c_during_run_prints_what_finished_and_exits_130(monkeypatch, resul
 
 
 def test_ctrl_c_during_report_leaves_it_unchanged_and_exits_130(monkeypatch, tmp_path, capsys):
-    def interrupted(case):
+    def interrupted(case, localise=True):
         raise KeyboardInterrupt
     monkeypatch.setattr(cli, "run_case", interrupted)
     assert main_interrupted(["report", "piston", "--out", str(tmp_path / "out")]) == 130

@@ -43,3 +43,12 @@ def test_the_books_errors_are_localised(results):
     assert "swap sin/cos in `sin(th)` in `2 * Ld * w * sin(th)`" in localised["1.7-eq1.24"]
     assert "swap the factors of `TxT(n) @ TzT(p)`, and `ds` = 0 everywhere" in localised["1.10-R"]
     assert "none of the" in localised["1.8.3-listing-R"]  # three slips: beyond the pair search
+
+
+def test_a_plain_run_leaves_the_search_out_and_says_so():
+    """The search costs seconds per finding; a run that writes nothing of it skips it, and says so."""
+    import dyncheck
+    from dyncheck.checks import run_case
+    result = run_case(dyncheck.load_case("piston"), localise=False)
+    assert result.findings and all(f.localised.startswith("not searched in this run") for f in result.findings)
+
