@@ -1,6 +1,7 @@
 """Cases: one folder per scene with case.toml, scene.xml (MJCF) and scene.urdf; the case file names
 where its equations (its derivation) live."""
 
+import hashlib
 import importlib
 import importlib.util
 import math
@@ -9,6 +10,7 @@ import tomllib
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -44,22 +46,37 @@ class Parameter:
     about: str
 
 
-def load_file(path):
-    """The Python file at `path` as a module, loaded once per version of the file (an edited file is
-    loaded again: a researcher fixing a derivation between two runs in one process gets the fix)."""
+def load_file(path, what):
+    """The Python file at `path` as a module, loaded once per content of the file (an edited file is
+    loaded again: a researcher fixing a derivation between two runs in one process gets the fix);
+    `what` names it in the ValueError of a file that cannot be loaded."""
     path = Path(path).resolve()
-    stat = path.stat()
-    name = f"dyncheck_file_{abs(hash((str(path), stat.st_mtime_ns, stat.st_size))):x}"
+    try:
+        code = path.read_bytes()
+    except OSError as error:
+        raise ValueError(f"{what}: cannot read {path}: {error.strerror or error}") from None
+    name = f"dyncheck_file_{hashlib.sha256(code).hexdigest()[:16]}_{abs(hash(str(path))):x}"
     if name not in sys.modules:
         spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
         try:
-            spec.loader.exec_module(module)
+            guarded(what, lambda: spec.loader.exec_module(module))
         except BaseException:
             del sys.modules[name]
             raise
     return sys.modules[name]
+
+
+def guarded(what, call):
+    """call(), with whatever a case's own code raises (or its sys.exit) as a ValueError naming `what`:
+    bad input, exit 2, never a traceback or a silent exit."""
+    try:
+        return call()
+    except ValueError as error:
+        raise ValueError(f"{what}: {error}") from None
+    except (Exception, SystemExit) as error:
+        raise ValueError(f"{what}: {type(error).__name__}: {error}") from None
 
 
 def case_names(cases_dir=CASES_DIR):
@@ -86,11 +103,13 @@ class Case:
     engines take it, and its models by source.  `spec` (the parsed file) may be given instead of read,
     as when a report is rendered from saved results (dyncheck.results.CaseResult.spec)."""
 
-    def __init__(self, folder, overrides=None, spec=None):
-        self.folder = Path(folder)
+    def __init__(self, folder, overrides=None, spec=None, derivation=None):
+        # `derivation`: the module of a case this one varies (with_params), so that one run uses one
+        # version of the equations even if their file is edited meanwhile.
+        self.folder = Path(folder).absolute()  # saved with the results: they must not depend on the working folder
         self.file = self.folder / "case.toml"
         self.spec = self._read() if spec is None else spec
-        schema.validate(self.spec, self.file)
+        schema.validate(self.spec, self.file, where=spec is None)
         self.name = self.spec["name"]
         self.section = self.spec["section"]
         self.title = self.spec["title"]
@@ -110,11 +129,13 @@ class Case:
             if not math.isfinite(number):
                 raise ValueError(f"{self.file}: override {key} = {number!r} is not finite")
             self.overrides[key] = number
-        self.params = {**self.defaults, **self.overrides}
+        self.params = MappingProxyType({**self.defaults, **self.overrides})  # read-only: models get it too
         schema.check_params(self.spec, self.params, self.overrides, self.file)
         schema.check_values(self.spec, self.file, self.value)
         self.findings = self.spec.get("findings", [])
         self._models = {}
+        if derivation is not None:
+            self.__dict__["derivation"] = derivation  # the cached_property's slot
         self._frozen = True
 
     def __setattr__(self, name, value):
@@ -130,7 +151,7 @@ class Case:
 
     def with_params(self, **params):
         """This case with further parameters overridden (on top of its own overrides)."""
-        return Case(self.folder, {**self.overrides, **params}, self.spec)
+        return Case(self.folder, {**self.overrides, **params}, self.spec, self.derivation)
 
     def _read(self):
         try:
@@ -150,7 +171,7 @@ class Case:
         """A finite number from case.toml: a float, or an expression of the parameters and pi
         (dyncheck.expressions); `field`, where it is in the file, for the message."""
         try:
-            number = float(expressions.evaluate(x, {**self.params, "pi": math.pi}) if isinstance(x, str) else x)
+            number = float(expressions.evaluate(x, expressions.of_parameters(self.params)) if isinstance(x, str) else x)
             if not math.isfinite(number):
                 raise ValueError(f"{number} is not finite")
             return number
@@ -208,9 +229,10 @@ class Case:
         """The module of the case's equations (its `derivation`: a module name, or a .py file in the case
         folder), with its classes Reference, Book and, where the book prints one, Program."""
         where = self.spec["derivation"]
+        what = f"{self.file}: derivation = {where!r}"
         if not where.endswith(".py"):
-            return importlib.import_module(where)
-        return load_file(self.folder / where)
+            return guarded(what, lambda: importlib.import_module(where))
+        return load_file(self.folder / where, what)
 
     @property
     def has_program(self):
@@ -229,7 +251,7 @@ class Case:
 
     def _build(self, source):
         if source in ("book", "reference", "program"):
-            return getattr(self.derivation, source.capitalize())(self.params)
+            return self._derived(source.capitalize())
         if source == "mujoco":
             from engines.mujoco_adapter import MujocoModel as Model
             path = self.folder / "scene.xml"
@@ -253,6 +275,36 @@ class Case:
         if other in self._models:  # both engines loaded: their files must model the same scene
             engines = {source: model, other: self._models[other]}
             compare_scenes(engines["mujoco"], engines["pinocchio"], self.name)
+        return model
+
+    def _derived(self, name):
+        """The derivation's class `name` at the case's parameters, checked against the case file: its
+        coordinates and reactions, and the shape of its accelerations at the initial state."""
+        what = f"{self.file}: derivation = {self.spec['derivation']!r}"
+        cls = getattr(self.derivation, name, None)
+        if cls is None:
+            raise ValueError(f"{what} defines no class {name} (docs/model-interface.md)")
+        model = guarded(f"{what}: {name}({{params}})", lambda: cls(self.params))
+        coords, reactions = getattr(model, "coords", None), getattr(model, "reaction_names", None)
+        if coords is None or tuple(coords) != self.coords:
+            raise ValueError(f"{what}: {name}.coords is {coords!r}, but case.toml's coords are {list(self.coords)}")
+        # a printed program may compute fewer reactions than the case compares
+        if reactions is None or not set(reactions) <= set(self.reaction_names) or \
+                (name != "Program" and tuple(reactions) != self.reaction_names):
+            raise ValueError(f"{what}: {name}.reaction_names is {reactions!r}, but case.toml's reactions are "
+                             f"{list(self.reaction_names)}")
+        q0, v0, _ = self.initial
+        try:
+            with np.errstate(all="ignore"):
+                acc = np.asarray(model.accelerations(0.0, q0, v0), dtype=float)
+        except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
+            return model
+        except Exception as error:
+            raise ValueError(f"{what}: {name}.accelerations at the initial state: {type(error).__name__}: "
+                             f"{error}") from None
+        if acc.shape != (len(self.coords),):
+            raise ValueError(f"{what}: {name}.accelerations gives shape {acc.shape} at the initial state, not "
+                             f"({len(self.coords)},), one per coordinate")
         return model
 
     def _verify(self, model, path, bindings):

@@ -36,12 +36,18 @@ def evaluate(case, source, states):
             try:
                 with np.errstate(all="ignore"):
                     out.append(method(t, q, v))
-            except (ArithmeticError, np.linalg.LinAlgError) as error:
+            except Exception as error:  # an overflow, a singular matrix, any error of a case's own code
                 raise ArithmeticError(f"{source}: {quantity} at random state {i}: {type(error).__name__}: "
                                       f"{error}") from None
         return out
 
-    acc = np.array(each("accelerations", model.accelerations))
+    try:
+        acc = np.array(each("accelerations", model.accelerations), dtype=float)
+    except (TypeError, ValueError):  # vectors of different lengths, or not numbers
+        acc = np.empty(0)
+    if acc.shape != (len(states), len(case.coords)):  # one number per coordinate at every state
+        raise ArithmeticError(f"{source}: accelerations give {acc.shape[1:] if acc.ndim > 1 else 'no vector'} at "
+                              f"the random states, not ({len(case.coords)},)")
     values = {f"{c}_acc": acc[:, i] for i, c in enumerate(case.coords)}
     reactions = each("reactions", model.reactions)
     values.update({name: np.array([r[name] for r in reactions]) for name in case.reaction_names})

@@ -60,7 +60,7 @@ def main(argv=None):
         if args.command == "run" and args.json:
             check_json_path(args.json)
         if args.command == "run" and args.results:
-            check_results_folder(args.results)
+            check_results_folder(args.results, [case.name for case in cases])
     except ValueError as error:
         return error_exit(error)
     if args.command == "bench":
@@ -227,13 +227,17 @@ def check_out_folder(out):
     check_writable("--out", out, [out.parent] + ([out] if out.is_dir() else []))
 
 
-def check_results_folder(folder):
-    """`run --results` writes folder/<case>/ for each case: refuse a folder of something else."""
+def check_results_folder(folder, names):
+    """`run --results` replaces folder/<case>/ for each case: refuse a folder of something else."""
     if folder.exists() and not folder.is_dir():
         raise ValueError(f"--results {folder}: is not a folder")
     if folder.is_dir() and any(folder.iterdir()) and not any(folder.glob("*/value.json")):
         raise ValueError(f"--results {folder}: holds files but no saved results (no <case>/value.json); "
                          "give a new or empty folder, or one `run --results` wrote")
+    for name in names:
+        own = folder / name
+        if own.is_symlink() or (own.exists() and not (own / "value.json").is_file()):
+            raise ValueError(f"--results {folder}: {own} is not saved results, and the run would replace it")
     check_writable("--results", folder.resolve(), [folder.resolve()])
 
 

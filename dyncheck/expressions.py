@@ -29,6 +29,11 @@ MAX_DEPTH = 100  # levels of the syntax tree
 MAX_EXPONENT = 1024
 
 
+def of_parameters(params):
+    """What a case-file number may use: the parameters, pi and numpy's functions."""
+    return {**{name: getattr(np, name) for name in FUNCTIONS}, "pi": np.pi, **params}
+
+
 def namespace(case, run):
     """What a case's expressions may use along `run` (a DataFrame indexed by t): its columns (among them
     the traced bodies' centre-of-mass coordinates <body>_x, _y, _z, see dyncheck.checks.with_paths),

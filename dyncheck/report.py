@@ -570,6 +570,8 @@ def study_sections(result, case, tmp):
         for study in studies["stability"]:
             chart = f"figures/{case.name}_{study.study}.png"
             stability.figure(case, study, tmp / chart)
+            if not (tmp / chart).is_file():  # a case's own figure function that drew nothing
+                raise ValueError(f"{case.file}: stability study {study.study}: its figure function wrote no {chart}")
             files.append(chart)
             lines += [f"### {study.title}", "", *[f"- {sentence}" for sentence in study.findings], "",
                       f"![{study.study}]({chart})", "",

@@ -208,16 +208,22 @@ def save_results(results, folder):
 
 
 def load_results(folder):
-    """The CaseResults saved in folder/<case>/, in name order; ValueError naming what is not one."""
-    folders = sorted(p.parent for p in folder.glob("*/value.json"))
+    """The CaseResults saved in folder/<case>/, in name order; ValueError naming what is not one.
+    Hidden folders (a save in progress, or one a kill left) are not results."""
+    if not folder.is_dir():
+        raise ValueError(f"{folder}: no such folder")
+    folders = sorted(p.parent for p in folder.glob("*/value.json") if not p.parent.name.startswith("."))
     if not folders:
-        raise ValueError(f"{folder}: holds no saved results (no <case>/value.json); `dyncheck run --results DIR` "
-                         "and `dyncheck report` (in its results/) save them")
+        hint = " (the report's saved results are in its results/ folder)" if (folder / "results").is_dir() else ""
+        raise ValueError(f"{folder}: holds no saved results (no <case>/value.json){hint}; `dyncheck run --results "
+                         "DIR` and `dyncheck report` (in its results/) save them")
     results = []
     for path in folders:
         result = store.load(path)
         if not isinstance(result, CaseResult):
             raise ValueError(f"{path}: holds a {type(result).__name__}, not a case's results")
+        if result.name != path.name:  # a copy set aside under another name would pass for the case's results
+            raise ValueError(f"{path}: holds the results of case '{result.name}', not of '{path.name}'")
         results.append(result)
     return results
 

@@ -118,10 +118,19 @@ BOUNDS = {"minimum": ">=", "exclusive_minimum": ">", "maximum": "<=", "exclusive
 RELATIONS = {">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt}
 
 
-def validate(spec, file):
-    """The parsed case file `spec` against the schema; ValueError names `file`, the field and the value."""
+RESERVED_NAMES = ("index", "errata")  # the report's own pages: <name>.md of a case would replace them
+
+
+def validate(spec, file, where=True):
+    """The parsed case file `spec` against the schema; ValueError names `file`, the field and the value.
+    `where`: also that the case's folder is named after it and its derivation is there (not for a
+    case rebuilt from saved results, whose folder may have moved)."""
     _walk(spec, SCHEMA, "", file)
     _cross_references(spec, file)
+    if where:
+        if spec["name"] != Path(file).parent.name:  # the command line finds a case by its folder, pages by its name
+            raise _error(file, "name", spec["name"], f"is not the name of the case's folder, '{Path(file).parent.name}'")
+        _derivation(spec["derivation"], file)
 
 
 def check_params(spec, params, overrides, file):
@@ -136,7 +145,7 @@ def check_params(spec, params, overrides, file):
 
 def _check_constraints(constraints, params, overrides, file):
     """Each constraint's expression >= 0 (> 0 if strict) at `params`, or ValueError naming it."""
-    names = {**params, "pi": math.pi}  # as dyncheck.case.Case.value evaluates the file's numbers
+    names = expressions.of_parameters(params)  # as dyncheck.case.Case.value evaluates the file's numbers
     for i, constraint in enumerate(constraints):
         field, expression = f"constraints[{i}]", constraint["expression"]
         try:
@@ -283,7 +292,8 @@ def _cross_references(spec, file):
     name, coords, params, scene = spec["name"], spec["coords"], spec["params"], spec["scene"]
     if not name.isidentifier():
         raise _error(file, "name", name, "is not an identifier (letters, digits and _, not starting with a digit)")
-    _derivation(spec["derivation"], file)
+    if name in RESERVED_NAMES:
+        raise _error(file, "name", name, f"is the name of a page of the report ({', '.join(RESERVED_NAMES)}); choose another")
     for key in ("coords", "reactions"):
         twice = [x for x in spec[key] if spec[key].count(x) > 1]
         if twice:
@@ -680,7 +690,7 @@ def markdown():
               f"{expressions.MAX_LENGTH} characters or nested deeper than {expressions.MAX_DEPTH} levels.", "",
               "The names depend on where the expression is:", "",
               "- the file's numbers of type \"a number or an expression in quotes\" and `constraints[i].expression`: "
-              "the parameters and `pi`, no functions;",
+              "the parameters, `pi` and numpy's " + ", ".join(f"`{name}`" for name in expressions.FUNCTIONS) + ";",
               "- along a run (`report.stop`, `report.values`, `report.figures`, `program.figures`, `program.plots`): "
               "the run's columns, arrays over its output times (each coordinate, its rate `<coord>_rate`, each "
               "reaction, `energy`, `work`, and `<body>_x`, `<body>_y`, `<body>_z` of each body of `scene.paths`), "

@@ -142,12 +142,15 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
 
 
 def _arithmetic(method, t, step, call, *args):
-    """call(*args), with an arithmetic failure in the model (an overflow in its float arithmetic, a
-    singular matrix) raised as Unstable at time t, step `step`."""
+    """call(*args), with a failure in the model (an overflow in its float arithmetic, a singular
+    matrix, any error of a case's own code) raised as Unstable at time t, step `step`: a row that
+    says why, never a traceback."""
     try:
         return call(*args)
     except (ArithmeticError, np.linalg.LinAlgError) as error:
         raise Unstable(method, t, step, f"the model's arithmetic failed: {type(error).__name__}: {error}") from None
+    except Exception as error:
+        raise Unstable(method, t, step, f"the model failed: {type(error).__name__}: {error}") from None
 
 
 def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget):
@@ -157,7 +160,10 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget):
     evaluations = steps = 0
 
     def derivative(t, q, v):
-        return np.concatenate([v, model.accelerations(t, q, v), [model.drive_power(t, q, v) if work else 0.0]])
+        acc = model.accelerations(t, q, v)
+        if not np.all(np.isfinite(acc)):  # at once: a solver shrinks its step on NaN until the budget ends
+            raise ArithmeticError(f"accelerations {acc} are not finite")
+        return np.concatenate([v, acc, [model.drive_power(t, q, v) if work else 0.0]])
 
     def rhs(t, y):
         nonlocal evaluations

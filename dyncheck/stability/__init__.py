@@ -40,9 +40,10 @@ def case_module(case):
     if module is None:
         return None
     path = case.folder / module
-    if not path.is_file():
-        raise ValueError(f"{case.file}: stability.module = {module!r}: no such Python file {path}")
-    return load_file(path)
+    if not path.is_file():  # also when saved results are rendered after their case folder moved
+        raise ValueError(f"{case.file}: stability.module = {module!r}: no such Python file {path} (the case's "
+                         "studies and the figures of their saved results need it)")
+    return load_file(path, f"{case.file}: stability.module = {module!r}")
 
 
 def available(case):
@@ -52,7 +53,11 @@ def available(case):
         return GENERIC
     own = getattr(module, "STUDIES", None)
     if not isinstance(own, dict) or not all(isinstance(s, Study) for s in own.values()):
-        raise ValueError(f"{module.__file__}: defines no STUDIES, a dict of dyncheck.stability.common.Study")
+        raise ValueError(f"{module.__file__}: STUDIES is {type(own).__name__}, not a dict of "
+                         "dyncheck.stability.common.Study")
+    if GENERIC.keys() & own.keys():
+        raise ValueError(f"{module.__file__}: STUDIES names {sorted(GENERIC.keys() & own.keys())}, which are "
+                         "dyncheck's own studies; give yours other names")
     return {**GENERIC, **own}
 
 
@@ -82,6 +87,10 @@ def validate(case):
         for name, override in value.get("overrides", {}).items():
             if name not in case.params:
                 raise ValueError(f"{case.file}: stability.{key}.overrides: no parameter '{name}'")
+        try:  # the study's case must be physical too
+            case.with_params(**value.get("overrides", {}))
+        except ValueError as error:
+            raise ValueError(f"stability.{key}.overrides = {value.get('overrides')}: {error}") from None
         settings = settings_of(case, key)  # a ValueError names the file and the field
         if key == "lyapunov":
             _agreement_settings(case.file, settings)

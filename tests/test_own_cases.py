@@ -1,0 +1,121 @@
+"""A researcher's own case, broken every way the attack of issue 11 found: each is refused before any
+work (exit 2, one line naming the file and what is wrong) or becomes a row that says why; none passes
+silently and none is a traceback."""
+
+import json
+import time
+
+import pytest
+
+from dyncheck.cli import main
+from test_architecture import doc_example
+
+ACC = '-self.p["k"] / self.p["m"] * q[0]'
+
+
+def case_folder(tmp_path, name="oscillator", **edits):
+    """The documented example in tmp_path/cases/<name>, with `edits` {file: (old, new)} applied."""
+    folder = tmp_path / "cases" / name
+    folder.mkdir(parents=True)
+    for file, text in doc_example().items():
+        if file in edits:
+            old, new = edits[file]
+            assert old in text, (file, old)
+            text = text.replace(old, new, 1)
+        (folder / file).write_text(text)
+    return folder
+
+
+def run(tmp_path, capsys, *args):
+    status = main(["run", "--cases", str(tmp_path / "cases"), *args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+@pytest.mark.parametrize("file, old, new, message", [
+    ("case.toml", 'name = "oscillator"', 'name = "spring"', "name = 'spring' is not the name of the case's folder"),
+    ("equations.py", "import numpy as np", "import numpy as np\nraise RuntimeError('half-typed')",
+     "derivation = 'equations.py': RuntimeError: half-typed"),
+    ("equations.py", "import numpy as np", "import numpy as np\nimport sys\nsys.exit(0)",
+     "derivation = 'equations.py': SystemExit: 0"),
+    ("equations.py", "import numpy as np", "import numpy as np\ndef broken(:", "derivation = 'equations.py': SyntaxError"),
+    ("equations.py", "Book = Reference", "", "defines no class Book"),
+    ("equations.py", 'coords, reaction_names = ("x",), ()', 'coords, reaction_names = ("y",), ()',
+     "Reference.coords is ('y',), but case.toml's coords are ['x']"),
+    ("equations.py", 'coords, reaction_names = ("x",), ()', 'coords, reaction_names = ("x",), ("R",)',
+     "Reference.reaction_names is ('R',)"),
+    ("equations.py", f"np.array([{ACC}])", f"np.array([{ACC}, 5.0])",
+     "Reference.accelerations gives shape (2,) at the initial state, not (1,)"),
+    ("case.toml", 'derivation = "equations.py"', 'derivation = "os"', "derivation = 'os' defines no class Reference"),
+])
+def test_a_broken_derivation_is_refused_before_any_work(tmp_path, capsys, file, old, new, message):
+    case_folder(tmp_path, **{file: (old, new)})
+    status, out, err = run(tmp_path, capsys)
+    assert status == 2 and err.startswith("dyncheck: error: ") and message in err, err
+    assert len(err.splitlines()) == 1 and "oscillator: " not in out
+
+
+def test_a_case_may_not_take_the_name_of_a_page_of_the_report(tmp_path, capsys):
+    case_folder(tmp_path, "index", **{"case.toml": ('name = "oscillator"', 'name = "index"')})
+    status, _, err = run(tmp_path, capsys)
+    assert status == 2 and "is the name of a page of the report" in err
+
+
+def test_accelerations_that_are_nan_or_raise_later_are_rows_at_once(tmp_path, capsys):
+    """Right at the initial state, wrong elsewhere: failing rows that say why, found in seconds (a
+    solver shrinks its step on NaN until its budget ends, minutes, unless the harness stops it)."""
+    case_folder(tmp_path, **{"equations.py": (f"np.array([{ACC}])",
+                                              f"np.array([{ACC} if t == 0 else float('nan')])")})
+    start = time.perf_counter()
+    status, _, _ = run(tmp_path, capsys, "--json", str(tmp_path / "out.json"))
+    assert status == 1 and time.perf_counter() - start < 60
+    rows = json.loads((tmp_path / "out.json").read_text())["cases"][0]["checks"]
+    assert any("not finite" in r["detail"] for r in rows if r["status"] in ("fail", "unstable"))
+
+
+def test_a_derivation_may_not_change_the_parameters_it_is_given(tmp_path, capsys):
+    case_folder(tmp_path, **{"equations.py": ("self.p = p", 'self.p = p\n        p["k"] = 1e6')})
+    status, _, err = run(tmp_path, capsys)
+    assert status == 2 and "does not support item assignment" in err
+
+
+def test_saved_results_are_read_from_their_own_folders_only(tmp_path, capsys):
+    """A copy set aside under another name, or a save a kill left hidden, is not taken for the case's."""
+    case_folder(tmp_path)
+    saved = tmp_path / "saved"
+    assert run(tmp_path, capsys, "--results", str(saved))[0] == 0
+    (saved / "oscillator").rename(saved / "oscillator_backup")
+    assert main(["report", "--from", str(saved), "--out", str(tmp_path / "pages")]) == 2
+    assert "holds the results of case 'oscillator', not of 'oscillator_backup'" in capsys.readouterr().err
+    (saved / "oscillator_backup").rename(saved / ".oscillator.tmp")
+    assert main(["report", "--from", str(saved), "--out", str(tmp_path / "pages")]) == 2
+    assert "holds no saved results" in capsys.readouterr().err
+    assert main(["report", "--from", str(tmp_path / "missing"), "--out", str(tmp_path / "pages")]) == 2
+    assert "no such folder" in capsys.readouterr().err
+
+
+def test_run_results_will_not_replace_a_folder_it_did_not_write(tmp_path, capsys):
+    case_folder(tmp_path)
+    saved = tmp_path / "saved"
+    (saved / "other").mkdir(parents=True)
+    (saved / "other" / "value.json").write_text("{}")
+    (saved / "oscillator").mkdir()
+    (saved / "oscillator" / "thesis.tex").write_text("months of work")
+    status, out, err = run(tmp_path, capsys, "--results", str(saved))
+    assert status == 2 and "is not saved results, and the run would replace it" in err and not out
+    assert (saved / "oscillator" / "thesis.tex").read_text() == "months of work"
+
+
+STUDIES = '''
+from dyncheck.stability.common import Study
+from dyncheck.stability.long_runs import energy_drift, figure_energy_drift
+
+STUDIES = {"lyapunov": Study(energy_drift, figure_energy_drift, ())}
+'''
+
+
+def test_a_case_s_studies_may_not_replace_dyncheck_s_own(tmp_path, capsys):
+    folder = case_folder(tmp_path, **{"case.toml": ("[scene]", '[stability]\nmodule = "studies.py"\n\n[scene]')})
+    (folder / "studies.py").write_text(STUDIES)
+    status, _, err = run(tmp_path, capsys)
+    assert status == 2 and "STUDIES names ['lyapunov'], which are dyncheck's own studies" in err
