@@ -24,6 +24,7 @@ import struct
 import tempfile
 import zipfile
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import pandas as pd
@@ -115,6 +116,8 @@ def _encode(value, path, arrays):
     in errors."""
     if isinstance(value, np.generic):
         return _encode(value.item(), path, arrays)
+    if isinstance(value, MappingProxyType):  # a read-only view of a dict (a case's parameters): comes back a dict
+        return _encode(dict(value), path, arrays)
     if value is None or type(value) in (bool, int, str):
         return value
     if type(value) is float:

@@ -308,3 +308,10 @@ def test_an_object_column_of_any_values_round_trips(tmp_path):
     assert list(back["start"]) == [(0.5, 1.0), (3.0, 3.1)] and list(back["mixed"]) == ["a", 1.5]
     pd.testing.assert_frame_equal(back, frame)
 
+
+def test_a_read_only_mapping_comes_back_a_dict(tmp_path):
+    """A case's parameters are a read-only view; a study may keep them in what it returns."""
+    from types import MappingProxyType
+    store.save({"params": MappingProxyType({"k": 2000.0})}, tmp_path / "s")
+    assert store.load(tmp_path / "s") == {"params": {"k": 2000.0}}
+
