@@ -40,8 +40,8 @@ Pinocchio:
     solver and ABA do together.
 Reference and book: the accelerations state by state; and where a source's accelerations, as
 written, take many states as columns (closed forms in numpy), one call over 10000 states against
-the loop.  The numerical Newton-Euler references (the 1.8 chain of frames, the double pendulum's
-linear solve) take one state at a time: vectorising them would mean writing their equations twice.
+the loop.  The numerical Newton-Euler references (chains of frames, linear
+solves) take one state at a time: vectorising them would mean writing their equations twice.
 """
 
 import statistics

@@ -16,8 +16,8 @@ POINTWISE = 1e-6
 
 # Trajectories and energy balances are judged against `safety` times the run's own error estimate
 # (its difference from a tighter twin).  That estimate assumes the run's error grows linearly with a
-# perturbation; beyond about 1e-3 of a quantity's scale it does not (where the double pendulum's
-# difference stops growing linearly: [stability.lyapunov] in its case file), and neither the
+# perturbation; beyond about 1e-3 of a quantity's scale it does not (where the book's chaotic
+# example's difference stops growing linearly: [stability.lyapunov] in its case file), and neither the
 # estimate nor a comparison built on it means anything.
 RUN = 1e-3
 

@@ -323,7 +323,7 @@ def convergence(case):
     p = log2(D1 / D2) with D1 = |x_h - x_h/2|, D2 = |x_h/2 - x_h/4|, each the largest difference
     over the trajectory (at 50 or more of the coarsest run's steps) and the state coordinates,
     relative to the coordinate's largest magnitude.  Over the trajectory, not at the final state: the error of one
-    instant can pass near zero and bend the ratio (measured: RK4 on the double pendulum shows 5.05
+    instant can pass near zero and bend the ratio (measured: RK4 on the book's chaotic example shows 5.05
     at the final state and 3.89 over the trajectory, 4.00 and 3.94 at halved steps).
 
     Tolerance, from the error expansion x_h - x = h^p e_p + h^(p+1) e_(p+1) + ...:

@@ -5,8 +5,8 @@ Each case says in its `[stability]` table which studies it gets and with what nu
 in a sub-table named after it with a `why`.  Studies that apply to any scene are here
 (`long_runs`: the finite-time Lyapunov exponent and agreement horizon, the long-run energy drift);
 a case's own studies live in the file its table names as `module`, whose `STUDIES` maps names to
-`common.Study` (run, figure, required keys), as the book's spring pendulum (the largest stable step
-against the stiffness) and top (the Euler-angle singularity, the sleeping top) do.
+`common.Study` (run, figure, required keys), as the `studies.py` of two of the book's cases do (the
+largest stable step against a stiffness; the Euler-angle singularity and the sleeping top).
 
 `studies(case)` runs them and returns one dyncheck.results.StudyResult per study; `figure(case,
 result, path)` draws one.  `validate(case)` checks the table at load.  A run that blows up (NaN, a

@@ -1,4 +1,5 @@
-"""1.9 double pendulum: the Lyapunov exponent, the agreement horizon and long-run energy drift."""
+"""Studies of long runs, for any case: the finite-time Lyapunov exponent and the agreement horizon of
+two sources, and each method's long-run energy drift."""
 
 import math
 import time
@@ -168,7 +169,8 @@ def lyapunov(case, settings, progress=None):
                                                                  else f"> {settings['horizon']:g}"),
     } for r in rows])
     findings = [f"Largest Lyapunov exponent by two neighbouring trajectories (Benettin; DOP853 at rtol "
-                f"{settings['rtol']:g}, distance {settings['d0']:g} in the state with rates divided by sqrt(g/l1), "
+                f"{settings['rtol']:g}, distance {settings['d0']:g} in the state with rates divided by "
+                f"rate_scale = {settings['rate_scale']:.4g} rad/s, "
                 f"renormalised every {settings['renormalise']:g} s) over {settings['horizon']:g} s. The agreement "
                 f"horizon T = ln(tol/eps0)/lambda is how long two sources that differ by eps0 stay within tol."]
     for r in rows:
@@ -251,19 +253,20 @@ def energy_drift(case, settings, progress=None):
                                                                                "step": r.get("step_fail")}),
     } for r in rows])
     dop = f", DOP853 at rtol {settings['rtol']:g}" if "DOP853" in settings["methods"] else ""
-    findings = [f"From the book's initial conditions over {T:g} s at dt = {dt:g} s (the step of the book's Pascal "
-                f"listing){dop}; "
+    findings = [f"From the book's initial conditions over {T:g} s at dt = {dt:g} s{dop}; "
                 f"the error is |E(t) - E(0)| relative to the swing's energy above rest, E(0) - E_rest = {swing:.4g} J. "
                 "The growth exponent is d ln(max |dE|) / d ln t from T/10 to T: 0 for a bounded error, 1 for a "
                 "linear drift."]
     ran = data[data["status"] == "ran"] if "status" in data else data
-    top = (reference.energy(0.0, np.array([math.pi, 0.0]), np.zeros(2)) - rest) / swing if len(q0) == 2 else None
+    # Optional: a state whose energy above rest the motion must exceed to run away (over the top, say).
+    whirl = settings.get("whirl_q")
+    top = (reference.energy(0.0, np.array(whirl), np.zeros(len(v0))) - rest) / swing if whirl else None
     for _, r in ran.iterrows():
         text = (f"{r['method']}: {r['character']} (growth exponent {r['growth_exponent']:.2f}); "
                 f"{r['drift_1s']:.2g} after 1 s, {r['drift_T10']:.2g} after {T / 10:g} s, {r['drift_T']:.2g} by {T:g} s")
         if r["drift_T"] > 1.0 and top:
-            text += (f": the pendulum gains more than the {top:.3g} swing energies that lift both masses over the "
-                     "top, and whirls")
+            text += (f": it gains more than the {top:.3g} swing energies that the state q = "
+                     f"({', '.join(f'{x:.4g}' for x in whirl)}) holds above rest, and runs away")
         findings.append(text + ".")
     for _, r in (data[data["status"] == "unstable"].iterrows() if "status" in data else []):
         findings.append(f"{r['method']}: unstable at t = {fmt(r['t_fail'])} s (step {r['step_fail']}): {r['why']}.")
@@ -308,7 +311,7 @@ def figure_lyapunov(result, path):
     for a in (a1, a2):
         a.grid(True, which="both", alpha=0.3)
         a.legend(fontsize=8)
-    fig.suptitle("1.9 double pendulum: sensitivity to initial conditions", fontsize=11)
+    fig.suptitle(f"{result.case}: sensitivity to initial conditions", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
@@ -334,8 +337,8 @@ def figure_energy_drift(result, path):
     ax.set_xscale("log")
     ax.set_xlabel("t [s]")
     ax.set_ylabel("|E(t) - E(0)| / (E(0) - E_rest)")
-    ax.set_title(f"1.9 double pendulum: energy error of each method at dt = {s['dt']:g} s "
-                 f"(the book's listing's step), E(0) - E_rest = {s['swing']:.3g} J\n"
+    ax.set_title(f"{result.case}: energy error of each method at dt = {s['dt']:g} s, "
+                 f"E(0) - E_rest = {s['swing']:.3g} J\n"
                  "MuJoCo's Euler and implicitfast lie on semi-implicit Euler, MuJoCo's RK4 on RK4 "
                  "(wide pale lines under the thin ones)", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
