@@ -44,6 +44,7 @@ class Parameter:
     default: float  # the case file's value
     unit: str
     about: str
+    bounds: tuple  # (relation, value) pairs its value must satisfy (schema.demands), e.g. ((">", 0.0),)
 
 
 def load_file(path, what):
@@ -146,7 +147,8 @@ class Case:
     @property
     def parameters(self):
         """Every parameter, in the case file's order."""
-        return tuple(Parameter(name, self.params[name], self.defaults[name], self.units[name], item["about"])
+        return tuple(Parameter(name, self.params[name], self.defaults[name], self.units[name], item["about"],
+                               tuple((relation, float(bound)) for relation, bound, _ in schema.demands(item, name)))
                      for name, item in self.spec["params"].items())
 
     def with_params(self, **params):

@@ -137,7 +137,7 @@ def check_params(spec, params, overrides, file):
     """The parameter values (defaults and `overrides` applied): physical, or ValueError."""
     field = lambda p: f"override {p}" if p in overrides else f"params.{p}.value"
     for p, x in params.items():
-        for relation, bound, reason in _demands(spec["params"][p], p):
+        for relation, bound, reason in demands(spec["params"][p], p):
             if not RELATIONS[relation](x, bound):
                 raise _error(file, field(p), x, f"must be {relation} {bound:g} ({reason})")
     _check_constraints(spec.get("constraints", []), params, overrides, file)
@@ -192,7 +192,7 @@ def check_values(spec, file, value):
             raise _error(file, field, bounds, f"is not an interval lo <= hi ({lo:g} > {hi:g})")
     # The random parameter sets must be physical too: an interval is within bounds when both its ends are.
     for p, bounds in ranges.items():
-        for relation, bound, reason in _demands(spec["params"][p], p):
+        for relation, bound, reason in demands(spec["params"][p], p):
             if not all(RELATIONS[relation](values[f"sample.params.ranges.{p}[{i}]"], bound) for i in (0, 1)):
                 raise _error(file, f"sample.params.ranges.{p}", bounds,
                              f"leaves the physical values: {p} must be {relation} {bound:g} ({reason})")
@@ -405,7 +405,7 @@ def _binding(location, field, params, file):
                          + _hint(depend, params))
 
 
-def _demands(item, name):
+def demands(item, name):
     """What the value of parameter `name` (its table `item` in [params]) must satisfy beyond being finite:
     a list of (relation, bound, reason)."""
     unit = item["unit"]
