@@ -1,4 +1,4 @@
-"""Engine adapters: MuJoCo (MJCF) and Pinocchio (URDF) behind the model interface of DESIGN.md.
+"""Engine adapters: MuJoCo (MJCF) and Pinocchio (URDF) behind the model interface (docs/model-interface.md).
 
 The only importers of `mujoco` and `pinocchio`: what the rest of dyncheck needs of an engine is an adapter
 method (mujoco_adapter, pinocchio_adapter) or a bare-engine loop for timing (bench).  euler holds the book's

@@ -1,7 +1,7 @@
 """Section 1.10: heavy symmetric top on the floor, tip O fixed (no slip), Euler angles.
 
 Names.  The book writes varphi for the precession, theta for the nutation and phi for the spin;
-its Pascal listing calls them psi, teta and phi.  Here (DESIGN.md): precession = varphi = psi,
+its Pascal listing calls them psi, teta and phi.  Here (the case file's coords): precession = varphi = psi,
 nutation = theta = teta, spin = phi; the velocities are the Euler-angle rates.  Below,
 p = precession, n = nutation, s = spin, and ', '' are time derivatives.
 

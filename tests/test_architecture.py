@@ -146,3 +146,12 @@ def test_a_mechanism_from_a_folder_outside_the_tree_runs(tmp_path, capsys):
     assert wrong != files["equations.py"]
     (folder / "equations.py").write_text(wrong)
     assert main(["run", "--cases", cases]) == 1
+
+
+def test_nothing_points_outside_the_repository():
+    """The repository carries its own contract: no file names the scaffolding it was built from."""
+    tracked = subprocess.run(["git", "ls-files"], capture_output=True, text=True, cwd=ROOT).stdout.split()
+    pointing = [name for name in tracked if name.endswith((".py", ".md", ".toml", ".xml", ".urdf"))
+                and re.search(r"\.\./shared|DESIGN\.md", (ROOT / name).read_text(errors="replace"))]
+    assert not pointing, pointing
+
