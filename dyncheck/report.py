@@ -334,6 +334,11 @@ def values_table(case, spaces):
 
 # -- pages --------------------------------------------------------------------------
 
+def size(error, spec=".3g"):
+    """A finding's largest error, or why there is none (its rows not applicable under overrides)."""
+    return "not measured with these parameters" if error is None else format(error, spec)
+
+
 def worst_engine_error(rows):
     """Largest pointwise error among reference, MuJoCo and Pinocchio."""
     errors = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= set(ENGINES)]
@@ -498,7 +503,7 @@ def write_case_page(result, case, tmp):
         lines += ["## Findings: where the book is wrong", ""]
         for f in findings:
             lines += [f"### {f.id}: {f.title}", "",
-                      f"*Where:* {f.where}.  *Largest relative error:* {f.error:.3g}"
+                      f"*Where:* {f.where}.  *Largest relative error:* {size(f.error)}"
                       f" (quantities {', '.join(f.quantities)}; comparisons: {', '.join(f.sources)};"
                       f" {f.established})."
                       + (f"  {f.effect}" if f.effect else ""), "",
@@ -618,7 +623,7 @@ def section_key(section):
 def write_errata(tmp, cases):
     """errata.md: every finding of every case in one table, then each in full."""
     table = [{"finding": f"[{f['id']}](#{f['id'].replace('.', '').lower()})", "case": f"[{c['case']}]({c['case']}.md)",
-              "where": f["where"], "what": f["title"], "largest relative error": f"{f['error']:.3g}",
+              "where": f["where"], "what": f["title"], "largest relative error": size(f["error"]),
               "localised edit": f["localised"]}
              for c in cases for f in c["findings"]]
     lines = ["# Errata: where the book is wrong", "",
@@ -630,7 +635,7 @@ def write_errata(tmp, cases):
         for f in c["findings"]:
             lines += [f"## {f['id']}", "", f"**{f['title']}** ([{c['case']}]({c['case']}.md), {c['section']})", "",
                       f"- *Where:* {f['where']}",
-                      f"- *Quantities:* {', '.join(f['quantity'])}; largest relative error {f['error']:.3g}",
+                      f"- *Quantities:* {', '.join(f['quantity'])}; largest relative error {size(f['error'])}",
                       f"- *How established:* {f['established']}",
                       *([f"- *Effect:* {f['effect']}"] if f["effect"] else []),
                       f"- *Localised edit:* {f['localised']}", "",
@@ -667,7 +672,7 @@ def write_index(tmp, cases):
             "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"], "title": case["title"],
             "status": case["status"], "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
             "worst engine error": "-" if case["worst_engine_error"] is None else f"{case['worst_engine_error']:.1e}",
-            "findings": ", ".join(f"{f['id']} ({f['error']:.2g})" for f in case["findings"]) or "none"})
+            "findings": ", ".join(f"{f['id']} ({size(f['error'], '.2g')})" for f in case["findings"]) or "none"})
     tried = [c["random"] for c in cases]
     states = sum(t["states"] + t["parameter_sets"] * t["states_per_set"] for t in tried)
     disagreed = [c["case"] for c in cases if not c["random"]["agreed"]]

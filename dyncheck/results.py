@@ -24,11 +24,12 @@ class Status(enum.StrEnum):
     FAIL = "fail"
     INCONCLUSIVE = "inconclusive"  # the tolerance is above the ceiling: the comparison proves nothing
     UNSTABLE = "unstable"  # an integration blew up: no number to compare
+    NOT_APPLICABLE = "not applicable"  # a comparison with the book's printed run, under other parameters
 
     @property
     def ok(self):
         """Whether a run with this row exits 0."""
-        return self in (Status.PASS, Status.FINDING)
+        return self in (Status.PASS, Status.FINDING, Status.NOT_APPLICABLE)
 
 
 @store.register
