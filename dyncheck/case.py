@@ -151,6 +151,11 @@ class Case:
                                tuple((relation, float(bound)) for relation, bound, _ in schema.demands(item, name)))
                      for name, item in self.spec["params"].items())
 
+    def overrides_text(self):
+        """The overrides in words, as pages and rows show them: "k = 500 N/m (book: 2000)"."""
+        return ", ".join(f"{name} = {value:g} {self.units[name]} (book: {self.defaults[name]:g})"
+                         for name, value in self.overrides.items())
+
     def with_params(self, **params):
         """This case with further parameters overridden (on top of its own overrides)."""
         return Case(self.folder, {**self.overrides, **params}, self.spec, self.derivation)

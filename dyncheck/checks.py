@@ -336,9 +336,9 @@ def book_numbers_only(case, rows):
     applicable (the book printed them for its own numbers): shown, counted apart, never a failure."""
     if not case.overrides:
         return rows
-    changed = ", ".join(f"{name} = {value:g} (book: {case.defaults[name]:g})" for name, value in case.overrides.items())
     return [replace(r, status=Status.NOT_APPLICABLE, finding=None,
-                    detail=f"the book printed this for its own parameters, not for {changed}; " + r.detail)
+                    detail=f"the book printed this for its own parameters, not for {case.overrides_text()}; "
+                           + r.detail)
             if r.check in BOOK_ONLY and r.status in (Status.PASS, Status.FAIL, Status.FINDING) else r for r in rows]
 
 

@@ -11,6 +11,7 @@ import os
 import sys
 import tempfile
 import time
+from importlib.metadata import version
 from pathlib import Path
 
 import pandas as pd
@@ -24,6 +25,7 @@ from dyncheck.results import format_rows, load_results, save_results, to_json
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="dyncheck", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"dyncheck {version('dyncheck')}")
     commands = parser.add_subparsers(dest="command", required=True)
     listing = commands.add_parser("list", help="list the cases")
     run = commands.add_parser("run", help="run the checks and print a table")
@@ -41,14 +43,17 @@ def main(argv=None):
     run.add_argument("--json", type=Path, metavar="PATH", help="also write the results as JSON")
     run.add_argument("--results", type=Path, metavar="DIR",
                      help="also save the results (rows, runs, findings) for `dyncheck report --from DIR`")
-    report.add_argument("--out", type=Path, default=Path("reports"), metavar="DIR",
-                        help="where to write the reports (default: reports)")
+    report.add_argument("--out", type=Path, metavar="DIR",
+                        help="where to write the reports (default: reports, or with --set a folder beside it named "
+                             "after the overrides, so that the book's pages stay as they are)")
     report.add_argument("--no-studies", action="store_true",
                         help="leave out the work-precision and stability studies (minutes) from the pages")
     report.add_argument("--from", type=Path, metavar="DIR", dest="saved",
                         help="render the pages from results saved in DIR (a report's results/ folder, or "
                              "`run --results DIR`) instead of running anything; needs neither engine")
     args = parser.parse_args(argv)
+    if args.command == "report" and args.out is None:
+        args.out = Path("reports" + "".join(f"-{pair.strip().replace('/', '_')}" for pair in args.set))
     try:
         if args.command == "list":
             return list_cases(args.cases_dir)

@@ -456,7 +456,8 @@ def write_case_page(result, case, tmp):
         f"**{result.status}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
         + f"; worst pointwise error among reference, MuJoCo and Pinocchio: {worst_engine_error(rows):.1e}"
         + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md), [errata](errata.md)"
-        + (f"  \nParameters overridden: {case.overrides}" if case.overrides else ""),
+        + (f"  \nParameters overridden (`--set`): {case.overrides_text()}; the book's figures and printed data"
+           " do not apply to them" if case.overrides else ""),
         "",
         "## The scene",
         "",
@@ -669,7 +670,8 @@ def write_index(tmp, cases):
     for case in cases:
         counts = pd.Series([c["status"] for c in case["checks"]]).value_counts()
         rows.append({
-            "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"], "title": case["title"],
+            "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"],
+            "title": case["title"] + "".join(f", {name} = {value:g}" for name, value in case.get("overrides", {}).items()),
             "status": case["status"], "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
             "worst engine error": "-" if case["worst_engine_error"] is None else f"{case['worst_engine_error']:.1e}",
             "findings": ", ".join(f"{f['id']} ({size(f['error'], '.2g')})" for f in case["findings"]) or "none"})

@@ -140,5 +140,5 @@ def test_the_book_s_printed_figures_and_data_do_not_apply_to_other_parameters():
     from dyncheck.checks import run_case
     result = run_case(dyncheck.load_case("spring_pendulum", k=500.0), localise=False)
     book_only = [r for r in result.rows if r.check in ("figure", "data")]
-    assert book_only and all(r.status == "not applicable" and "k = 500 (book: 2000)" in r.detail for r in book_only)
+    assert book_only and all(r.status == "not applicable" and "k = 500 N/m (book: 2000)" in r.detail for r in book_only)
     assert result.status == "PASS" and all(r.status in ("pass", "finding") for r in result.rows if r not in book_only)

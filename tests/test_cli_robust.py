@@ -208,7 +208,16 @@ def test_nothing_reaches_the_folder_before_the_swap(canned, quick_figures, monke
 def test_a_duplicated_case_name_writes_one_report(canned, quick_figures, tmp_path):
     out = tmp_path / "out"
     assert cli.main(["report", "piston", "piston", "--set", "m=3", "--out", str(out)]) == 0
-    assert set(files(out)) == PISTON_FILES and "Parameters overridden: {'m': 3.0}" in (out / "piston.md").read_text()
+    assert set(files(out)) == PISTON_FILES and "Parameters overridden (`--set`): m = 3 kg (book: " in (out / "piston.md").read_text()
+
+
+def test_a_report_with_overrides_goes_beside_the_book_s_pages(canned, quick_figures, monkeypatch, tmp_path):
+    """Without --out, `report --set` writes to a folder named after the overrides, never over reports/."""
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["report", "piston", "--set", "m=3", "--no-studies"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith(".")) == ["reports-m=3"]
+    index = (tmp_path / "reports-m=3" / "index.md").read_text()
+    assert "m = 3" in index
 
 
 def test_stale_trees_of_killed_runs_are_removed(results, quick_figures, tmp_path):
