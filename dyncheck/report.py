@@ -25,7 +25,8 @@ import pandas as pd
 from dyncheck import stability, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
-from dyncheck.results import RESULTS_VERSION, Status, case_json, format_rows, load_results, save_results
+from dyncheck.results import (RESULTS_VERSION, Status, case_json, format_rows, inside_or_outside, load_results,
+                              save_results)
 from dyncheck.simulate import energy_residual, state_columns
 from dyncheck.style import SOURCE_STYLE as STYLE
 from dyncheck.style import plt
@@ -372,7 +373,7 @@ def summary_table(rows):
     """One line per (check, comparison): how many quantities, their statuses, the worst error/tolerance."""
     frame = pd.DataFrame([{"check": r.check, "sources": r.comparison, "quantity": r.quantity, "status": str(r.status),
                            "error": np.nan if r.error is None else r.error,
-                           "tolerance": np.nan if r.tolerance is None else r.tolerance} for r in rows])
+                           "tolerance": np.nan if r.tolerance is None else r.tolerance, "row": r} for r in rows])
     out = []
     for (check, sources), group in frame.groupby(["check", "sources"], sort=False):
         judged = group.dropna(subset=["error", "tolerance"])
@@ -381,7 +382,9 @@ def summary_table(rows):
         worst = judged.iloc[int(np.argmax(ratios))] if len(judged) else None
         out.append({"check": check, "comparison": sources, "quantities": len(group),
                     "status": ", ".join(f"{n} {s}" for s, n in group["status"].value_counts().items()),
-                    "worst": "-" if worst is None else f"{worst['quantity']}: {worst['error']:.2e} / {worst['tolerance']:.2e}"})
+                    "worst": "-" if worst is None else f"{worst['quantity']}: " + (
+                        inside_or_outside(worst["row"]) if worst["row"].yes_or_no
+                        else f"{worst['error']:.2e} / {worst['tolerance']:.2e}")})
     return pd.DataFrame(out)
 
 

@@ -50,6 +50,11 @@ class Row:
     def comparison(self):
         return " vs ".join(self.sources)
 
+    @property
+    def yes_or_no(self):
+        """A comparison with no tolerance (inside a printed figure's axes or not): no error to weigh."""
+        return self.tolerance == 0 and self.ceiling == 0
+
 
 def row(check, quantity, sources, error, tolerance, detail="", *, ceiling):
     """A check's row; `ceiling` (dyncheck.ceilings) is the tolerance above which the comparison proves
@@ -197,8 +202,14 @@ def format_rows(rows):
     """The rows as a table of strings, as `dyncheck run` prints them and the pages list them."""
     number = lambda x: "-" if x is None else f"{x:.2e}"
     return pd.DataFrame([{"check": r.check, "quantity": r.quantity, "sources": r.comparison,
-                          "error": number(r.error), "tolerance": number(r.tolerance), "status": str(r.status)}
+                          "error": inside_or_outside(r) if r.yes_or_no else number(r.error),
+                          "tolerance": "-" if r.yes_or_no else number(r.tolerance), "status": str(r.status)}
                          for r in rows], columns=TABLE_COLUMNS)
+
+
+def inside_or_outside(row):
+    """A yes-or-no comparison's error in words: "inside", or "outside by" its relative excess."""
+    return "inside" if row.error == 0 else f"outside by {row.error:.2g}"
 
 
 def save_results(results, folder):

@@ -129,7 +129,7 @@ def test_a_scene_at_rest_is_judged_in_si_units_and_an_unmeasurable_order_says_so
     (omega = 0), is a failing row that says why rather than a crash."""
     from dyncheck.checks import run_case
     rows = run_case(dyncheck.load_case("double_pendulum", g=0.0)).rows
-    bad = [r for r in rows if r.status != "pass"]
+    bad = [r for r in rows if r.status not in ("pass", "not applicable")]  # the book's figures are for g = 9.81
     assert [(r.check, r.status) for r in bad] == [("convergence", "fail")]
     assert "not measured" in bad[0].detail and "omega" in bad[0].detail
 
