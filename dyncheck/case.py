@@ -236,10 +236,14 @@ class Case:
         """The module of the case's equations (its `derivation`: a module name, or a .py file in the case
         folder), with its classes Reference, Book and, where the book prints one, Program."""
         where = self.spec["derivation"]
-        what = f"{self.file}: derivation = {where!r}"
         if not where.endswith(".py"):
-            return guarded(what, lambda: importlib.import_module(where))
-        return load_file(self.folder / where, what)
+            return guarded(self._where_derived, lambda: importlib.import_module(where))
+        return load_file(self.folder / where, self._where_derived)
+
+    @property
+    def _where_derived(self):
+        """The case file's `derivation` field, as errors about the derivation name it."""
+        return f"{self.file}: derivation = {self.spec['derivation']!r}"
 
     @property
     def has_program(self):
@@ -287,7 +291,7 @@ class Case:
     def _derived(self, name):
         """The derivation's class `name` at the case's parameters, checked against the case file: its
         coordinates and reactions, and the shape of its accelerations at the initial state."""
-        what = f"{self.file}: derivation = {self.spec['derivation']!r}"
+        what = self._where_derived
         cls = getattr(self.derivation, name, None)
         if cls is None:
             raise ValueError(f"{what} defines no class {name} (docs/model-interface.md)")

@@ -40,9 +40,7 @@ def namespace(case, run):
     t, the parameters, numpy's functions, pi and first(condition); up to the case's `stop` condition,
     if it has one."""
     t = run.index.to_numpy()
-    names = {name: getattr(np, name) for name in FUNCTIONS}
-    names["pi"] = np.pi
-    names.update(case.params)
+    names = of_parameters(case.params)
     names.update({column: run[column].to_numpy() for column in run.columns})
     names["t"] = t
     stop = case.spec["report"].get("stop")

@@ -25,7 +25,7 @@ import pandas as pd
 from dyncheck import stability, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
-from dyncheck.results import (RESULTS_VERSION, Status, case_json, format_rows, inside_or_outside, load_results,
+from dyncheck.results import (RESULTS_VERSION, Status, case_json, format_rows, inside_or_outside, load_result,
                               save_results)
 from dyncheck.simulate import energy_residual, state_columns
 from dyncheck.style import SOURCE_STYLE as STYLE
@@ -55,8 +55,7 @@ def write_reports(results, out):
             save_results(results, tree / "results")
             written = [f"results/{result.name}" for result in results]
             # The pages from the results as saved: what `report --from` renders from them.
-            saved = [r for r in load_results(tree / "results") if r.name in {result.name for result in results}]
-            for result in saved:
+            for result in (load_result(tree / "results" / result.name) for result in results):
                 case = Case(result.folder, result.overrides, result.spec)
                 written += write_case_page(result, case, tree)
                 written.append(write_summary(result, case, tree))

@@ -229,13 +229,15 @@ def load_results(folder):
         hint = " (the report's saved results are in its results/ folder)" if (folder / "results").is_dir() else ""
         raise ValueError(f"{folder}: holds no saved results (no <case>/value.json){hint}; `dyncheck run --results "
                          "DIR` and `dyncheck report` (in its results/) save them")
-    results = []
-    for path in folders:
-        result = store.load(path)
-        if not isinstance(result, CaseResult):
-            raise ValueError(f"{path}: holds a {type(result).__name__}, not a case's results")
-        if result.name != path.name:  # a copy set aside under another name would pass for the case's results
-            raise ValueError(f"{path}: holds the results of case '{result.name}', not of '{path.name}'")
-        results.append(result)
-    return results
+    return [load_result(path) for path in folders]
+
+
+def load_result(path):
+    """The CaseResult saved in `path`, a folder named after its case; ValueError naming what is wrong."""
+    result = store.load(path)
+    if not isinstance(result, CaseResult):
+        raise ValueError(f"{path}: holds a {type(result).__name__}, not a case's results")
+    if result.name != path.name:  # a copy set aside under another name would pass for the case's results
+        raise ValueError(f"{path}: holds the results of case '{result.name}', not of '{path.name}'")
+    return result
 
