@@ -5,6 +5,7 @@ import hashlib
 import importlib
 import importlib.util
 import math
+import re
 import sys
 import tomllib
 from dataclasses import dataclass
@@ -16,6 +17,7 @@ import numpy as np
 
 from dyncheck import expressions, schema
 from dyncheck.messages import suggest
+from dyncheck.results import overrides_in_words
 
 CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 SOURCES = ("reference", "book", "mujoco", "pinocchio")
@@ -45,6 +47,21 @@ class Parameter:
     unit: str
     about: str
     bounds: tuple  # (relation, value) pairs its value must satisfy (schema.demands), e.g. ((">", 0.0),)
+
+
+PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
+
+
+def prose_fields(spec, path=""):
+    """(field, text) for every text of a case file that holds a `{= expression}` (Case.prose)."""
+    if isinstance(spec, dict):
+        for key, value in spec.items():
+            yield from prose_fields(value, f"{path}.{key}" if path else key)
+    elif isinstance(spec, list):
+        for i, value in enumerate(spec):
+            yield from prose_fields(value, f"{path}[{i}]")
+    elif isinstance(spec, str) and PROSE_NUMBER.search(spec):
+        yield path, spec
 
 
 def load_file(path, what):
@@ -133,6 +150,8 @@ class Case:
         self.params = MappingProxyType({**self.defaults, **self.overrides})  # read-only: models get it too
         schema.check_params(self.spec, self.params, self.overrides, self.file)
         schema.check_values(self.spec, self.file, self.value)
+        for field, text in prose_fields(self.spec):  # a formula in the prose that does not evaluate: at load
+            self.prose(text, field)
         self.findings = self.spec.get("findings", [])
         self._models = {}
         if derivation is not None:
@@ -153,12 +172,19 @@ class Case:
 
     def overrides_text(self):
         """The overrides in words, as pages and rows show them: "k = 500 N/m (book: 2000)"."""
-        return ", ".join(f"{name} = {value:g} {self.units[name]} (book: {self.defaults[name]:g})"
-                         for name, value in self.overrides.items())
+        return overrides_in_words(self.overrides, self.spec["params"])
 
     def with_params(self, **params):
         """This case with further parameters overridden (on top of its own overrides)."""
         return Case(self.folder, {**self.overrides, **params}, self.spec, self.derivation)
+
+    def with_horizon(self, t_end):
+        """This case with its runs ending at `t_end` (s) instead of [initial] t_end: every source's run
+        from the initial conditions, the agreement horizon measured along them, and the program's run
+        (ProgramUpTo).  The tolerances that depend on the horizon follow from these runs, as at the
+        book's horizon; a shorter one makes a run cheap (the property tests' whole runs)."""
+        spec = {**self.spec, "initial": {**self.spec["initial"], "t_end": t_end}}
+        return Case(self.folder, self.overrides, spec, self.derivation)
 
     def _read(self):
         try:
@@ -185,6 +211,19 @@ class Case:
         except (OverflowError, TypeError, ValueError) as error:  # also float() of a list, of a huge integer
             raise ValueError(f"{self.file}: cannot evaluate {x!r}: {error}"
                              + (f" (at {field})" if field else "")) from None
+
+    def prose(self, text, field=None):
+        """`text` with each number written as `{= expression}` or `{= expression :format}` (default
+        ".3g") computed at the case's parameters, so that a page's prose stays true under --set:
+        "sqrt(k/m) = {= sqrt(k/m) :.0f} rad/s"."""
+        def number(match):
+            expression, _, spec = match[1].rpartition(":") if ":" in match[1] else (match[1], "", ".3g")
+            value = self.value(expression.strip(), field)
+            try:
+                return format(value, spec.strip() or ".3g")
+            except ValueError as error:  # a format spec that is not one
+                raise ValueError(f"{self.file}: {field}: cannot write {match[0]!r}: {error}") from None
+        return PROSE_NUMBER.sub(number, text)
 
     @cached_property
     def initial(self):
@@ -260,8 +299,19 @@ class Case:
             self._models[source] = self._build(source)
         return self._models[source]
 
+    def approximations_doubled(self):
+        """MuJoCo's scene with its approximations of the case's physics doubled: its placeholders (the mass
+        and inertia that the MJCF gives a body where the URDF has none: MuJoCo refuses a moving body
+        without them) and the drift of its prescribed motions (their armature halved).  Both are small, so
+        a run responds linearly to them: this scene's run minus MuJoCo's is their effect."""
+        scales = {body.name: (2.0 if body.mass == 0 else 1.0, 2.0 if not body.inertia.any() else 1.0)
+                  for body in self.model("pinocchio").tree()}
+        return self.model("mujoco").approximations_doubled(scales)
+
     def _build(self, source):
-        if source in ("book", "reference", "program"):
+        if source == "program":
+            return ProgramUpTo(self._derived("Program"), self.initial[2])
+        if source in ("book", "reference"):
             return self._derived(source.capitalize())
         if source == "mujoco":
             from engines.mujoco_adapter import MujocoModel as Model
@@ -332,6 +382,21 @@ class Case:
 
     def __repr__(self):
         return f"Case({self.name!r}, overrides={self.overrides})"
+
+
+class ProgramUpTo:
+    """A case's Program, its run cut at the case's [initial] t_end, where every run of the case ends:
+    a listing runs as long as the book's, which Case.with_horizon may shorten (the program checks
+    compare over the run's length).  The book's listings end within their case's t_end."""
+
+    def __init__(self, program, t_end):
+        self.program, self.t_end = program, t_end
+
+    def __getattr__(self, name):
+        return getattr(self.program, name)
+
+    def run(self, q0, v0):
+        return self.program.run(q0, v0).loc[:self.t_end]
 
 
 def compare_scenes(mujoco_model, pinocchio_model, case_name):

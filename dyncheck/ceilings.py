@@ -40,9 +40,11 @@ DATA = 5e-2
 # says, in the row, whether its integrator or its formulas stray.
 LISTING = 1e-2
 
-# Prescribed motions must be exact to about 1e-12 (MuJoCo holds them by a large armature): a drift of
-# the driven rate beyond it changes the motion measurably over a run.
-DRIVEN_RATE = 1e-12
+# MuJoCo holds the prescribed motions by a large armature A; they drift by torque x time / A.  What the
+# drift changes in the motion is measured (the run with A halved, dyncheck.checks.approximations_effect)
+# and allowed in the trajectory and energy rows; that measurement is first order in the drift, its error
+# second order: a drift within 1e-6 of the run's largest rate keeps it below a millionth of the effect.
+DRIVEN_RATE = 1e-6
 
 # Figure ranges are inside/outside: any excess over the book's printed axis is outside.
 FIGURE = 0.0

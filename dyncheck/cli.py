@@ -10,6 +10,7 @@ import json
 import os
 import sys
 import tempfile
+import textwrap
 import time
 from importlib.metadata import version
 from pathlib import Path
@@ -17,6 +18,7 @@ from pathlib import Path
 import pandas as pd
 from tqdm import tqdm
 
+from dyncheck import ci
 from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
 from dyncheck.checks import run_case
 from dyncheck.messages import suggest
@@ -24,19 +26,23 @@ from dyncheck.results import format_rows, load_results, save_results, to_json
 
 
 def main(argv=None):
+    start = time.perf_counter()
     parser = argparse.ArgumentParser(prog="dyncheck", description=__doc__)
     parser.add_argument("--version", action="version", version=f"dyncheck {version('dyncheck')}")
     commands = parser.add_subparsers(dest="command", required=True)
-    listing = commands.add_parser("list", help="list the cases")
+    listing = commands.add_parser("list", help="list the cases and their parameters")
     run = commands.add_parser("run", help="run the checks and print a table")
     report = commands.add_parser("report", help="run the checks and write Markdown reports with figures")
     bench = commands.add_parser("bench", help="throughput of each source and the harness's overhead")
     bench.add_argument("cases", nargs="*", metavar="CASE", help="cases to measure (default: all)")
     bench.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help=argparse.SUPPRESS)
+    listing.add_argument("cases", nargs="*", metavar="CASE", help="cases to list (default: all)")
     for sub in (run, report):
         sub.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
         sub.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                          help="override a parameter in every selected case that has it")
+        sub.add_argument("--junit", type=Path, metavar="PATH",
+                         help="also write the rows as JUnit XML (a test suite per case, a test case per row)")
     for sub in (listing, run, report, bench):
         sub.add_argument("--cases", type=Path, default=CASES_DIR, metavar="DIR", dest="cases_dir",
                          help="the folder of case folders (default: the checkout's cases/)")
@@ -56,14 +62,16 @@ def main(argv=None):
         args.out = Path("reports" + "".join(f"-{pair.strip().replace('/', '_')}" for pair in args.set))
     try:
         if args.command == "list":
-            return list_cases(args.cases_dir)
+            return list_cases(args.cases, args.cases_dir)
+        if args.command in ("run", "report") and args.junit:
+            check_file_path("--junit", args.junit)
         if args.command == "report":
             check_out_folder(args.out)
             if args.saved:
-                return report_saved(args)
+                return report_saved(args, start)
         cases = select_cases(args.cases, args.set, args.cases_dir)
         if args.command == "run" and args.json:
-            check_json_path(args.json)
+            check_file_path("--json", args.json)
         if args.command == "run" and args.results:
             check_results_folder(args.results, [case.name for case in cases])
     except ValueError as error:
@@ -82,13 +90,15 @@ def main(argv=None):
             print_results(results)
             if args.json:
                 writing = f"--json {args.json}"
-                marked = {"incomplete": f"interrupted (Ctrl-C) during case {interrupted}"} if interrupted else {}
-                write_json({**to_json(results), **marked}, args.json)
+                write_json(to_json(results, ci.tool_versions(), interrupted), args.json)
             if args.results and not interrupted:
                 writing = f"--results {args.results}"
                 save_results(results, args.results)
         elif not interrupted:  # a report of some cases would pass for one of all
             results = make_report(results, cases, args.out, args.no_studies)
+        if not interrupted:  # a JUnit file has no word for "some cases did not run": it would pass for all
+            writing = f"--junit {args.junit}"  # the one file that close() writes
+            close(results, args.junit, start)
     except KeyboardInterrupt:  # in the studies or while writing: the JSON and the report are replaced whole
         print("dyncheck: interrupted", file=sys.stderr)
         return 130
@@ -134,7 +144,7 @@ def make_report(results, cases, out, no_studies):
     return results
 
 
-def report_saved(args):
+def report_saved(args, start):
     """`report --from DIR`: the pages of the results saved in DIR, with no run."""
     from dyncheck.report import write_reports
     if args.cases or args.set or args.no_studies:
@@ -143,7 +153,20 @@ def report_saved(args):
     written = write_reports(results, args.out)
     print(f"pages: wrote {len(written)} files to {args.out}/ from {args.saved}/")
     print_results(results, table=False)
+    close(results, args.junit, start)
     return exit_code(results)
+
+
+def close(results, junit, start):
+    """What every finished run and report ends with: the JUnit file (with --junit), an annotation per
+    failing row on GitHub Actions, the failing rows and the summary line."""
+    if junit:
+        write_file(ci.junit_xml(results), junit)
+    if os.environ.get("GITHUB_ACTIONS") == "true":  # GitHub sets it in every step of a workflow
+        for line in ci.github_annotations(results):
+            print(line)
+    for line in ci.recap(results, time.perf_counter() - start):
+        print(line)
 
 
 def study_case(case):
@@ -157,14 +180,39 @@ def study_case(case):
                 "stability": stability.studies(case, progress)}
 
 
-def list_cases(cases_dir):
-    rows = []
-    for name in case_names(cases_dir):
+def list_cases(names, cases_dir):
+    """Each case (all, or those named) with its parameters: value, unit, the values it allows and the
+    range its random parameter sets are drawn from."""
+    for name in list(dict.fromkeys(names)) or case_names(cases_dir):
         case = load_case(name, cases_dir)
-        rows.append({"case": name, "section": case.section, "title": case.title,
-                     "coordinates": ", ".join(case.coords) or "-", "reactions": ", ".join(case.reaction_names)})
-    print(pd.DataFrame(rows).to_string(index=False))
+        print(f"\n== {name} ({case.section}) {case.title}\n"
+              f"coordinates: {', '.join(case.coords) or '-'}; reactions: {', '.join(case.reaction_names) or '-'}")
+        ranges = case.spec["sample"].get("params", {}).get("ranges", {})
+        rows = [{"parameter": p.name, "value": f"{p.value:g}", "unit": p.unit or "-",
+                 "allowed": ", ".join(f"{relation} {bound:g}" for relation, bound in p.bounds) or "any",
+                 "sampled": "-" if p.name not in ranges else
+                 " to ".join(f"{case.value(end):g}" for end in ranges[p.name]), "about": p.about}
+                for p in case.parameters]
+        print(text_table(rows) if rows else "no parameters")
+    print("\n" + textwrap.fill("allowed: what a value (the case file's or --set's) must satisfy; sampled: the "
+                               "interval that the random parameter sets are drawn from (the 'random parameters' "
+                               "check), - if the parameter is not drawn", 100))
     return 0
+
+
+def text_table(rows, width=100):
+    """Rows of strings as left-aligned columns; the last column wraps so that lines stay within `width`
+    where the other columns leave it room."""
+    columns = list(rows[0])
+    widths = {c: max(len(c), *(len(r[c]) for r in rows)) for c in columns[:-1]}
+    indent = sum(widths.values()) + 2 * len(widths)
+    last = max(width - indent, 30)
+    lines = []
+    for row in [dict(zip(columns, columns))] + rows:
+        wrapped = textwrap.wrap(row[columns[-1]], last) or [""]
+        lines.append("".join(f"{row[c]:<{widths[c]}}  " for c in columns[:-1]) + wrapped[0])
+        lines += [" " * indent + more for more in wrapped[1:]]
+    return "\n".join(lines)
 
 
 def parse_overrides(pairs):
@@ -207,17 +255,15 @@ def print_results(results, table=True):
         spec, rows = result.spec, result.rows
         if table:
             print(f"\n== {result.name} ({spec['section']}) {spec['title']}"
-                  + (f"  [overrides: {result.overrides}]" if result.overrides else ""))
+                  + (f", with {result.overrides_text}" if result.overrides else ""))
             print(format_rows(rows).to_string(index=False))
-        counts = pd.Series([str(r.status) for r in rows]).value_counts().to_dict()
-        summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-        print(f"{result.name}: {summary} ({result.wall:.1f} s)")
+        print(f"{result.name}: {result.status}: {ci.tally(rows)} ({result.wall:.1f} s)")
 
 
-def check_json_path(path):
+def check_file_path(option, path):
     if path.exists() and not path.is_file():
-        raise ValueError(f"--json {path}: is not a regular file")
-    check_writable("--json", path, [path.parent])
+        raise ValueError(f"{option} {path}: is not a regular file")
+    check_writable(option, path, [path.parent])
 
 
 def check_out_folder(out):
@@ -262,12 +308,16 @@ def check_writable(option, path, folders):
 
 
 def write_json(data, path):
+    write_file(json.dumps(data, indent=2) + "\n", path)
+
+
+def write_file(text, path):
     """Whole or not at all: written beside `path`, synced to disk, then renamed over it, so a full
     disk or a kill leaves the previous file as it was."""
     partial = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
-        with open(partial, "w") as file:
-            file.write(json.dumps(data, indent=2) + "\n")
+        with open(partial, "w", encoding="utf-8") as file:
+            file.write(text)
             file.flush()
             os.fsync(file.fileno())
         os.replace(partial, path)

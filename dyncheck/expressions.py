@@ -29,9 +29,19 @@ MAX_DEPTH = 100  # levels of the syntax tree
 MAX_EXPONENT = 1024
 
 
+def _extreme(reduce, pairwise):
+    """max(x) / min(x): over an array (along a run); max(a, b, ...): of its arguments, element by element."""
+    return lambda *args: reduce(args[0]) if len(args) == 1 else functools.reduce(pairwise, args)
+
+
+# numpy's, by these names; max and min as in Python (numpy's max(a, b) takes b for an axis)
+NUMPY = {**{name: getattr(np, name) for name in FUNCTIONS}, "max": _extreme(np.max, np.maximum),
+         "min": _extreme(np.min, np.minimum)}
+
+
 def of_parameters(params):
     """What a case-file number may use: the parameters, pi and numpy's functions."""
-    return {**{name: getattr(np, name) for name in FUNCTIONS}, "pi": np.pi, **params}
+    return {**NUMPY, "pi": np.pi, **params}
 
 
 def namespace(case, run):

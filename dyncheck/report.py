@@ -26,7 +26,7 @@ from dyncheck import stability, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.results import (RESULTS_VERSION, Status, case_json, format_rows, inside_or_outside, load_result,
-                              save_results)
+                              reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
 from dyncheck.style import SOURCE_STYLE as STYLE
 from dyncheck.style import plt
@@ -139,7 +139,8 @@ def write_summary(result, case, tmp):
     rows = result.rows
     sweep = result.studies["work_precision"] if result.studies else None
     worst = worst_engine_error(rows)
-    summary = {"version": RESULTS_VERSION, **case_json(result), "title": case.title, "status": result.status,
+    summary = {"version": RESULTS_VERSION, **case_json(result), "title": case.title,
+               "overridden": case.overrides_text(),  # in words, for the index and errata
                "worst_engine_error": worst if math.isfinite(worst) else None,  # JSON has no NaN
                "random": random_tried(result, case),
                "cheapest": None if sweep is None or sweep.empty else  # for the index: level -> method
@@ -306,18 +307,30 @@ def figure_program(result, case, path):
         for col, (label, run, color) in enumerate(sides):
             names = namespace(case, run)
             ax = axes[row, col]
-            ax.plot(evaluate(item["x"], names), evaluate(item["y"], names), color=color, lw=0.8)
-            for key, setter in (("xlim", ax.set_xlim), ("ylim", ax.set_ylim)):
-                if key in item:
-                    setter(*item[key])
+            x, y = evaluate(item["x"], names), evaluate(item["y"], names)
+            ax.plot(x, y, color=color, lw=0.8)
+            book_axes(ax, item, x, y)
             ax.set_title(f"{item['title']}: {label}", fontsize=8)
             ax.set_xlabel("t [s]" if item["x"] == "t" else item["x"], fontsize=8)
             ax.grid(alpha=0.3)
     fig.suptitle(f"{case.section}: the book's figures from its program ({runs['integrator']}, dt = {runs['dt']:.3g} s)"
-                 " and from the corrected equations; axes as the book's", fontsize=9)
+                 " and from the corrected equations; dashed: the book's axes", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
+
+
+def book_axes(ax, item, x, y):
+    """The book's printed axes (the plot's xlim, ylim) as a dashed frame, and the view wide enough for
+    the frame and for the data wherever it goes (under other parameters it may leave the book's axes)."""
+    x, y = (np.asarray(v, dtype=float) for v in (x, y))
+    shown = np.isfinite(x) & np.isfinite(y)  # a run that blew up is drawn up to where it went
+    (x0, x1), (y0, y1) = (item.get(key, (v[shown].min(), v[shown].max())) for key, v in (("xlim", x), ("ylim", y)))
+    if "xlim" in item or "ylim" in item:
+        ax.add_patch(plt.Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ls="--", lw=0.8, color="0.4", zorder=0))
+    for v, low, high, setter in ((x, x0, x1, ax.set_xlim), (y, y0, y1, ax.set_ylim)):
+        low, high = min(low, v[shown].min()), max(high, v[shown].max())
+        setter(low - 0.04 * (high - low), high + 0.04 * (high - low))
 
 
 def values_table(case, spaces):
@@ -387,6 +400,18 @@ def summary_table(rows):
     return pd.DataFrame(out)
 
 
+def not_passed(rows):
+    """Page lines naming every row that neither passed nor is a finding or not applicable, and why: a
+    failure's error against its tolerance, an integration's blow-up or a physical runaway (when, which
+    method, which step)."""
+    shown = [r for r in rows if r.status not in (Status.PASS, Status.FINDING, Status.NOT_APPLICABLE)]
+    if not shown:
+        return []
+    return ["Rows that did not pass, and why:", "",
+            *[f"- {r.check} {r.quantity} ({r.comparison}): **{r.status}**: {reason(r) or r.detail}" for r in shown],
+            ""]
+
+
 def scene_table(case):
     """The joints of the engine models: what is free, what is prescribed, what is applied."""
     scene = case.scene
@@ -425,7 +450,7 @@ def write_case_page(result, case, tmp):
     if result.program.get("listing") is not None and case.spec.get("program", {}).get("plots"):
         plots["program"] = lambda path: figure_program(result, case, path)
     along_runs = result.runs["reference"].ok
-    if not along_runs:  # the reference run blew up (see the unstable rows): nothing to draw along it
+    if not along_runs:  # the reference run blew up or ran away (rows say when): nothing to draw along it
         plots = {kind: draw for kind, draw in plots.items() if kind in ("pointwise", "program")}
     extras = case.spec["report"].get("figures", {}) if along_runs else {}
     values = case.spec["report"].get("values") if along_runs else None
@@ -447,11 +472,7 @@ def write_case_page(result, case, tmp):
     table["finding"] = [r.finding or "" for r in rows]
     findings = result.findings
     runs = result.runs
-    cost = pd.DataFrame([{"source": s, "method": run.attrs["method"],
-                          "setting": f"dt = {run.attrs['dt']:g} s" if run.attrs["dt"] else f"rtol = {run.attrs['rtol']:g}",
-                          "wall time [s]": f"{run.attrs['wall']:.3f}", "evaluations": run.attrs["evaluations"]}
-                         for s in ("reference", "book", "pinocchio", "mujoco") if runs[s].ok
-                         for run in (runs[s].run, runs[s].twin)])
+    cost = cost_table(runs).drop(columns="wall time [s]")
     lines = [
         f"# {case.section} {case.title}",
         "",
@@ -463,7 +484,7 @@ def write_case_page(result, case, tmp):
         "",
         "## The scene",
         "",
-        " ".join(case.spec["summary"].split()),
+        " ".join(case.prose(case.spec["summary"], "summary").split()),
         "",
         f"![scene]({figures['scene']})" if "scene" in figures else "",
         "",
@@ -475,7 +496,8 @@ def write_case_page(result, case, tmp):
         "",
         "## How each source models it",
         "",
-        "\n\n".join(" ".join(p.split()) for p in case.spec["report"]["modelling"].strip().split("\n\n")),
+        "\n\n".join(" ".join(p.split()) for p in case.prose(case.spec["report"]["modelling"], "report.modelling")
+                    .strip().split("\n\n")),
         "",
         "Joints of `scene.xml` (MuJoCo) and `scene.urdf` (Pinocchio), the same in both:",
         "",
@@ -495,6 +517,7 @@ def write_case_page(result, case, tmp):
         "",
         markdown_table(summary_table(rows)),
         "",
+        *not_passed(rows),
         f"<details><summary>All {len(rows)} checks</summary>",
         "",
         markdown_table(table),
@@ -522,12 +545,69 @@ def write_case_page(result, case, tmp):
     ]
     for kind, tol in case.tolerance.items():
         value = f"{tol['value']:g}" if "value" in tol else f"safety factor {tol['safety']:g}"
-        lines += [f"- **{kind}** ({value}): " + " ".join(tol["why"].split())]
+        lines += [f"- **{kind}** ({value}): " + " ".join(case.prose(tol["why"], f"tolerance.{kind}.why").split())]
     lines += ["", "## Cost of the runs", "", markdown_table(cost), "",
-              f"All checks of this case took {result.wall:.1f} s.", ""]
+              f"Wall times, which differ from run to run, are on the [timing page]({timing_page_name(case)}).", ""]
     page = f"{name}.md"
     (tmp / page).write_text("\n".join(lines))
-    return [page] + list(figures.values()) + study_files
+    return [page] + list(figures.values()) + study_files + write_timing_page(result, case, tmp)
+
+
+def cost_table(runs):
+    """Each source's run of the book's initial conditions and its twin: method, setting, wall time,
+    right-hand-side evaluations."""
+    return pd.DataFrame([{"source": s, "method": run.attrs["method"],
+                          "setting": f"dt = {run.attrs['dt']:g} s" if run.attrs["dt"] else f"rtol = {run.attrs['rtol']:g}",
+                          "wall time [s]": f"{run.attrs['wall']:.3f}", "evaluations": run.attrs["evaluations"]}
+                         for s in ("reference", "book", "pinocchio", "mujoco") if runs[s].ok
+                         for run in (runs[s].run, runs[s].twin)],
+                        columns=["source", "method", "setting", "wall time [s]", "evaluations"])
+
+
+def timing_page_name(case):
+    return f"{case.name}_timing.md"
+
+
+def write_timing_page(result, case, tmp):
+    """<case>_timing.md and its chart and CSV: every wall time of the run, apart from the case page
+    because wall times differ from run to run (the page stays the same when nothing else changed)."""
+    studies = result.studies
+    lines = [f"# {case.section} {case.title}: wall times", "",
+             f"Wall times of this run on this machine, which differ from run to run; [the case page]({case.name}.md).",
+             "", f"All checks of this case took {result.wall:.1f} s.", "",
+             "## The runs of the book's initial conditions", "", markdown_table(cost_table(result.runs)), ""]
+    files = [timing_page_name(case)]
+    if studies and not studies["work_precision"].empty:
+        frame = studies["work_precision"]
+        csv, chart = (f"data/{case.name}_work_precision_timing.csv",
+                      f"figures/{case.name}_work_precision_timing.png")
+        work_precision.write_csv(frame, tmp / csv, timing=True)
+        work_precision.figure(frame, case, tmp / chart, cost="wall")
+        files += [csv, chart]
+        best = work_precision.cheapest(frame, cost="wall")
+        labels = {work_precision.point_label(r): r for _, r in frame.iterrows()}
+
+        def wall_with_spread(label):
+            r = labels.get(label)
+            return "-" if r is None or pd.isna(r["wall"]) else \
+                f"{r['wall']:.3g} ({r['wall_min']:.3g} to {r['wall_max']:.3g}, {r['repeats']:g} runs)"
+        table = pd.DataFrame({"level": best["level"].map(lambda x: f"{x:.0e}"), "cheapest": best["cheapest"],
+                              "wall [s]: median (least to most)": best["cheapest"].map(wall_with_spread),
+                              "runner-up": best["runner_up"],
+                              "runner-up wall [s]": best["runner_up"].map(wall_with_spread)})
+        lines += ["## Speed against accuracy in wall time", "",
+                  f"The work-precision sweep of [the case page]({case.name}.md#speed-against-accuracy) against wall"
+                  " time: the integration alone, the median of repeated runs (quick runs are repeated, as the"
+                  " case file's `work_precision.repeat` says), the bars from the fastest to the slowest.  "
+                  + work_precision.WALL_NOTE, "",
+                  f"![work-precision, wall time]({chart})", "",
+                  "Which method reaches each accuracy level (relative trajectory error) in the least wall time:", "",
+                  markdown_table(table), "", f"The rows behind the chart: [{csv}]({csv}).", ""]
+    if studies and studies["stability"]:
+        lines += ["## Stability studies", "", markdown_table(pd.DataFrame(
+            [{"study": s.title, "wall time [s]": f"{s.wall:.1f}"} for s in studies["stability"]])), ""]
+    (tmp / files[0]).write_text("\n".join(lines))
+    return files
 
 
 def study_sections(result, case, tmp):
@@ -550,16 +630,18 @@ def study_sections(result, case, tmp):
         unstable = frame[frame["status"] == "unstable"]
         best = work_precision.cheapest(frame)
         best["level"] = best["level"].map(lambda x: f"{x:.0e}")
-        for column in ("wall", "runner_up_wall", "error"):
-            best[column] = best[column].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")
+        for column in ("evaluations", "runner_up_evaluations"):
+            best[column] = best[column].map(lambda x: "-" if pd.isna(x) else f"{x:.0f}")
+        best["error"] = best["error"].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")
         lines += [f"Every method from the book's initial conditions over {reference['t_end']:g} s, against the"
                   f" reference solution: {reference['label']}.  Error is the largest deviation of any"
                   " coordinate or rate, relative to its largest magnitude; the rows behind the chart are in"
-                  f" [{csv}]({csv}).  {work_precision.COST_NOTE}", "",
+                  f" [{csv}]({csv}).  {work_precision.EVALUATIONS_NOTE}", "",
                   f"![work-precision]({chart})", "",
-                  "Which method is cheapest at each accuracy level (relative trajectory error):", "",
-                  markdown_table(best.rename(columns={"wall": "wall [s]", "runner_up": "runner-up",
-                                                      "runner_up_wall": "runner-up wall [s]"})), ""]
+                  "Which method is cheapest (fewest evaluations) at each accuracy level (relative trajectory"
+                  f" error); in wall time on the [timing page]({timing_page_name(case)}):", "",
+                  markdown_table(best.rename(columns={"runner_up": "runner-up",
+                                                      "runner_up_evaluations": "runner-up evaluations"})), ""]
         if len(unstable):
             lines += ["Unstable (blew up; not drawn): " + "; ".join(
                 f"{work_precision.point_label(r)}: {r['detail']}" for _, r in unstable.iterrows()) + ".", ""]
@@ -584,7 +666,7 @@ def study_sections(result, case, tmp):
             files.append(chart)
             lines += [f"### {study.title}", "", *[f"- {sentence}" for sentence in study.findings], "",
                       f"![{study.study}]({chart})", "",
-                      f"*How:* {study.why} (this study took {study.wall:.0f} s.)", "",
+                      f"*How:* {study.why}", "",
                       f"<details><summary>The numbers ({len(study.table)} rows)</summary>", "",
                       markdown_table(study.table), "", "</details>", ""]
     return lines, files
@@ -623,9 +705,15 @@ def section_key(section):
     return [(0, int(part)) if i % 2 else (1, part) for i, part in enumerate(parts)]
 
 
+def with_overrides(summary):
+    """", with k = 500 N/m (book: 2000)" for a case run with overrides, else nothing."""
+    return f", with {summary['overridden']}" if summary.get("overridden") else ""
+
+
 def write_errata(tmp, cases):
     """errata.md: every finding of every case in one table, then each in full."""
-    table = [{"finding": f"[{f['id']}](#{f['id'].replace('.', '').lower()})", "case": f"[{c['case']}]({c['case']}.md)",
+    table = [{"finding": f"[{f['id']}](#{f['id'].replace('.', '').lower()})",
+              "case": f"[{c['case']}]({c['case']}.md)" + with_overrides(c),
               "where": f["where"], "what": f["title"], "largest relative error": size(f["error"]),
               "localised edit": f["localised"]}
              for c in cases for f in c["findings"]]
@@ -636,7 +724,8 @@ def write_errata(tmp, cases):
              markdown_table(pd.DataFrame(table)) if table else "No findings.", ""]
     for c in cases:
         for f in c["findings"]:
-            lines += [f"## {f['id']}", "", f"**{f['title']}** ([{c['case']}]({c['case']}.md), {c['section']})", "",
+            lines += [f"## {f['id']}", "",
+                      f"**{f['title']}** ([{c['case']}]({c['case']}.md), {c['section']}{with_overrides(c)})", "",
                       f"- *Where:* {f['where']}",
                       f"- *Quantities:* {', '.join(f['quantity'])}; largest relative error {size(f['error'])}",
                       f"- *How established:* {f['established']}",
@@ -661,7 +750,7 @@ def speed_table(cases):
             for c in cases if c.get("cheapest")]
     if not rows:
         return []
-    return ["The cheapest method (least wall time) that reaches each relative trajectory error, from each"
+    return ["The cheapest method (fewest right-hand-side evaluations) that reaches each relative trajectory error, from each"
             " case's work-precision sweep (details, charts and the stability studies on the case pages):", "",
             markdown_table(pd.DataFrame(rows).fillna("-")), ""]
 
@@ -673,8 +762,8 @@ def write_index(tmp, cases):
         counts = pd.Series([c["status"] for c in case["checks"]]).value_counts()
         rows.append({
             "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"],
-            "title": case["title"] + "".join(f", {name} = {value:g}" for name, value in case.get("overrides", {}).items()),
-            "status": case["status"], "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
+            "title": case["title"] + with_overrides(case),
+            "status": case["status"].upper(), "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
             "worst engine error": "-" if case["worst_engine_error"] is None else f"{case['worst_engine_error']:.1e}",
             "findings": ", ".join(f"{f['id']} ({size(f['error'], '.2g')})" for f in case["findings"]) or "none"})
     tried = [c["random"] for c in cases]

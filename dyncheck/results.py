@@ -13,7 +13,8 @@ import pandas as pd
 
 from dyncheck import store
 
-RESULTS_VERSION = 2  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top
+RESULTS_VERSION = 3  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
+# 3: "status" and "counts" at the top and in each case, "reason" in each row, "tool" in run --json
 
 
 @store.register
@@ -25,11 +26,13 @@ class Status(enum.StrEnum):
     INCONCLUSIVE = "inconclusive"  # the tolerance is above the ceiling: the comparison proves nothing
     UNSTABLE = "unstable"  # an integration blew up: no number to compare
     NOT_APPLICABLE = "not applicable"  # a comparison with the book's printed run, under other parameters
+    RUNAWAY = "runaway"  # every source's run left the case's physical limits, as the case says it must
 
     @property
     def ok(self):
-        """Whether a run with this row exits 0."""
-        return self in (Status.PASS, Status.FINDING, Status.NOT_APPLICABLE)
+        """Whether a run with this row exits 0.  A runaway is ok: the checks give it only when every
+        source escaped as the case's [[runaway]] says the physics must (dyncheck.checks.runaway_rows)."""
+        return self in (Status.PASS, Status.FINDING, Status.NOT_APPLICABLE, Status.RUNAWAY)
 
 
 @store.register
@@ -99,10 +102,13 @@ class Failure:
 @store.register
 @dataclass(frozen=True)
 class Outcome:
-    """A source's run of the book's initial conditions and its tighter twin, or why there is none."""
+    """A source's run of the book's initial conditions and its tighter twin, or why there is none; for
+    MuJoCo also `approximations`, the run of its scene with its approximations of the case's physics
+    doubled (Case.approximations_doubled)."""
     run: pd.DataFrame | None = None
     twin: pd.DataFrame | None = None
     failure: Failure | None = None
+    approximations: pd.DataFrame | None = None
 
     @property
     def ok(self):
@@ -165,16 +171,54 @@ class CaseResult:
 
     @property
     def status(self):
-        return "PASS" if all(r.status.ok for r in self.rows) else "FAIL"
+        """As the pages head it: PASS or FAIL (`verdict`)."""
+        return verdict(self.rows).upper()
+
+    @property
+    def overrides_text(self):
+        return overrides_in_words(self.overrides, self.spec["params"])
 
     def with_studies(self, studies):
         return replace(self, studies=studies)
 
 
+def overrides_in_words(overrides, params):
+    """Overrides as pages and rows show them: "k = 500 N/m (book: 2000)"; `params`: the case file's table."""
+    return ", ".join(f"{name} = {value:g} {params[name]['unit']} (book: {float(params[name]['value']):g})"
+                     for name, value in overrides.items())
+
+
 def rows_json(rows):
     return [{"check": r.check, "quantity": r.quantity, "sources": list(r.sources), "error": r.error,
              "tolerance": r.tolerance, "ceiling": r.ceiling, "status": str(r.status), "finding": r.finding,
-             "detail": r.detail} for r in rows]
+             "detail": r.detail, "reason": reason(r)} for r in rows]
+
+
+def reason(row):
+    """Why a row counts as a failure, in one line (None for a row that counts as success): its error
+    against its tolerance, or, with no number, the row's own account (for an integration that blew up:
+    when, which method, which step, why)."""
+    if row.status.ok:
+        return None
+    if row.error is None:
+        return row.detail
+    if row.status == Status.INCONCLUSIVE:
+        return f"tolerance {row.tolerance:.2e} is above the ceiling {row.ceiling:.0e} of this comparison"
+    measured = inside_or_outside(row) + " the printed range" if row.yes_or_no else \
+        f"error {row.error:.2e} {'>' if row.error > row.tolerance else '<='} tolerance {row.tolerance:.2e}"
+    if row.finding:  # a registered error of the book that this row no longer shows
+        return f"registered finding {row.finding} no longer reproduces: {measured}"
+    return measured
+
+
+def verdict(rows):
+    """"pass" when every row counts as success (the exit code 0), else "fail"."""
+    return "pass" if all(r.status.ok for r in rows) else "fail"
+
+
+def status_counts(rows):
+    """How many rows have each status, every status named (0 for none), in the order of Status."""
+    return {str(status): sum(r.status == status for r in rows) for status in Status}
 
 
 def findings_json(findings):
@@ -184,15 +228,24 @@ def findings_json(findings):
 
 
 def case_json(result):
-    """A case's entry in `dyncheck run --json` and in the report's data/<case>.json."""
+    """A case's entry in `dyncheck run --json` and in the report's data/<case>.json: results only, nothing
+    of the machine or checkout that made them, so that a committed data/<case>.json changes only with them."""
     params = {name: float(p["value"]) for name, p in result.spec["params"].items()}
-    return {"case": result.name, "section": result.spec["section"], "params": {**params, **result.overrides},
+    return {"case": result.name, "section": result.spec["section"], "status": verdict(result.rows),
+            "counts": status_counts(result.rows), "params": {**params, **result.overrides},
             "overrides": dict(result.overrides), "checks": rows_json(result.rows),
             "findings": findings_json(result.findings)}
 
 
-def to_json(results):
-    return {"version": RESULTS_VERSION, "cases": [case_json(r) for r in results]}
+def to_json(results, tool=None, interrupted=None):
+    """The `dyncheck run --json` file of `results`: with `tool` (dyncheck.ci.tool_versions()), what ran
+    them; with `interrupted`, the case that Ctrl-C stopped (the results are then of the cases before it,
+    and the run does not pass)."""
+    rows = [r for result in results for r in result.rows]
+    return {"version": RESULTS_VERSION, "status": "fail" if interrupted else verdict(rows),
+            "counts": status_counts(rows), **({"tool": tool} if tool else {}),
+            **({"incomplete": f"interrupted (Ctrl-C) during case {interrupted}"} if interrupted else {}),
+            "cases": [case_json(r) for r in results]}
 
 
 TABLE_COLUMNS = ["check", "quantity", "sources", "error", "tolerance", "status"]

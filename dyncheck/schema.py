@@ -10,6 +10,7 @@ or `override m` for an override) and the value.
 docs/case-file.md, the reference of the case file, is `markdown()`.
 """
 
+import ast
 import importlib.util
 import math
 import operator
@@ -49,6 +50,8 @@ SCHEMA = ("table", {
                                  "exclusive_maximum?": "number"})),
     "constraints?": ("list", ("table", {"expression": "str", "strict?": "bool", "why": "str"})),
     "initial": ("table", {"q": ("list", "expr"), "v": ("list", "expr"), "t_end": "expr > 0"}),
+    # physical limits past which a coordinate grows without bound (dyncheck/checks.py, runaway)
+    "runaway?": ("list", ("table", {"when": "str", "coordinate": "str", "escape": "expr > 0", "why": "str"})),
     "sample": ("table", {
         "count": "int > 0", "seed": "int >= 0", "t": ("pair", "expr"),
         "q": ("list", ("pair", "expr")), "v": ("list", ("pair", "expr")),
@@ -181,6 +184,8 @@ def check_values(spec, file, value):
         raise _error(file, "integration.tight_rtol", setting["tight_rtol"],
                      f"is not below integration.rtol = {setting['rtol']!r}: the tight twin must be tighter")
     _check_sizes(spec, values, file)
+    for i, runaway in enumerate(spec.get("runaway", [])):  # true or false, it must evaluate (its why: Case.prose)
+        value(runaway["when"], f"runaway[{i}].when")
     sample = spec["sample"]
     ranges = sample.get("params", {}).get("ranges", {})
     intervals = {"sample.t": sample["t"], **{f"sample.q[{i}]": x for i, x in enumerate(sample["q"])},
@@ -342,6 +347,17 @@ def _cross_references(spec, file):
                              "is not the book's: a finding is an error of the book, its program, its figures or its "
                              "data ('book', 'program', or a comparison with one of them), never of an engine or the "
                              "reference")
+    for i, runaway in enumerate(spec.get("runaway", [])):
+        if runaway["coordinate"] not in coords:
+            raise _error(file, f"runaway[{i}].coordinate", runaway["coordinate"], "is not a coordinate"
+                         + _hint(runaway["coordinate"], coords))
+        try:
+            comparison = isinstance(ast.parse(runaway["when"].strip(), mode="eval").body, ast.Compare)
+        except SyntaxError as error:
+            raise _error(file, f"runaway[{i}].when", runaway["when"], f"cannot be parsed: {error.msg}") from None
+        if not comparison:  # a number would hold wherever it is not 0
+            raise _error(file, f"runaway[{i}].when", runaway["when"], "is not a comparison of the parameters, "
+                         "such as k < m*Omega**2")
     _ceilings(spec, file)
     for key, figure in spec.get("program", {}).get("figures", {}).items():
         lo, hi = figure["range"]
@@ -475,6 +491,17 @@ MEANINGS = {
     "initial.q": "The coordinates at t = 0, one per coordinate.",
     "initial.v": "Their rates at t = 0, one per coordinate.",
     "initial.t_end": "The end of the runs, which start at t = 0.",
+    "runaway": "Where the case's physics runs away: conditions of the parameters under which a coordinate grows "
+               "without bound, so that the runs past them are reported as `runaway`, not as `unstable` (see "
+               "Runaway).",
+    "runaway[i].when": "A comparison of the parameters and pi that holds where the physics runs away, e.g. "
+                       "`k < m*(alpha_rate + beta_rate)**2`.",
+    "runaway[i].coordinate": "The coordinate that grows without bound.",
+    "runaway[i].escape": "Where a run has run away: where `when` holds, every run of the checks stops at the first "
+                         "step that ends with the coordinate's magnitude beyond this.",
+    "runaway[i].why": "The physical reason, shown in the rows; a number in it may be written `{= expression}` "
+                      "or `{= expression :format}` (an expression of the parameters), computed at the run's "
+                      "parameters.",
     "sample": "The random states of the pointwise check, at which every source is evaluated.",
     "sample.count": f"How many random states (at most {MAX_STATES}).",
     "sample.seed": "The seed of their random generator: two runs draw the same states.",
@@ -608,6 +635,7 @@ KEY_UNITS = {
     **dict.fromkeys(["params.<name>.value", *(f"params.<name>.{key}" for key in BOUNDS), "sample.params.ranges"],
                     "params.<name>.unit"),
     **dict.fromkeys(["initial.q", "sample.q"], "coord_units"),
+    "runaway[i].escape": "the coordinate's (coord_units)",
     **dict.fromkeys(["initial.v", "sample.v"], "coord_units per s"),
     **dict.fromkeys(["initial.t_end", "sample.t", "integration.output_step", "integration.mujoco_step"], "s"),
     "tolerance.pointwise.force_scale": "N",
@@ -681,6 +709,36 @@ def markdown():
               "overridden) and the `why`.  For example:", "",
               "```toml", "[[constraints]]", "expression = \"Ixx - m*h**2\"", "strict = true",
               "why = \"the moment of inertia about the centre of mass across the axis must be > 0\"", "```", "",
+              "## Runaway", "",
+              "A physical runaway is not a numerical failure.  Where the case knows its physical limits, each "
+              "`[[runaway]]` entry says when the parameters are past one (`when`), which coordinate then grows "
+              "without bound and where a run has run away (`escape`), and why.  At parameters where no `when` "
+              "holds, nothing changes: a run that blows up is `unstable`.  Where the first `when` that holds "
+              "does, every run of the checks (reference, book, Pinocchio, MuJoCo, and their twins) stops at the "
+              "first step beyond `escape`, and:", "",
+              "- every source escaped: the runs' rows are `runaway` (a success, counted apart), with the `why` "
+              "and when, which method and which step each source escaped;",
+              "- some escaped and others did not: not the physics the case states.  The rows of a run that "
+              "stayed within the bound to the end fail, those of the escaped runs are `unstable` (as are those of "
+              "a run that blew up otherwise: a non-finite state, a budget);",
+              "- none escaped before `initial.t_end` (a growth too slow to reach `escape`): the runs are compared "
+              "as at any parameters.", "",
+              "The conditions are checked on load: `when` must be a comparison, and it and every `{= expression}` "
+              "in `why` must evaluate at the parameters.  For example:", "",
+              "```toml", "[[runaway]]", "when = \"k < m*(alpha_rate + beta_rate)**2\"", "coordinate = \"l\"",
+              "escape = 100.0",
+              "why = \"the spin's pull m Omega^2 = {= m*(alpha_rate + beta_rate)**2 :.4g} N/m beats the spring k = "
+              "{= k :g} N/m\"",
+              "```", "",
+              "## Numbers in prose", "",
+              "A text that a page shows (`summary`, `report.modelling`, `tolerance.<name>.why`, a finding's "
+              "`explanation` and `effect`, `runaway[i].why`, ...) may write a number as `{= expression}` or "
+              "`{= expression :format}` (a Python format spec, default `.3g`): it is computed at the parameters "
+              "of the run, so that the page stays true under `--set`.  For example `sqrt(k/m) = "
+              "{= sqrt(k/m) :.0f} rad/s` reads `sqrt(k/m) = 100 rad/s` at the book's k = 2000 N/m and `50 rad/s` "
+              "at k = 500.  Every such number is evaluated on load (a bad one is refused, exit 2).  A number "
+              "measured at the book's numbers belongs in a finding's text, which a page under overrides marks "
+              "as the case file's account of the book's numbers.", "",
               "## Expressions", "",
               "An expression is text in quotes, parsed and evaluated by `dyncheck.expressions` (never by Python's "
               "eval).  It may hold only numbers, names, unary + and -, the operators + - * / **, one comparison "
@@ -689,7 +747,8 @@ def markdown():
               f"exponent beyond +-{expressions.MAX_EXPONENT} is refused, and so is an expression longer than "
               f"{expressions.MAX_LENGTH} characters or nested deeper than {expressions.MAX_DEPTH} levels.", "",
               "The names depend on where the expression is:", "",
-              "- the file's numbers of type \"a number or an expression in quotes\" and `constraints[i].expression`: "
+              "- the file's numbers of type \"a number or an expression in quotes\", `constraints[i].expression`, "
+              "`runaway[i].when` and every `{= expression}` in prose: "
               "the parameters, `pi` and numpy's " + ", ".join(f"`{name}`" for name in expressions.FUNCTIONS) + ";",
               "- along a run (`report.stop`, `report.values`, `report.figures`, `program.figures`, `program.plots`): "
               "the run's columns, arrays over its output times (each coordinate, its rate `<coord>_rate`, each "

@@ -7,9 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 from scipy.integrate import DOP853, LSODA, RK45, Radau, cumulative_simpson
+from scipy.optimize import brentq
 
+from dyncheck import store
 from dyncheck.results import Failure
-
 
 
 @dataclass(frozen=True)
@@ -43,11 +44,36 @@ class Unstable(Exception):
                          + f": {why}")
         self.method, self.t, self.step, self.why = method, t, step, why
 
+    kind = Failure  # what `failure` makes of it
+
     @property
     def failure(self):
         """The blow-up as a value, for the results."""
-        return Failure(self.method, None if self.t is None else float(self.t),
-                       None if self.step is None else int(self.step), str(self.why))
+        return self.kind(self.method, None if self.t is None else float(self.t),
+                         None if self.step is None else int(self.step), str(self.why))
+
+
+@store.register
+class Escape(Failure):
+    """A run stopped where its coordinate left the bound it was given (simulate's `bound`): the state
+    was still finite there, so this is not a numerical failure unless the physics says it cannot be."""
+
+    def __str__(self):
+        return f"{self.method} escaped at t = {self.t:.6g} s (step {self.step}): {self.why}"
+
+
+class Escaped(Unstable):
+    """A run whose coordinate left its bound (simulate's `bound`)."""
+    kind = Escape
+
+
+def check_bound(bound, method, t, step, q):
+    """Raise Escaped when q[index] is beyond +-limit, for bound = (coordinate name, index, limit) (None:
+    no bound)."""
+    if bound is not None:
+        name, index, limit = bound
+        if abs(q[index]) > limit:
+            raise Escaped(method, t, step, f"|{name}| = {abs(q[index]):.6g} beyond {limit:g}")
 
 
 def state_columns(case):
@@ -110,7 +136,8 @@ def fastest_frequency(case):
     return None if omega is None else abs(case.value(omega, "work_precision.convergence.omega"))
 
 
-def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True, max_step=np.inf, omega=None):
+def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True, max_step=np.inf, omega=None,
+             bound=None):
     """Integrate `model` from ic = (q0, v0) over [0, t_end].
 
     method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol` and steps of at
@@ -123,19 +150,21 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
     of the prescribed motions and applied forces so far (`work`; pass work=False for a scene where
     nothing does work, to skip the drive power), with the cost in `.attrs`.
     Raises Unstable (when, which method, which step) for a run that blows up, whose model's arithmetic
-    fails, or that goes past its Budget; a fixed-step run longer than MAX_STEPS is not started.
+    fails, or that goes past its Budget; a fixed-step run longer than MAX_STEPS is not started.  With
+    `bound` = (coordinate name, its index, limit), raises Escaped at the first step that ends with the
+    coordinate beyond +-limit.
     """
     q0, v0 = (np.asarray(x, dtype=float) for x in ic)
     n_out = int(round(t_end / output_step))
     grid = np.linspace(0.0, t_end, n_out + 1)
     if method in SCIPY_METHODS:
         budget = scipy_budget(method, t_end, rtol, max_step, omega)
-        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget)
+        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound)
     elif method in FIXED_METHODS + MUJOCO_METHODS:
         every = round(output_step / dt)  # steps per output
         budget = Budget(method, t_end, every * n_out, f"{every * n_out} steps of {dt:g} s")
         run = _fixed if method in FIXED_METHODS else _mujoco
-        t, q, v, w, cost = run(model, q0, v0, grid, method, dt, every, work, budget)
+        t, q, v, w, cost = run(model, q0, v0, grid, method, dt, every, work, budget, bound)
     else:
         raise ValueError(f"unknown method '{method}'; methods are {', '.join(METHODS)}")
     return _frame(model, t, q, v, w, {"method": method, "rtol": rtol, "dt": dt, **cost})
@@ -153,7 +182,7 @@ def _arithmetic(method, t, step, call, *args):
         raise Unstable(method, t, step, f"the model failed: {type(error).__name__}: {error}") from None
 
 
-def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget):
+def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
     """scipy's solver stepped here rather than by solve_ivp (the same steps and outputs), so that the
     budget is checked at every step and right-hand side."""
     n = len(q0)
@@ -183,6 +212,8 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget):
                 raise Unstable(method, solver.t, steps, message)
             if not np.all(np.isfinite(solver.y)):
                 raise Unstable(method, solver.t, steps, "state is not finite")
+            if bound is not None and abs(solver.y[bound[1]]) > bound[2]:
+                _escape_within_step(solver, bound, method, steps)
             budget.check(solver.t, steps)
             reached = np.searchsorted(grid, solver.t, side="right")
             if reached > done:
@@ -193,7 +224,17 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget):
     return grid, y[:, :n], y[:, n:2 * n], y[:, -1], {"wall": wall, "evaluations": evaluations, "steps": steps}
 
 
-def _fixed(model, q0, v0, grid, method, dt, every, work, budget):
+def _escape_within_step(solver, bound, method, step):
+    """Raise Escaped at the time the coordinate crossed the bound within the solver's last step, found on
+    its dense output: an adaptive step is long (DOP853 at 1e-10 takes 10 ms steps where l runs away),
+    and the step's end would put different sources' escapes that far apart."""
+    name, index, limit = bound
+    dense = solver.dense_output()
+    t = brentq(lambda s: abs(dense(s)[index]) - limit, solver.t_old, solver.t)  # inside at t_old, beyond at t
+    raise Escaped(method, t, step, f"|{name}| reached {limit:g} (by the step's dense output)")
+
+
+def _fixed(model, q0, v0, grid, method, dt, every, work, budget, bound):
     """Fixed-step integration; the work W' = P rides along with the scheme's own update."""
     nstep = every * (len(grid) - 1)
     n = len(q0)
@@ -232,6 +273,7 @@ def _fixed(model, q0, v0, grid, method, dt, every, work, budget):
                 v, w = v_new, w + dt * power
             if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
                 raise Unstable(method, (step + 1) * dt, step + 1, "state is not finite")
+            check_bound(bound, method, (step + 1) * dt, step + 1, q)
             if (step + 1) % every == 0:
                 out_q.append(q.copy())
                 out_v.append(v.copy())
@@ -241,11 +283,11 @@ def _fixed(model, q0, v0, grid, method, dt, every, work, budget):
         {"wall": wall, "evaluations": evaluations, "steps": nstep}
 
 
-def _mujoco(model, q0, v0, grid, method, dt, every, work, budget):
+def _mujoco(model, q0, v0, grid, method, dt, every, work, budget, bound):
     # MuJoCo steps in C, out of reach of the budget's clock: its steps are bounded before it starts (Budget).
     run = model.step(q0, v0, grid[-1], dt, METHODS[method].engine_name)
     t, q, v = run["t"], run["q"], run["v"]
-    check_mujoco_run(run, method, dt)
+    check_mujoco_run(run, method, dt, bound)
     # Work of the prescribed motions: drive power at every step, Simpson's rule (error ~ dt^4).
     if work:
         work = cumulative_simpson(model.drive_powers(t, q, v), x=t, initial=0.0)
@@ -262,8 +304,8 @@ def _mujoco(model, q0, v0, grid, method, dt, every, work, budget):
 
 def check_mujoco_run(run, method, dt, bound=None):
     """Raise Unstable at the first step of a MujocoModel.step run that is not finite, that MuJoCo reset,
-    or (with `bound` = (coordinate name, its index, limit)) whose coordinate is beyond the limit; or,
-    for a run with a MuJoCo warning but no reset, at its end."""
+    or (with `bound` = (coordinate name, its index, limit)) whose coordinate is beyond the limit (then
+    Escaped); or, for a run with a MuJoCo warning but no reset, at its end."""
     t, q, v = run["t"], run["q"], run["v"]
     # MuJoCo answers a blow-up (NaN, Inf or |qvel| > 1e10) by resetting the state and the clock
     # to their initial values, silently for a rollout: a clock that stops advancing by dt marks it.
@@ -279,13 +321,10 @@ def check_mujoco_run(run, method, dt, bound=None):
     if not good.all():
         step = int(np.argmin(good))
         if not finite[step]:
-            why = "state is not finite"
-        elif not advancing[step]:
-            why = (warned or "non-finite or huge state") + "; MuJoCo reset the simulation"
-        else:
-            name, index, limit = bound
-            why = f"|{name}| = {abs(q[step, index]):.3g} beyond {limit:g}"
-        raise Unstable(method, step * dt, step, why)
+            raise Unstable(method, step * dt, step, "state is not finite")
+        if not advancing[step]:
+            raise Unstable(method, step * dt, step, (warned or "non-finite or huge state") + "; MuJoCo reset the simulation")
+        check_bound(bound, method, step * dt, step, q[step])  # finite and advancing: beyond the bound, Escaped
     if warned:  # a warning without a reset: the run is not to be trusted either
         raise Unstable(method, t[-1], run["steps"], warned)
 

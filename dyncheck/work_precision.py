@@ -20,13 +20,18 @@ from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_M
                                energy_residual, fastest_frequency, simulate, state_columns)
 from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, plt
 
-COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "evaluations",
-           "steps", "status", "resolved", "detail"]
+COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "wall_min", "wall_max",
+           "repeats", "evaluations", "steps", "status", "resolved", "detail"]
+# Wall times differ from run to run: the pages and their CSV leave them out (a report made twice is
+# the same), and the timing files (write_csv(..., timing=True), figure(..., cost="wall")) carry them.
+TIMING_COLUMNS = ["wall", "wall_min", "wall_max", "repeats"]
+COSTS = {"evaluations": "right-hand-side evaluations", "wall": "wall time [s], median (bars: fastest to slowest)"}
 NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no free coordinate), so it "
             "has no work-precision chart and no convergence check.")
-COST_NOTE = ("Wall time is the integration alone, median of repeated runs.  MuJoCo steps in C (its rollout); "
-             "every other method steps in Python around its right-hand side, so across engines wall time "
-             "measures the harness as much as the method: the evaluations (right) compare the methods.")
+EVALUATIONS_NOTE = ("Cost is counted in right-hand-side evaluations (MuJoCo's RK4: 4 a step, its Euler: 1), "
+                    "which compare the methods whatever steps them.")
+WALL_NOTE = ("MuJoCo steps in C (its rollout) and every other method in Python around its right-hand side, so "
+             "across engines wall time measures the harness as much as the method.")
 # A point whose error is within this factor of the reference solution's verified accuracy cannot be
 # told apart from the reference's own error: it is drawn hollow and never counts as reaching a level.
 RESOLUTION = 10.0
@@ -172,8 +177,8 @@ def sweep(case, progress=None):
 
     error: max over time and state coordinates of |x - x_ref| / max |x_ref| (per coordinate);
     energy_error: max |E(t) - E(0) - W(t)| / max(|E_ref|, |W_ref|), the energy drift of a closed scene
-    or the work-energy balance of a driven one; wall: median of `repeat` runs (one run when a run takes
-    longer than `repeat_under` seconds in all); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
+    or the work-energy balance of a driven one; wall, wall_min, wall_max: median, least and most of
+    `repeats` timed runs (`repeat`, or fewer when they take longer than `repeat_under` seconds in all); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
     steps: fixed steps (NaN for scipy, which does not report them).  A run that blows up is a row
     with status "unstable", NaN errors and the time and step in `detail`.  resolved: whether the error
     is above RESOLUTION times the reference's verified accuracy.  An empty frame for a case with
@@ -200,7 +205,8 @@ def sweep(case, progress=None):
                 took = time.perf_counter() - start
                 walls.append(run.attrs["wall"])
         except Unstable as failure:
-            rows.append({**point, "error": np.nan, "energy_error": np.nan, "wall": np.nan, "evaluations": np.nan,
+            rows.append({**point, "error": np.nan, "energy_error": np.nan, "wall": np.nan, "wall_min": np.nan,
+                         "wall_max": np.nan, "repeats": len(walls), "evaluations": np.nan,
                          "steps": failure.step, "status": "unstable", "resolved": False,
                          "detail": f"unstable at t = {failure.t:.4g} s"
                                    + (f", step {failure.step}" if failure.step is not None else "") + f": {failure.why}"})
@@ -208,7 +214,8 @@ def sweep(case, progress=None):
             continue
         error = trajectory_error(run, reference, columns)
         rows.append({**point, "error": error, "energy_error": float(energy_residual(run).abs().max() / scale),
-                     "wall": float(np.median(walls)), "evaluations": run.attrs["evaluations"],
+                     "wall": float(np.median(walls)), "wall_min": min(walls), "wall_max": max(walls),
+                     "repeats": len(walls), "evaluations": run.attrs["evaluations"],
                      "steps": run.attrs.get("steps", np.nan), "status": "ok",
                      "resolved": bool(error > RESOLUTION * accuracy), "detail": ""})
         _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: {error:.1e}")
@@ -217,12 +224,15 @@ def sweep(case, progress=None):
     return frame
 
 
-def write_csv(frame, path):
-    """The tidy rows, with the reference solution named in a comment line above the header."""
+def write_csv(frame, path, timing=False):
+    """The tidy rows, with the reference solution named in a comment line above the header: without the
+    wall times, or (timing) the points' keys with only their wall times."""
+    keys = ["case", "source", "method", "setting", "value"]
+    columns = keys + TIMING_COLUMNS if timing else [c for c in frame.columns if c not in TIMING_COLUMNS]
     with open(path, "w") as f:
         if "reference" in frame.attrs:
             f.write(f"# {frame.attrs['reference']['label']}\n")
-        frame.to_csv(f, index=False)
+        frame[columns].to_csv(f, index=False)
 
 
 # -- which method is cheapest ----------------------------------------------------------------------
@@ -233,41 +243,42 @@ def point_label(r):
     return f"{name}, {r['setting']} = {r['value']:g}" + (" s" if r["setting"] == "dt" else "")
 
 
-def cheapest(frame, levels=LEVELS):
-    """For each accuracy level (relative trajectory error), the point that reaches it at the least wall
-    time and the runner-up from another (source, method): a DataFrame with level, cheapest, wall,
-    error, runner_up, runner_up_wall.  Only resolved points count; a level below RESOLUTION times the
+def cheapest(frame, cost="evaluations", levels=LEVELS):
+    """For each accuracy level (relative trajectory error), the point that reaches it at the least
+    `cost` (a column: "evaluations" or "wall") and the runner-up from another (source, method): a
+    DataFrame with level, cheapest, <cost>, error, runner_up, runner_up_<cost>.  Only resolved points count; a level below RESOLUTION times the
     reference's accuracy cannot be decided and says so, a level nobody reaches says "none reached"."""
     floor = RESOLUTION * frame.attrs.get("reference", {}).get("accuracy", 0.0)
     ok = frame[(frame["status"] == "ok") & frame["resolved"]]
     out = []
     for level in levels:
-        entry = {"level": level, "cheapest": "none reached", "wall": np.nan, "error": np.nan,
-                 "runner_up": "", "runner_up_wall": np.nan}
+        entry = {"level": level, "cheapest": "none reached", cost: np.nan, "error": np.nan,
+                 "runner_up": "", f"runner_up_{cost}": np.nan}
         if level < floor:
             entry["cheapest"] = f"not resolvable: below {floor:.1g}, {RESOLUTION:g}x the reference's accuracy"
         else:
-            # each (source, method)'s fastest point that reaches the level, fastest first
-            reached = ok[ok["error"] <= level].sort_values("wall").drop_duplicates(["source", "method"])
+            # each (source, method)'s cheapest point that reaches the level, cheapest first; a stable sort
+            # (ties in the sweep's order) so that equal counts pick the same point every time
+            reached = ok[ok["error"] <= level].sort_values(cost, kind="stable").drop_duplicates(["source", "method"])
             if len(reached):
                 best = reached.iloc[0]
-                entry.update(cheapest=point_label(best), wall=best["wall"], error=best["error"])
+                entry.update({"cheapest": point_label(best), cost: best[cost], "error": best["error"]})
             if len(reached) > 1:
-                entry.update(runner_up=point_label(reached.iloc[1]), runner_up_wall=reached.iloc[1]["wall"])
+                entry.update({"runner_up": point_label(reached.iloc[1]), f"runner_up_{cost}": reached.iloc[1][cost]})
         out.append(entry)
     return pd.DataFrame(out)
 
 
 # -- the chart ---------------------------------------------------------------------------------
 
-def figure(frame, case, path):
-    """Error against cost, log-log: trajectory error (top) and energy error (bottom) against median
-    wall time (left) and right-hand-side evaluations (right); hollow markers for points the reference
-    cannot resolve; the unresolvable band shaded."""
+def figure(frame, case, path, cost="evaluations"):
+    """Error against cost, log-log: trajectory error (top) and energy error (bottom) against `cost`
+    (COSTS: right-hand-side evaluations, or the wall time with bars from the fastest to the slowest
+    repeat); hollow markers for points the reference cannot resolve; the unresolvable band shaded."""
     ref = frame.attrs.get("reference", {})
     floor = RESOLUTION * ref.get("accuracy", 0.0)
     ok = frame[frame["status"] == "ok"]
-    fig, axes = plt.subplots(2, 2, figsize=(10.5, 8.5), sharex="col", sharey="row")
+    fig, axes = plt.subplots(2, 1, figsize=(7.5, 8.5), sharex=True)
     drawn = {}  # label -> errors by step or tolerance, to name a line that hides another
     for (source, method), points in ok.groupby(["source", "method"], sort=False):
         points = points.sort_values("value", ascending=False)  # along the sweep: loose to tight
@@ -277,34 +288,34 @@ def figure(frame, case, path):
         same = [other for other, e in drawn.items() if e.index.equals(errors.index) and np.array_equal(e, errors)]
         drawn[label] = errors
         label += f", same as {same[0]}" if same else ""
-        for row_axes, y in zip(axes, ("error", "energy_error")):
-            for ax, x in zip(row_axes, ("wall", "evaluations")):
-                ax.plot(points[x], points[y], mfc="none", label=label if ax is axes[0, 0] else None, **style)
-                solid = points[points["resolved"]]
-                ax.plot(solid[x], solid[y], ls="none", marker=style["marker"], color=style["color"], ms=5)
-    for ax in axes.flat:
+        for ax, y in zip(axes, ("error", "energy_error")):
+            ax.plot(points[cost], points[y], mfc="none", label=label if ax is axes[0] else None, **style)
+            solid = points[points["resolved"]]
+            ax.plot(solid[cost], solid[y], ls="none", marker=style["marker"], color=style["color"], ms=5)
+            if cost == "wall":
+                spread = [points["wall"] - points["wall_min"], points["wall_max"] - points["wall"]]
+                ax.errorbar(points["wall"], points[y], xerr=spread, ls="none", color=style["color"], lw=0.7)
+    for ax in axes:
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.grid(True, which="major", alpha=0.3)
-    for ax in axes[0]:
-        ax.axhspan(1e-300, floor, color="0.85", zorder=0)
-        ax.axhline(floor, color="0.5", lw=0.8)
+    axes[0].axhspan(1e-300, floor, color="0.85", zorder=0)
+    axes[0].axhline(floor, color="0.5", lw=0.8)
     top = max(ok["error"].max(), ok["energy_error"].max()) if len(ok) else 1.0
     low = min(floor / 10, ok["error"].min()) if len(ok) else 1e-14
-    axes[0, 0].set_ylim(max(low, 1e-16) / 2, min(top, 1e3) * 3)
-    axes[0, 0].set_ylabel("trajectory error\nmax |x - x_ref| / max |x_ref|")
-    axes[1, 0].set_ylabel("energy error\nmax |E - E(0) - W| / max(|E|, |W|)")
-    axes[1, 0].set_xlabel("wall time [s], median")
-    axes[1, 1].set_xlabel("right-hand-side evaluations")
-    axes[0, 0].text(0.02, 0.02, f"shaded: within {RESOLUTION:g}x of the reference's accuracy (hollow points)",
-                    transform=axes[0, 0].transAxes, fontsize=7, color="0.3")
+    axes[0].set_ylim(max(low, 1e-16) / 2, min(top, 1e3) * 3)
+    axes[0].set_ylabel("trajectory error\nmax |x - x_ref| / max |x_ref|")
+    axes[1].set_ylabel("energy error\nmax |E - E(0) - W| / max(|E|, |W|)")
+    axes[1].set_xlabel(COSTS[cost])
+    axes[0].text(0.02, 0.02, f"shaded: within {RESOLUTION:g}x of the reference's accuracy (hollow points)",
+                 transform=axes[0].transAxes, fontsize=7, color="0.3")
     fig.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False,
                title="colour: method; marker and line: source\n\u25cb \u2014 reference, \u25a1 - - pinocchio, \u25b3 \u00b7\u00b7\u00b7 mujoco",
                title_fontsize=8)
     unstable = frame[frame["status"] == "unstable"]
     notes = "; ".join(f"{point_label(r)} ({r['detail'].split(':')[0]})" for _, r in unstable.iterrows())
-    fig.suptitle(f"{case.name}: error against cost over {ref.get('t_end', 0):g} s\n{ref.get('label', '')}",
-                 fontsize=10)
+    fig.suptitle(f"{case.name}: error against {'wall time' if cost == 'wall' else 'cost'} over "
+                 f"{ref.get('t_end', 0):g} s\n{ref.get('label', '')}", fontsize=10)
     if notes:
         fig.text(0.01, 0.005, "unstable (not drawn): " + notes, fontsize=7, wrap=True)
     fig.tight_layout(rect=(0, 0.03, 1, 1))

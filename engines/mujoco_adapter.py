@@ -121,6 +121,23 @@ class MujocoModel:
                                       int(self.m.sensor_history[i][0]))
         return int(self.m.sensor_adr[i]), site
 
+    def approximations_doubled(self, scales):
+        """This scene with its approximations of the case's physics doubled: some bodies' mass and inertia
+        scaled, {body: (mass factor, inertia factor)} (set in the compiled model, which MuJoCo checks only
+        when it compiles; mj_setConst redoes what follows), and the armature that holds the prescribed
+        motions halved (they drift by torque x time / armature)."""
+        twin = copy.copy(self)
+        twin.m = copy.copy(self.m)
+        twin.armature = self.armature.copy()
+        twin.armature[self._driven_dofs] /= 2
+        for name, (mass, inertia) in scales.items():
+            twin.m.body_mass[self.body_id(name)] *= mass
+            twin.m.body_inertia[self.body_id(name)] *= inertia
+        twin.d = mujoco.MjData(twin.m)
+        mujoco.mj_setConst(twin.m, twin.d)
+        twin.d.qfrc_applied[:] = self.applied
+        return twin
+
     def tree(self):
         """The moving bodies as MuJoCo models them (see engines.scene.Body).  A ball joint's armature a on a
         body on the world is the isotropic inertia a I about the joint (no mass, so the same about the centre
@@ -317,11 +334,11 @@ class MujocoModel:
         times, qpos, qvel, wall, warnings = self._rollout(q0, v0, t_end, dt, integrator)
         nstep = len(times) - 1
         q, v = self._book_states(qpos, qvel, q0)
-        # How well the armatures held the prescribed rates, relative to the largest prescribed
-        # rate (a joint may be held at rate 0).
+        # How well the armatures held the prescribed rates, relative to the largest rate of the run,
+        # prescribed or free (a prescribed motion may be at rate 0, or nearly).
         prescribed = self._driven_motion[1] + self._driven_motion[2] * times[:, None]
         drift = np.max(np.abs(qvel[:, self._driven_dofs] - prescribed), initial=0.0)
-        scale = np.max(np.abs(prescribed), initial=0.0)
+        scale = max(np.max(np.abs(prescribed), initial=0.0), np.max(np.abs(qvel), initial=0.0))
         driven_error = float(drift / scale if scale > 0 else drift)
         return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep, "warnings": warnings,
                 "evaluations": nstep * (4 if integrator == "RK4" else 1), "driven_rate_error": driven_error}

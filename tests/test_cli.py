@@ -27,6 +27,23 @@ def test_list_names_both_cases(capsys):
     assert "spring_pendulum" in out and "double_pendulum" in out and "1.8.3" in out
 
 
+def test_list_shows_each_parameter_with_its_unit_bounds_and_sampled_range(capsys):
+    assert cli.main(["list", "spring_pendulum"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "== spring_pendulum (1.8.3)" in lines[1] and not any("== piston" in line for line in lines)
+    header = next(line for line in lines if line.startswith("parameter"))
+    assert header.split() == ["parameter", "value", "unit", "allowed", "sampled", "about"]
+    k = next(line for line in lines if line.startswith("k "))
+    assert k.split()[:5] == ["k", "2000", "N/m", ">", "0"]  # the value and what it must satisfy: k > 0
+    assert all(len(line) <= 100 for line in lines)
+
+
+def test_list_shows_the_sampled_interval_apart_from_the_allowed_one(capsys):
+    assert cli.main(["list", "piston"]) == 0
+    m = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("m "))
+    assert m.split()[:7] == ["m", "2", "kg", ">", "0", "0.1", "to"]  # allowed m > 0, drawn from 0.1 to 5 kg
+
+
 def test_run_exits_0_and_writes_the_json_of_the_design(canned, tmp_path, capsys):
     path = tmp_path / "out.json"
     assert cli.main(["run", "spring_pendulum", "double_pendulum", "--json", str(path)]) == 0
@@ -34,9 +51,9 @@ def test_run_exits_0_and_writes_the_json_of_the_design(canned, tmp_path, capsys)
     data = json.loads(path.read_text())
     spring = next(c for c in data["cases"] if c["case"] == "spring_pendulum")
     assert data["version"] == RESULTS_VERSION
-    assert set(spring) == {"case", "section", "params", "overrides", "checks", "findings"}
+    assert set(spring) == {"case", "section", "status", "counts", "params", "overrides", "checks", "findings"}
     assert set(spring["checks"][0]) == {"check", "quantity", "sources", "error", "tolerance", "ceiling", "status", "finding",
-                                       "detail"}
+                                       "detail", "reason"}
     finding = next(f for f in spring["findings"] if f["id"] == "1.8.3-R")
     assert {"id", "title", "quantity", "sources", "error", "explanation"} <= set(finding)
     assert finding["error"] > 0.1

@@ -13,7 +13,7 @@ from dyncheck import case as case_module
 from dyncheck import cli, report
 from dyncheck.case import Case
 
-PISTON_FILES = {"piston.md", "index.md", "errata.md", "data/piston.json", "figures/piston_scene.png",
+PISTON_FILES = {"piston.md", "piston_timing.md", "index.md", "errata.md", "data/piston.json", "figures/piston_scene.png",
                 "figures/piston_energy.png", "figures/piston_reactions.png", "figures/piston_pointwise.png",
                 "results/piston/value.json", "results/piston/arrays.npz"}
 

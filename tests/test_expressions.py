@@ -17,7 +17,7 @@ import dyncheck
 from dyncheck import stability, work_precision
 from dyncheck.case import CASES_DIR, Case
 from dyncheck.cli import main
-from dyncheck.expressions import evaluate, namespace
+from dyncheck.expressions import evaluate, namespace, of_parameters
 
 # The classic escape of eval with empty builtins: through object's subclasses to a module's builtins.
 ESCAPE = ("[c for c in ().__class__.__base__.__subclasses__() if c.__name__ == 'catch_warnings'][0]()"
@@ -139,7 +139,7 @@ def test_every_number_of_the_case_files_evaluates_as_before(name, monkeypatch):
     expressions = {(x, params): y for (x, params), y in seen.items() if isinstance(x, str)}
     assert expressions  # every case has some: pi/6, m * g, ...
     for (x, params), y in expressions.items():
-        assert y == float(old_eval(x, {**dict(params), "pi": math.pi})), x
+        assert y == float(old_eval(x, of_parameters(dict(params)))), x
 
 
 @pytest.mark.parametrize("name", dyncheck.case_names())

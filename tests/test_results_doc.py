@@ -7,14 +7,13 @@ import re
 from pathlib import Path
 
 from dyncheck.case import Case
+from dyncheck.ci import tool_versions
 from dyncheck.report import write_summary
 from dyncheck.results import RESULTS_VERSION, to_json
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "results.md"
 # Objects whose keys are data (parameter names, accuracy levels), not the layout's keys.
 KEYED_BY_DATA = {"params", "overrides", "cheapest"}
-# The one key that the command line adds to to_json's output: `run --json` interrupted by Ctrl-C.
-ADDED_BY_CLI = {"incomplete"}
 
 
 def keys(value):
@@ -47,7 +46,8 @@ def example(text):
 def test_every_emitted_key_is_documented(results, tmp_path):
     result = results["piston"]  # a case with a registered finding, so that a finding's keys are emitted
     assert result.findings
-    emitted = keys(to_json([result])) | keys(summary(result, tmp_path)) | ADDED_BY_CLI
+    interrupted = to_json([], tool_versions(), interrupted="piston")  # `run --json` stopped by Ctrl-C
+    emitted = keys(to_json([result], tool_versions())) | keys(interrupted) | keys(summary(result, tmp_path))
     text = DOC.read_text()
     missing = sorted(key for key in emitted if f"`{key}`" not in text)
     assert not missing, f"{DOC}: keys that dyncheck writes but the page does not name (in backquotes): {missing}"
@@ -62,7 +62,7 @@ def test_the_documented_version_is_the_current_one():
 
 
 def test_the_example_has_the_layout_of_the_output(results):
-    real, shown = to_json([results["piston"]]), example(DOC.read_text())
+    real, shown = to_json([results["piston"]], tool_versions()), example(DOC.read_text())
     assert shown.keys() == real.keys()
     case, shown_case = real["cases"][0], shown["cases"][0]
     assert shown_case.keys() == case.keys()

@@ -60,12 +60,16 @@ def test_sweep_rows_and_an_unstable_point(tmp_path):
     assert np.isnan(unstable["error"]).all() and "t = 0.8" in unstable["detail"].iloc[0]
     assert (ok["error"] > 0).all() and (ok["error"] < 1e-2).all() and (ok["energy_error"] > 0).all()
     assert (ok["wall"] > 0).all() and (ok["evaluations"] > 0).all()
+    assert (ok["wall_min"] <= ok["wall"]).all() and (ok["wall"] <= ok["wall_max"]).all() and (ok["repeats"] >= 1).all()
     # The reference solution is named and its accuracy verified (tolerance 1e-9 here).
     assert frame.attrs["reference"]["accuracy"] < 1e-6
-    work_precision.figure(frame, case, tmp_path / "wp.png")
-    work_precision.write_csv(frame, tmp_path / "wp.csv")
-    assert (tmp_path / "wp.png").stat().st_size > 0
-    assert len(pd.read_csv(tmp_path / "wp.csv", comment="#")) == 3
+    for cost in work_precision.COSTS:
+        work_precision.figure(frame, case, tmp_path / f"wp_{cost}.png", cost=cost)
+        assert (tmp_path / f"wp_{cost}.png").stat().st_size > 0
+    for timing in (False, True):
+        work_precision.write_csv(frame, tmp_path / "wp.csv", timing=timing)
+        written = pd.read_csv(tmp_path / "wp.csv", comment="#")
+        assert len(written) == 3 and ("wall" in written) == timing
 
 
 def test_nothing_to_integrate():
@@ -81,17 +85,23 @@ def test_a_step_must_divide_the_output_step():
         work_precision.plan(case)
 
 
-def test_cheapest_picks_the_fastest_point_that_reaches_each_level():
-    rows = [("a", "RK4", 1e-3, 0.10), ("b", "DOP853", 5e-3, 0.05), ("b", "DOP853", 1e-5, 0.20),
-            ("c", "Euler", 1e-9, 0.01)]  # c: within 10x of the reference's accuracy, unresolved
+def test_cheapest_picks_the_cheapest_point_that_reaches_each_level():
+    # source, method, error, wall time, evaluations: by evaluations b's first point is cheapest at 1e-2, by
+    # wall time too; at 1e-4 only b's second point is left
+    rows = [("a", "RK4", 1e-3, 0.10, 400), ("b", "DOP853", 5e-3, 0.05, 300), ("b", "DOP853", 1e-5, 0.20, 900),
+            ("c", "Euler", 1e-9, 0.01, 50)]  # c: within 10x of the reference's accuracy, unresolved
     frame = pd.DataFrame([{"source": s, "method": m, "setting": "dt", "value": 0.1, "error": e, "wall": w,
-                           "status": "ok", "resolved": e > 1e-8} for s, m, e, w in rows]
+                           "evaluations": n, "status": "ok", "resolved": e > 1e-8} for s, m, e, w, n in rows]
                          + [{"source": "d", "method": "RK45", "setting": "rtol", "value": 1.0, "error": np.nan,
-                             "wall": np.nan, "status": "unstable", "resolved": False}])
+                             "wall": np.nan, "evaluations": np.nan, "status": "unstable", "resolved": False}])
     frame.attrs["reference"] = {"accuracy": 1e-9}
+    by_wall = work_precision.cheapest(frame, cost="wall", levels=(1e-2, 1e-4)).set_index("level")
+    assert by_wall.loc[1e-2, "cheapest"].startswith("b DOP853") and by_wall.loc[1e-2, "wall"] == 0.05
+    assert by_wall.loc[1e-2, "runner_up"].startswith("a RK4") and by_wall.loc[1e-2, "runner_up_wall"] == 0.10
+    frame.loc[1, "evaluations"] = 500  # now a's point is cheaper in evaluations, b's in wall time
     table = work_precision.cheapest(frame, levels=(1e-2, 1e-4, 1e-8, 1e-10)).set_index("level")
-    assert table.loc[1e-2, "cheapest"].startswith("b DOP853") and table.loc[1e-2, "wall"] == 0.05
-    assert table.loc[1e-2, "runner_up"].startswith("a RK4") and table.loc[1e-2, "runner_up_wall"] == 0.10
-    assert table.loc[1e-4, "wall"] == 0.20 and table.loc[1e-4, "runner_up"] == ""
+    assert table.loc[1e-2, "cheapest"].startswith("a RK4") and table.loc[1e-2, "evaluations"] == 400
+    assert table.loc[1e-2, "runner_up"].startswith("b DOP853") and table.loc[1e-2, "runner_up_evaluations"] == 500
+    assert table.loc[1e-4, "evaluations"] == 900 and table.loc[1e-4, "runner_up"] == ""
     assert table.loc[1e-8, "cheapest"] == "none reached"
     assert table.loc[1e-10, "cheapest"].startswith("not resolvable")
