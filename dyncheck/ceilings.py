@@ -44,7 +44,7 @@ LISTING = 1e-2
 # drift changes in the motion is measured (the run with A halved, dyncheck.checks.approximations_effect)
 # and allowed in the trajectory and energy rows; that measurement is first order in the drift, its error
 # second order: a drift within 1e-6 of the run's largest rate keeps it below a millionth of the effect.
-DRIVEN_RATE = 1e-6
+DRIVEN_RATE = 1e-6  # of the largest rate of the run, and at least of 1 rad/s (or m/s)
 
 # Figure ranges are inside/outside: any excess over the book's printed axis is outside.
 FIGURE = 0.0

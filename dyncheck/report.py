@@ -407,9 +407,11 @@ def not_passed(rows):
     shown = [r for r in rows if r.status not in (Status.PASS, Status.FINDING, Status.NOT_APPLICABLE)]
     if not shown:
         return []
+    why = {}  # one line per status and reason: a runaway or a blow-up stops every row of a run alike
+    for r in shown:
+        why.setdefault((r.status, reason(r) or r.detail), []).append(f"{r.check} {r.quantity} ({r.comparison})")
     return ["Rows that did not pass, and why:", "",
-            *[f"- {r.check} {r.quantity} ({r.comparison}): **{r.status}**: {reason(r) or r.detail}" for r in shown],
-            ""]
+            *[f"- {'; '.join(names)}: **{status}**: {text}" for (status, text), names in why.items()], ""]
 
 
 def scene_table(case):

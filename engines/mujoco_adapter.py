@@ -338,7 +338,8 @@ class MujocoModel:
         # prescribed or free (a prescribed motion may be at rate 0, or nearly).
         prescribed = self._driven_motion[1] + self._driven_motion[2] * times[:, None]
         drift = np.max(np.abs(qvel[:, self._driven_dofs] - prescribed), initial=0.0)
-        scale = max(np.max(np.abs(prescribed), initial=0.0), np.max(np.abs(qvel), initial=0.0))
+        # (rad/s, or m/s for a slider: at rest, the drift in SI units)
+        scale = max(np.max(np.abs(prescribed), initial=0.0), np.max(np.abs(qvel), initial=0.0), 1.0)
         driven_error = float(drift / scale if scale > 0 else drift)
         return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep, "warnings": warnings,
                 "evaluations": nstep * (4 if integrator == "RK4" else 1), "driven_rate_error": driven_error}
