@@ -592,7 +592,7 @@ def write_timing_page(result, case, tmp):
         def wall_with_spread(label):
             r = labels.get(label)
             return "-" if r is None or pd.isna(r["wall"]) else \
-                f"{r['wall']:.3g} ({r['wall_min']:.3g} to {r['wall_max']:.3g}, {r['repeats']:g} runs)"
+                f"{r['wall']:.3g} ({r['wall_min']:.3g} to {r['wall_max']:.3g}, {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
         table = pd.DataFrame({"level": best["level"].map(lambda x: f"{x:.0e}"), "cheapest": best["cheapest"],
                               "wall [s]: median (least to most)": best["cheapest"].map(wall_with_spread),
                               "runner-up": best["runner_up"],
