@@ -18,6 +18,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pint
 
 from dyncheck import ceilings, expressions
 from dyncheck.expressions import evaluate
@@ -110,12 +111,36 @@ BINDABLE = {("body", "mass"): 1, ("body", "pos"): 3, ("body", "ipos"): 3, ("body
             ("joint", "stiffness"): 1, ("option", None): 3}
 
 # -- parameters ---------------------------------------------------------------------------------
-# The units a parameter may have (params.<name>.unit).
-UNITS = ("N m", "N/m", "kg", "kg m^2", "m", "m/s", "m/s^2", "rad", "rad/s", "rad/s^2")
-# Units whose every value must be positive, in every case.  Whatever else a parameter must satisfy
-# depends on the case (a length may be a body's size, > 0, or a position, of any sign): its bounds
-# in [params] and the case's [[constraints]].
+# A parameter's unit (params.<name>.unit) is any SI unit that pint reads ("N s/m", "kg m^2", "rad/s"),
+# coherent (no prefix, no factor: every value of a case is in SI), or "-" for a pure number.
+UNIT_REGISTRY = pint.UnitRegistry()
+DIMENSIONLESS = "-"
+UNIT_TEXT = re.compile(r"(?:1\s*/\s*)?[A-Za-z_ ]+(?:(?:\^|\*\*)-?[1-9])?(?:\s*[*/ ]\s*[A-Za-z_]+(?:(?:\^|\*\*)-?[1-9])?)*")
+# Quantities whose every value must be positive, in every case, by their dimension.  Whatever else a
+# parameter must satisfy depends on the case (a length may be a body's size, > 0, or a position, of any
+# sign): its bounds in [params] and the case's [[constraints]].
 POSITIVE_UNITS = {"kg": "a mass", "N/m": "a stiffness", "kg m^2": "a moment of inertia"}
+POSITIVE_DIMENSIONS = {UNIT_REGISTRY.Quantity(1.0, unit).dimensionality: what for unit, what in POSITIVE_UNITS.items()}
+
+
+def si_dimension(unit):
+    """The dimension of `unit`, a coherent SI unit or "-"; ValueError saying why it is not one."""
+    if unit == DIMENSIONLESS:
+        return UNIT_REGISTRY.Quantity(1.0).dimensionality
+    if not unit.strip():
+        raise ValueError(f"is empty; write '{DIMENSIONLESS}' for a pure number")
+    if not UNIT_TEXT.fullmatch(unit):  # before pint's parser, which evaluates what it reads
+        raise ValueError(f"is not a unit: write SI units with letters, spaces, / and ^ or ** and small integer "
+                         f"powers, as in 'N s/m' or 'kg m^2', or '{DIMENSIONLESS}' for a pure number")
+    try:
+        base = UNIT_REGISTRY.Quantity(1.0, unit).to_base_units()
+    except Exception as error:  # pint's parser fails in many ways (its errors, tokenize's, Python's)
+        raise ValueError(f"is not a unit ({type(error).__name__}: {error}); write SI units as in 'N s/m' or "
+                         f"'kg m^2', or '{DIMENSIONLESS}' for a pure number") from None
+    if not math.isclose(base.magnitude, 1.0, rel_tol=1e-12):
+        raise ValueError(f"is not a coherent SI unit: 1 {unit} = {base.magnitude:g} {base.units:~}; every value of a "
+                         f"case is in SI, so give it in {base.units:~}")
+    return base.dimensionality
 # The bound keys of params.<name> (JSON Schema's words) and the relation each demands of the value.
 BOUNDS = {"minimum": ">=", "exclusive_minimum": ">", "maximum": "<=", "exclusive_maximum": "<"}
 RELATIONS = {">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt}
@@ -311,8 +336,10 @@ def _cross_references(spec, file):
             raise _error(file, field, values, f"has length {len(values)}, not {len(coords)} "
                                               f"(one per coordinate: {', '.join(coords) or 'none'})")
     for p, item in params.items():
-        if item["unit"] not in UNITS:
-            raise _error(file, f"params.{p}.unit", item["unit"], "is not a known unit" + _hint(item["unit"], UNITS))
+        try:
+            si_dimension(item["unit"])
+        except ValueError as why:
+            raise _error(file, f"params.{p}.unit", item["unit"], str(why)) from None
         for key, relation in BOUNDS.items():  # overrides and ranges are checked later; the default here
             if key in item and not RELATIONS[relation](item["value"], item[key]):
                 raise _error(file, f"params.{p}.{key}", item[key], f"excludes the default params.{p}.value = "
@@ -425,7 +452,8 @@ def demands(item, name):
     """What the value of parameter `name` (its table `item` in [params]) must satisfy beyond being finite:
     a list of (relation, bound, reason)."""
     unit = item["unit"]
-    demands = [(">", 0, f"{name} is {POSITIVE_UNITS[unit]}, in {unit}")] if unit in POSITIVE_UNITS else []
+    what = POSITIVE_DIMENSIONS.get(si_dimension(unit))
+    demands = [(">", 0, f"{name} is {what}, in {unit}")] if what else []
     return demands + [(relation, item[key], f"params.{name}.{key}") for key, relation in BOUNDS.items() if key in item]
 
 
@@ -695,8 +723,10 @@ def markdown():
     lines += [f"| `{key}` | {'no' if optional else 'yes'} | {_words(kind)} | {KEY_UNITS.get(key, '')} | "
               f"{MEANINGS[key]} |" for key, kind, optional in keys()]
     lines += ["", "## Parameters", "",
-              "Known units: " + ", ".join(f"`{unit}`" for unit in UNITS) + ".", "",
-              "A parameter in " + ", ".join(f"`{unit}` ({what})" for unit, what in POSITIVE_UNITS.items())
+              "A parameter's `unit` is any coherent SI unit (no prefix, no factor: every value of a case is in "
+              "SI) that the units library pint reads, such as `N s/m`, `N m s/rad`, `kg m^2`, `rad/s^2`, or "
+              f"`{DIMENSIONLESS}` for a pure number; `g`, `N/mm` or `deg` are refused with the SI unit to use.", "",
+              "A parameter of the dimension of " + ", ".join(f"`{unit}` ({what})" for unit, what in POSITIVE_UNITS.items())
               + " must be > 0 in every case.  Anything else a value must satisfy depends on the case and is "
               "written next to it, in JSON Schema's words:", ""]
     lines += [f"- `{key} = x`: the value must be {relation} x" for key, relation in BOUNDS.items()]
