@@ -48,6 +48,11 @@ class Parameter:
     about: str
     bounds: tuple  # (relation, value) pairs its value must satisfy (schema.demands), e.g. ((">", 0.0),)
 
+    @property
+    def allowed(self):
+        """The bounds in words, as the pages and `dyncheck list` show them: "> 0", or "any"."""
+        return ", ".join(f"{relation} {bound:g}" for relation, bound in self.bounds) or "any"
+
 
 PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
 

@@ -189,7 +189,7 @@ def list_cases(names, cases_dir):
               f"coordinates: {', '.join(case.coords) or '-'}; reactions: {', '.join(case.reaction_names) or '-'}")
         ranges = case.spec["sample"].get("params", {}).get("ranges", {})
         rows = [{"parameter": p.name, "value": f"{p.value:g}", "unit": p.unit or "-",
-                 "allowed": ", ".join(f"{relation} {bound:g}" for relation, bound in p.bounds) or "any",
+                 "allowed": p.allowed,
                  "sampled": "-" if p.name not in ranges else
                  " to ".join(f"{case.value(end):g}" for end in ranges[p.name]), "about": p.about}
                 for p in case.parameters]

@@ -465,7 +465,7 @@ def write_case_page(result, case, tmp):
         draw(tmp / figures[kind])
 
     params = pd.DataFrame([{"parameter": p.name, "value": f"{p.value:.10g}", "unit": p.unit,
-                            "allowed": ", ".join(f"{relation} {bound:g}" for relation, bound in p.bounds) or "any",
+                            "allowed": p.allowed,
                             "meaning": p.about + (" (overridden)" if p.name in case.overrides else "")}
                            for p in case.parameters])
     q0, v0, t_end = case.initial
