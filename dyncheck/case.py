@@ -15,7 +15,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from dyncheck import expressions, schema
+from dyncheck import derived, expressions, schema
 from dyncheck.messages import suggest
 from dyncheck.results import overrides_in_words
 
@@ -107,10 +107,17 @@ def case_names(cases_dir=CASES_DIR):
     cases_dir = Path(cases_dir)
     if not cases_dir.is_dir():
         raise ValueError(f"--cases {cases_dir}: no such folder")
-    names = sorted(p.parent.name for p in cases_dir.glob("*/case.toml"))
+    names = sorted(p.name for p in cases_dir.iterdir() if is_case_folder(p))
     if not names:  # e.g. a non-editable install, which copies the code but not cases/
-        raise ValueError(f"no cases in {cases_dir} (no <folder>/case.toml); give a folder of cases with --cases DIR")
+        raise ValueError(f"no cases in {cases_dir} (no <folder>/case.toml, nor <folder>/{derived.SCENE} with "
+                         f"<folder>/{derived.EQUATIONS}); give a folder of cases with --cases DIR")
     return names
+
+
+def is_case_folder(folder):
+    """A case is a folder with a case.toml, or with a scene.xml and an equations.py alone (dyncheck.derived)."""
+    return folder.is_dir() and ((folder / "case.toml").is_file()
+                                or ((folder / derived.SCENE).is_file() and (folder / derived.EQUATIONS).is_file()))
 
 
 def load_case(name, cases_dir=CASES_DIR, **overrides):
@@ -134,7 +141,7 @@ class Case:
         self.spec = self._read() if spec is None else spec
         schema.validate(self.spec, self.file, where=spec is None)
         self.name = self.spec["name"]
-        self.section = self.spec["section"]
+        self.section = self.spec.get("section", "")
         self.title = self.spec["title"]
         self.coords = tuple(self.spec["coords"])
         self.reaction_names = tuple(self.spec["reactions"])
@@ -192,6 +199,23 @@ class Case:
         return Case(self.folder, self.overrides, spec, self.derivation)
 
     def _read(self):
+        """The case file: case.toml as written, or, for a plain equations module beside a scene.xml, the case
+        file they imply with case.toml (if any) over it (dyncheck.derived)."""
+        given = self._toml() if self.file.is_file() or not (self.folder / derived.EQUATIONS).is_file() else {}
+        where = given.get("derivation", derived.EQUATIONS)
+        if isinstance(where, str) and where.endswith(".py") and (self.folder / where).is_file() \
+                and (self.folder / derived.SCENE).is_file():
+            module = load_file(self.folder / where, f"{self.file}: derivation = {where!r}" if "derivation" in given
+                               else str(self.folder / where))
+            if derived.is_plain(module):
+                from engines.mjcf import describe  # the harness reads a scene only through engines/
+                return derived.case_file(self.folder, module, describe(self.folder / derived.SCENE), given)
+        if not given:
+            raise ValueError(f"{self.file}: no such file, and {self.folder / derived.EQUATIONS} defines no COORDS and "
+                             "accelerations(t, q, v, p) (docs/own-case.md)")
+        return given
+
+    def _toml(self):
         try:
             with open(self.file, "rb") as f:
                 return tomllib.load(f)
@@ -290,6 +314,13 @@ class Case:
         return f"{self.file}: derivation = {self.spec['derivation']!r}"
 
     @property
+    def one_derivation(self):
+        """Whether the case has one derivation, a researcher's own (a plain equations module, or Book =
+        Reference), rather than a book's equations beside a reference that corrects them."""
+        module = self.derivation
+        return derived.is_plain(module) or getattr(module, "Book", None) is getattr(module, "Reference", None)
+
+    @property
     def has_program(self):
         """Whether the book prints a program for this case (the derivation's `Program`)."""
         return hasattr(self.derivation, "Program")
@@ -305,11 +336,12 @@ class Case:
         return self._models[source]
 
     def approximations_doubled(self):
-        """MuJoCo's scene with its approximations of the case's physics doubled: its placeholders (the mass
-        and inertia that the MJCF gives a body where the URDF has none: MuJoCo refuses a moving body
-        without them) and the drift of its prescribed motions (their armature halved).  Both are small, so
+        """MuJoCo's scene with its approximations of the case's physics doubled: its placeholders (a mass of
+        at most PLACEHOLDER_MASS, an inertia of at most PLACEHOLDER_INERTIA, where the scene means none: a
+        URDF's zero; MuJoCo refuses a moving body without them) and the drift of its prescribed motions (their armature halved).  Both are small, so
         a run responds linearly to them: this scene's run minus MuJoCo's is their effect."""
-        scales = {body.name: (2.0 if body.mass == 0 else 1.0, 2.0 if not body.inertia.any() else 1.0)
+        scales = {body.name: (2.0 if body.mass <= PLACEHOLDER_MASS else 1.0,
+                              2.0 if np.max(np.abs(body.inertia)) <= PLACEHOLDER_INERTIA else 1.0)
                   for body in self.model("pinocchio").tree()}
         return self.model("mujoco").approximations_doubled(scales)
 
@@ -323,7 +355,7 @@ class Case:
             path = self.folder / "scene.xml"
         else:
             from engines.pinocchio_adapter import PinocchioModel as Model
-            path = self.folder / "scene.urdf"
+            path = self.pinocchio_scene
         if not path.is_file():
             raise ValueError(f"{path}: no such scene file (case '{self.name}' needs it for {source})")
         bindings = self.spec["scene"].get("bindings", {})
@@ -333,7 +365,7 @@ class Case:
         changed = lambda p, loc: p in self.overrides or set(loc.get("depends", ())) & set(self.overrides)
         writes = sorted([(loc, self.params[p] * loc.get("scale", 1.0))
                          for p, locations in bindings.items() for loc in locations
-                         if changed(p, loc) or loc["element"] not in Model.file_elements],
+                         if changed(p, loc) or loc["element"] not in Model.elements_in(path)],
                         key=lambda write: "depends" in write[0])
         model = Model(path, self.scene, writes)
         self._verify(model, path, bindings)
@@ -343,11 +375,20 @@ class Case:
             compare_scenes(engines["mujoco"], engines["pinocchio"], self.name)
         return model
 
+    @property
+    def pinocchio_scene(self):
+        """The scene file Pinocchio reads: a hand-written scene.urdf, a second model of the scene checked against
+        the MJCF on load, or else the MJCF itself (Pinocchio's own MJCF reader)."""
+        urdf = self.folder / "scene.urdf"
+        return urdf if urdf.is_file() else self.folder / derived.SCENE
+
     def _derived(self, name):
         """The derivation's class `name` at the case's parameters, checked against the case file: its
         coordinates and reactions, and the shape of its accelerations at the initial state."""
         what = self._where_derived
         cls = getattr(self.derivation, name, None)
+        if derived.is_plain(self.derivation) and name != "Program":  # one derivation: the equations under test
+            cls = lambda params: derived.Equations(self.derivation, params, self.reaction_names)
         if cls is None:
             raise ValueError(f"{what} defines no class {name} (docs/model-interface.md)")
         model = guarded(f"{what}: {name}({{params}})", lambda: cls(self.params))

@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dyncheck import ceilings, schema
+from dyncheck import ceilings, residuals, schema
 from dyncheck.case import SOURCES
 from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.expressions import evaluate as evaluate_expression
@@ -461,7 +461,8 @@ def run_case(case, localise=True):
     what is written or saved shows it, a table of rows does not need it)."""
     start = time.perf_counter()
     rows, sample = pointwise(case)
-    rows += random_parameters(case)
+    equations, residuals_found = residuals.equation_rows(case, sample)
+    rows += equations + random_parameters(case)
     limit = runaway(case)
     runs = run_sources(case, None if limit is None else limit.bound)
     rows += trajectory(case, runs) + energy(case, runs)
@@ -471,14 +472,31 @@ def run_case(case, localise=True):
         rows.append(no_number("convergence", "every method", ("reference",), f"not measured: {error}", Status.FAIL))
     program_rows, program = program_checks(case, sample)
     rows = book_numbers_only(case, apply_findings(case, rows + program_rows + data_checks(case)))
-    rows = runaway_rows(limit, runs, rows)  # last: a bounded run's failure is no finding of the book
+    rows = runaway_rows(limit, runs, rows)  # a bounded run's failure is no finding of the book
+    localisations = residuals.localise(case, rows, residuals_found, parameter_sets(case)[0])
     # What the pages draw along runs: each source's run, and the reference's tight twin (report.trajectories).
     drawn = lambda source, outcome: replace(outcome, **({"twin": with_paths(case, outcome.twin)} if source == "reference"
                                                         else {"run": with_paths(case, outcome.run)}))
     runs = {source: drawn(source, outcome) if outcome.ok else outcome for source, outcome in runs.items()}
+    findings = tuple(findings_of(case, rows, sample, runs, localise))
+    if case.one_derivation:
+        rows, localisations = in_own_words(rows), tuple(replace(loc, source=OWN_WORDS[loc.source])
+                                                       for loc in localisations)
     return CaseResult(folder=str(case.folder), spec=case.spec, overrides=dict(case.overrides), rows=tuple(rows),
-                      findings=tuple(findings_of(case, rows, sample, runs, localise)), sample=sample, runs=runs,
-                      program=program, drawings=drawings(case, runs), wall=time.perf_counter() - start)
+                      findings=findings, sample=sample, runs=runs, program=program, drawings=drawings(case, runs),
+                      wall=time.perf_counter() - start, localisations=localisations)
+
+
+# A researcher's case has one derivation: no book beside a reference that corrects it.
+OWN_WORDS = {"reference": "derivation", "book": "derivation", "tight reference": "tight solution"}
+
+
+def in_own_words(rows):
+    """The rows of a case with one derivation (Case.one_derivation) in its own words: its Book is its
+    Reference, so the rows that compare the two, or repeat a reference's row for the book, go; the book's
+    run at the case's tolerance against the tight one stays, as the derivation's."""
+    kept = [r for r in rows if "book" not in r.sources or r.check == "trajectory"]
+    return [replace(r, sources=tuple(OWN_WORDS.get(s, s) for s in r.sources)) for r in kept]
 
 
 # -- what the figures draw ------------------------------------------------------------

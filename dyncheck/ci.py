@@ -7,7 +7,7 @@ import xml.etree.ElementTree as ET
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-from dyncheck.results import Status, reason, status_counts
+from dyncheck.results import Status, consequences, reason, status_counts
 
 CHECKOUT = Path(__file__).resolve().parent.parent  # where the package runs from, if it is a git checkout
 VERSIONED = {"dyncheck": "dyncheck", "mujoco": "mujoco", "pinocchio": "pin", "numpy": "numpy"}  # name: distribution
@@ -57,10 +57,22 @@ def recap(results, seconds):
     cases; 351 pass, 40 finding, 3 fail, 1 unstable, 25 not applicable (71 s)`."""
     rows = failing(results)
     lines = [f"failing rows ({len(rows)}):"] + [f"  {name}: {describe(r)}" for name, r in rows] if rows else []
+    lines += [line for result in results for line in wrong_equations(result)]
     failed_cases = len({name for name, _ in rows})
     cases = f"{len(results)} case" + ("s" if len(results) != 1 else "")
     verdict = f"FAIL: {failed_cases} of {cases}" if rows else f"PASS: {cases}"
     return lines + [f"dyncheck: {verdict}; {tally([r for result in results for r in result.rows])} ({seconds:.0f} s)"]
+
+
+def wrong_equations(result):
+    """Where a case's derivation is wrong (dyncheck.residuals): each failing equation with the terms that
+    explain it, then how many other failing rows follow from it."""
+    if not result.localisations:
+        return []
+    follow = consequences(result)
+    return [f"{result.name}: where the derivation is wrong:"] + [f"  {loc}" for loc in result.localisations] + (
+        [f"  {len(follow)} other failing rows compare quantities computed from these equations: consequences, "
+         "not further errors"] if follow else [])
 
 
 def tally(rows):

@@ -22,7 +22,7 @@ from dyncheck import ci
 from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
 from dyncheck.checks import run_case
 from dyncheck.messages import suggest
-from dyncheck.results import format_rows, load_results, save_results, to_json
+from dyncheck.results import format_rows, heading, load_results, save_results, to_json
 
 
 def main(argv=None):
@@ -34,6 +34,11 @@ def main(argv=None):
     run = commands.add_parser("run", help="run the checks and print a table")
     report = commands.add_parser("report", help="run the checks and write Markdown reports with figures")
     bench = commands.add_parser("bench", help="throughput of each source and the harness's overhead")
+    new = commands.add_parser("new", help="start a case of your own from an MJCF scene (docs/own-case.md)")
+    new.add_argument("name", metavar="NAME", help="the case's name, and its folder's")
+    new.add_argument("--scene", type=Path, required=True, metavar="PATH", help="the scene, MJCF")
+    new.add_argument("--cases", type=Path, default=Path("."), metavar="DIR", dest="cases_dir",
+                     help="the folder of case folders to make it in (default: the current folder)")
     bench.add_argument("cases", nargs="*", metavar="CASE", help="cases to measure (default: all)")
     bench.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help=argparse.SUPPRESS)
     listing.add_argument("cases", nargs="*", metavar="CASE", help="cases to list (default: all)")
@@ -63,6 +68,8 @@ def main(argv=None):
     try:
         if args.command == "list":
             return list_cases(args.cases, args.cases_dir)
+        if args.command == "new":
+            return new_case(args.name, args.scene, args.cases_dir)
         if args.command in ("run", "report") and args.junit:
             check_file_path("--junit", args.junit)
         if args.command == "report":
@@ -185,7 +192,7 @@ def list_cases(names, cases_dir):
     range its random parameter sets are drawn from."""
     for name in list(dict.fromkeys(names)) or case_names(cases_dir):
         case = load_case(name, cases_dir)
-        print(f"\n== {name} ({case.section}) {case.title}\n"
+        print(f"\n== {name}: {heading(case.spec)}\n"
               f"coordinates: {', '.join(case.coords) or '-'}; reactions: {', '.join(case.reaction_names) or '-'}")
         ranges = case.spec["sample"].get("params", {}).get("ranges", {})
         rows = [{"parameter": p.name, "value": f"{p.value:g}", "unit": p.unit or "-",
@@ -197,6 +204,27 @@ def list_cases(names, cases_dir):
     print("\n" + textwrap.fill("allowed: what a value (the case file's or --set's) must satisfy; sampled: the "
                                "interval that the random parameter sets are drawn from (the 'random parameters' "
                                "check), - if the parameter is not drawn", 100))
+    return 0
+
+
+def new_case(name, scene, cases_dir):
+    """`dyncheck new`: the folder cases_dir/name with the scene copied and equations.py and case.toml to fill in."""
+    from engines.mjcf import describe
+    from dyncheck.derived import EQUATIONS, SCENE, scaffold
+    if not name.isidentifier():
+        raise ValueError(f"new {name}: a case's name is an identifier (letters, digits and _, not starting with a digit)")
+    folder = cases_dir / name
+    if folder.exists():
+        raise ValueError(f"new {name}: {folder} exists; choose another name or remove it")
+    if not scene.is_file():
+        raise ValueError(f"--scene {scene}: no such file")
+    equations, case_toml = scaffold(name, describe(scene))
+    folder.mkdir(parents=True)
+    (folder / SCENE).write_bytes(scene.read_bytes())
+    (folder / EQUATIONS).write_text(equations)
+    (folder / "case.toml").write_text(case_toml)
+    print(f"made {folder}/ with {SCENE}, {EQUATIONS} and case.toml: write the equations in {folder / EQUATIONS}, "
+          f"then `dyncheck run {name} --cases {cases_dir}` (docs/own-case.md)")
     return 0
 
 
@@ -254,9 +282,11 @@ def print_results(results, table=True):
     for result in results:
         spec, rows = result.spec, result.rows
         if table:
-            print(f"\n== {result.name} ({spec['section']}) {spec['title']}"
+            print(f"\n== {result.name}: {heading(spec)}"
                   + (f", with {result.overrides_text}" if result.overrides else ""))
             print(format_rows(rows).to_string(index=False))
+        for line in ci.wrong_equations(result):
+            print(line)
         print(f"{result.name}: {result.status}: {ci.tally(rows)} ({result.wall:.1f} s)")
 
 

@@ -25,7 +25,7 @@ import pandas as pd
 from dyncheck import stability, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
-from dyncheck.results import (RESULTS_VERSION, Status, case_json, format_rows, inside_or_outside, load_result,
+from dyncheck.results import (RESULTS_VERSION, Status, case_json, consequences, format_rows, heading, inside_or_outside, load_result,
                               reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
 from dyncheck.style import SOURCE_STYLE as STYLE
@@ -186,7 +186,7 @@ def figure_scene(result, case, path):
         ax.set_aspect("equal")
     else:
         ax.set_zlabel("z [m]")
-    ax.set_title(f"{case.section} {case.title}\nthe scene at t = 0 (grey) and the path in space", fontsize=9)
+    ax.set_title(f"{heading(case.spec)}\nthe scene at t = 0 (grey) and the path in space", fontsize=9)
     if case.scene["paths"]:
         ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
@@ -476,7 +476,7 @@ def write_case_page(result, case, tmp):
     runs = result.runs
     cost = cost_table(runs).drop(columns="wall time [s]")
     lines = [
-        f"# {case.section} {case.title}",
+        f"# {heading(case.spec)}",
         "",
         f"**{result.status}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
         + f"; worst pointwise error among reference, MuJoCo and Pinocchio: {worst_engine_error(rows):.1e}"
@@ -494,14 +494,16 @@ def write_case_page(result, case, tmp):
         "",
         markdown_table(params),
         "",
-        f"Initial conditions (the book's): {_state(case.coords, q0, v0)}; horizon {t_end:g} s.",
+        ("Initial conditions" if case.one_derivation else "Initial conditions (the book's)")
+        + f": {_state(case.coords, q0, v0)}; "
+        f"horizon {t_end:g} s.",
         "",
         "## How each source models it",
         "",
         "\n\n".join(" ".join(p.split()) for p in case.prose(case.spec["report"]["modelling"], "report.modelling")
                     .strip().split("\n\n")),
         "",
-        "Joints of `scene.xml` (MuJoCo) and `scene.urdf` (Pinocchio), the same in both:",
+        f"Joints of `scene.xml` (MuJoCo) and `{case.pinocchio_scene.name}` (Pinocchio), the same in both:",
         "",
         scene_table(case),
         "",
@@ -520,6 +522,7 @@ def write_case_page(result, case, tmp):
         markdown_table(summary_table(rows)),
         "",
         *not_passed(rows),
+        *wrong_equations(result),
         f"<details><summary>All {len(rows)} checks</summary>",
         "",
         markdown_table(table),
@@ -574,7 +577,7 @@ def write_timing_page(result, case, tmp):
     """<case>_timing.md and its chart and CSV: every wall time of the run, apart from the case page
     because wall times differ from run to run (the page stays the same when nothing else changed)."""
     studies = result.studies
-    lines = [f"# {case.section} {case.title}: wall times", "",
+    lines = [f"# {heading(case.spec)}: wall times", "",
              f"Wall times of this run on this machine, which differ from run to run; [the case page]({case.name}.md).",
              "", f"All checks of this case took {result.wall:.1f} s.", "",
              "## The runs of the book's initial conditions", "", markdown_table(cost_table(result.runs)), ""]
@@ -610,6 +613,20 @@ def write_timing_page(result, case, tmp):
             [{"study": s.title, "wall time [s]": f"{s.wall:.1f}"} for s in studies["stability"]])), ""]
     (tmp / files[0]).write_text("\n".join(lines))
     return files
+
+
+def wrong_equations(result):
+    """The page's account of where the derivation's equations are wrong (dyncheck.residuals): each with the
+    terms that explain it, and how many failing rows are its consequences."""
+    if not result.localisations:
+        return []
+    follow = consequences(result)
+    return ["### Where the derivation is wrong", "",
+            "Each equation whose residual M_engine (q''_derivation - q''_engine) fails against MuJoCo, fitted over"
+            " the random states and parameter sets by a few terms in the derivation's own symbols:", "",
+            *[f"- {loc}" for loc in result.localisations], "",
+            *([f"{len(follow)} other failing rows compare quantities computed from these equations (accelerations,"
+               " runs, energy): consequences, not further errors.", ""] if follow else [])]
 
 
 def study_sections(result, case, tmp):

@@ -13,8 +13,9 @@ import pandas as pd
 
 from dyncheck import store
 
-RESULTS_VERSION = 3  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
-# 3: "status" and "counts" at the top and in each case, "reason" in each row, "tool" in run --json
+RESULTS_VERSION = 4  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
+# 3: "status" and "counts" at the top and in each case, "reason" in each row, "tool" in run --json;
+# 4: "localisations" in each case, check "equation", sources "derivation" and "tight solution"
 
 
 @store.register
@@ -149,6 +150,24 @@ class Finding:
 
 @store.register
 @dataclass(frozen=True)
+class Localisation:
+    """A failing equation of a derivation (dyncheck.residuals) and the terms its residual is fitted by."""
+    source: str  # the derivation: "reference", "book" or "derivation"
+    equation: str  # the coordinate whose equation is wrong
+    place: str  # where in it: "equation x" (its force side, or its residual), or a mass matrix entry "M[x,theta]"
+    text: str  # what the fit found, in the derivation's own symbols
+    exact: bool  # whether the terms explain the residual down to the engines' rounding
+    identified: bool  # exact, and every coefficient a simple number times a product of the parameters
+    residual: float  # the largest residual before the fit, N, N m, kg, kg m or kg m^2
+    left: float  # and after it
+    sets: int  # parameter sets fitted over
+
+    def __str__(self):
+        return f"the {self.source}'s {self.place}: {self.text}"
+
+
+@store.register
+@dataclass(frozen=True)
 class CaseResult:
     """Everything a case's run produced; the report reads nothing else (apart from the case file's
     text, carried in `spec`)."""
@@ -163,6 +182,7 @@ class CaseResult:
     drawings: dict  # what the figures draw beyond the runs (dyncheck.checks.drawings)
     wall: float
     studies: dict | None = None  # {"work_precision": frame, "stability": [StudyResult]}; None: not run
+    localisations: tuple = ()  # of Localisation: the failing equations of the derivation, their wrong terms
     version: int = RESULTS_VERSION
 
     @property
@@ -180,6 +200,25 @@ class CaseResult:
 
     def with_studies(self, studies):
         return replace(self, studies=studies)
+
+
+TIGHT = {"reference": "tight reference", "derivation": "tight solution"}  # a derivation's tight run, as rows name it
+
+
+def consequences(result):
+    """The failing rows, other than the equations' own, that compare quantities computed from a derivation
+    whose equations are wrong (result.localisations): its accelerations feed its runs, the tight run every
+    other run is compared with, their energy and whatever it computes from them.  Consequences, not
+    further errors."""
+    sources = {loc.source for loc in result.localisations}
+    sources |= {TIGHT[s] for s in sources if s in TIGHT}
+    return [r for r in result.rows if not r.status.ok and r.check != "equation" and sources & set(r.sources)]
+
+
+def heading(spec):
+    """A case as titles name it: "1.8.3 Spring-mass pendulum on a spinning arm", or its title alone where
+    the case has no section (a case of your own)."""
+    return " ".join(filter(None, (spec.get("section", ""), spec["title"])))
 
 
 def overrides_in_words(overrides, params):
@@ -231,10 +270,16 @@ def case_json(result):
     """A case's entry in `dyncheck run --json` and in the report's data/<case>.json: results only, nothing
     of the machine or checkout that made them, so that a committed data/<case>.json changes only with them."""
     params = {name: float(p["value"]) for name, p in result.spec["params"].items()}
-    return {"case": result.name, "section": result.spec["section"], "status": verdict(result.rows),
+    return {"case": result.name, "section": result.spec.get("section", ""), "status": verdict(result.rows),
             "counts": status_counts(result.rows), "params": {**params, **result.overrides},
             "overrides": dict(result.overrides), "checks": rows_json(result.rows),
-            "findings": findings_json(result.findings)}
+            "findings": findings_json(result.findings), "localisations": localisations_json(result.localisations)}
+
+
+def localisations_json(localisations):
+    return [{"source": loc.source, "equation": loc.equation, "place": loc.place, "text": loc.text, "exact": loc.exact,
+             "identified": loc.identified, "residual": loc.residual, "left": loc.left, "sets": loc.sets}
+            for loc in localisations]
 
 
 def to_json(results, tool=None, interrupted=None):

@@ -39,7 +39,7 @@ TOLERANCE = ("table", {"safety": "number > 0", "why": "str"})
 
 SCHEMA = ("table", {
     "name": "str",
-    "section": "str",
+    "section?": "str",
     "title": "str",
     "summary": "str",
     "derivation": "str",
@@ -493,7 +493,7 @@ def _describe(kind):
 ALONG_RUN = "an expression along the run (see Expressions)"
 MEANINGS = {
     "name": "The case's name, an identifier; the reports and the JSON output call the case by it.",
-    "section": "The book's section of the example, e.g. 1.8.3.",
+    "section": "The book's section of the example, e.g. 1.8.3; a case of your own may have none.",
     "title": "The example's title in the reports.",
     "summary": "The example in a paragraph: the scene, its coordinates, what moves it; it opens the case's report.",
     "derivation": "Where the case's equations live: a module importable from the checkout (e.g. "

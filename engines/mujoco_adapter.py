@@ -37,7 +37,11 @@ class MujocoModel:
     (joint -> (q0, rate, acc)), `applied` (joint -> generalized force in the joint's frame),
     `reactions` (name -> {sensor, axis, frame}), `points` (name -> {body, frame}), `paths` (bodies)."""
 
-    file_elements = {"body", "joint", "option"}  # what scene.xml holds of a case's bindings
+    @staticmethod
+    def elements_in(path):
+        """What the scene file at `path` holds of a case's bindings (as PinocchioModel.elements_in): an
+        MJCF holds them all."""
+        return {"body", "joint", "option"}
 
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
@@ -274,6 +278,12 @@ class MujocoModel:
                 vector = res[:3] if kind == "angular acceleration" else res[3:] + self.m.opt.gravity
             out[name] = self.d.xmat[body].reshape(3, 3).T @ vector if frame == "body" else vector
         return out
+
+    def mass_matrix(self, t, q, v):
+        """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): mj_fullM's in
+        the evaluation model, with the armature of a ball joint on the world, as `accelerations` solves it."""
+        mass = self._solve(t, q, v)[1]
+        return scene_rules.case_mass_matrix(mass, [(kind, dof, idx) for kind, (_, dof), idx in self.layout], q)
 
     def energy(self, t, q, v):
         self._set_state(t, q, v)

@@ -1,9 +1,10 @@
-"""Pinocchio adapter: a case's URDF scene behind the model interface, in the book's coordinates.
+"""Pinocchio adapter: a case's URDF or MJCF scene behind the model interface, in the book's coordinates.
 
 Prescribed joints are handled by partitioning: RNEA with the driven joints'
 imposed accelerations gives the free joints' bias, CRBA's free block is solved.
 URDF has no springs and no gravity, so joint stiffness and gravity come from
 the case's bindings (`write`), and `read` reports them back from this adapter.
+An MJCF has both, but Pinocchio's parser drops them: this adapter reads them from the file.
 """
 
 import functools
@@ -19,21 +20,36 @@ ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
 
 
 class PinocchioModel:
-    file_elements = {"body"}  # URDF holds masses and lengths; stiffness and gravity come from the case
-    """scene: as for MujocoModel (coords, driven, reactions); reactions use the body, not the sensor."""
+    """path: the scene's URDF, or its MJCF (a .xml file: the scene MuJoCo reads).
+    scene: as for MujocoModel (coords, driven, reactions); reactions use the body, not the sensor."""
+
+    @staticmethod
+    def elements_in(path):
+        """What the scene file at `path` holds of a case's bindings (the case writes the rest): an MJCF its
+        bodies, joints and options, a URDF only its bodies (masses and lengths: no springs, no gravity)."""
+        return {"body", "joint", "option"} if _is_mjcf(path) else {"body"}
 
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
         root = scene.get("urdf_root_joint")
         try:
-            if root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
+            if _is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
+                self.m = pin.buildModelFromMJCF(self.path)
+            elif root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
                 self.m = pin.buildModelFromUrdf(self.path, ROOT_JOINTS[root["type"]](), root["name"])
             else:
                 self.m = pin.buildModelFromUrdf(self.path)
         except (ValueError, RuntimeError) as error:
             raise ValueError(f"{self.path}: {error}") from error
-        self.stiffness = {}
-        self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
+        try:
+            document = ET.parse(self.path).getroot()
+        except ET.ParseError as error:  # stricter than urdfdom's parser
+            raise ValueError(f"{self.path}: {error}") from None
+        if _is_mjcf(self.path):
+            self._complete_mjcf(document, scene)
+        else:
+            self.stiffness = {}
+            self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
         for location, value in writes:
             self._write(location, value)
         self.point_specs = {name: (self._point_frame(spec), spec["frame"], spec.get("kind", "acceleration"))
@@ -45,12 +61,9 @@ class PinocchioModel:
         self.free = np.array([i for _, joint, idx in self.layout for i in range(joint.idx_v, joint.idx_v + len(idx))],
                              dtype=int)
         self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
-        # after the case's joints are found: a renamed joint is missing before it is extra
-        try:
-            robot = ET.parse(self.path).getroot()
-        except ET.ParseError as error:  # stricter than urdfdom's parser
-            raise ValueError(f"{self.path}: {error}") from None
-        unmodelled = next(_unmodelled(robot, scene), None)
+        # after the case's joints are found: a renamed joint is missing before it is extra.  An MJCF's
+        # are refused by MuJoCo's adapter, on the same file.
+        unmodelled = None if _is_mjcf(self.path) else next(_unmodelled(document, scene), None)
         if unmodelled:
             raise scene_rules.refusal(self.path, "URDF", *unmodelled)
         self.applied = np.zeros(self.m.nv)
@@ -69,7 +82,32 @@ class PinocchioModel:
         self.neutral = pin.neutral(self.m)
         # CRBA fills the upper triangle of M: M[i, j] for i > j is read at [j, i].
         every = np.arange(self.m.nv)
+        self._whole = np.minimum.outer(every, every), np.maximum.outer(every, every)
         self._free_columns = np.minimum.outer(every, self.free), np.maximum.outer(every, self.free)
+
+    def _complete_mjcf(self, document, scene):
+        """What Pinocchio's MJCF parser leaves out: the file's gravity and joint stiffness, which it drops; and
+        the armature of MuJoCo's evaluation model (engines.mujoco_adapter): none on the prescribed joints, and
+        a ball joint's armature a on a body on the world as what it is there, the isotropic inertia a I about
+        the joint (MujocoModel.tree), held in the body's inertia so that `tree`, `read` and `_write` count it
+        as the URDF side's inertia does.  Refuses what the parser reads otherwise than MuJoCo's compiler."""
+        misread = next(_misread(document), None)
+        if misread:
+            raise ValueError(f"{self.path}: {misread}")
+        option = document.find("option")
+        gravity = option.get("gravity", DEFAULT_GRAVITY) if option is not None else DEFAULT_GRAVITY
+        self.m.gravity.linear[:] = [float(x) for x in gravity.split()]
+        self.stiffness = _joint_stiffness(document, self.path)
+        for joint in scene["driven"]:
+            self.m.armature[self._joint(joint).idx_v] = 0.0
+        for j in range(1, self.m.njoints):
+            joint = self.m.joints[j]
+            if joint.shortname() == "JointModelSpherical" and self.m.parents[j] == 0:
+                dofs = slice(joint.idx_v, joint.idx_v + joint.nv)
+                inertia = self.m.inertias[j]
+                self.m.inertias[j] = pin.Inertia(inertia.mass, inertia.lever,
+                                                 inertia.inertia + np.diag(self.m.armature[dofs]))
+                self.m.armature[dofs] = 0.0
 
     # -- names -------------------------------------------------------------
     def _joint(self, name):
@@ -269,6 +307,12 @@ class PinocchioModel:
                              f"has {len(self.layout)} free joints and {len(self.driven)} driven")
         return self.layout[0][1]
 
+    def mass_matrix(self, t, q, v):
+        """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): CRBA's, whose
+        upper triangle is read for the whole."""
+        mass = pin.crba(self.m, self.d, self.engine_state(t, q, v)[0])[self._whole]
+        return scene_rules.case_mass_matrix(mass, [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints], q)
+
     def energy(self, t, q, v):
         config, velocity = self.engine_state(t, q, v)
         kinetic = pin.computeKineticEnergy(self.m, self.d, config, velocity)
@@ -281,6 +325,73 @@ class PinocchioModel:
         _, velocity, _, tau = self._dynamics(t, q, v)
         driven = sum(tau[iv] * velocity[iv] for (_, _, iv), _ in self._driven_joints)
         return float(driven + self.applied @ velocity)
+
+
+def _is_mjcf(path):
+    return str(path).endswith(".xml")
+
+
+DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>
+
+# A unit axis written in decimals has a norm within an ulp or two of 1; Pinocchio's rotation is off
+# by about |axis| - 1, which the scene comparison would find beyond 16 eps (dyncheck.case.SCENE_RTOL).
+UNIT_AXIS_RTOL = 4 * np.finfo(float).eps
+
+
+def _misread(document):
+    """What Pinocchio's MJCF parser (Pinocchio 4.1) reads otherwise than MuJoCo's compiler, which both accept
+    without a word: one message each."""
+    for compiler in document.iter("compiler"):
+        sequence = compiler.get("eulerseq", "xyz")
+        if sequence != sequence.lower():
+            yield (f'<compiler eulerseq="{sequence}">: Pinocchio\'s MJCF parser turns every Euler angle about '
+                   "the moving axes, where MuJoCo's upper-case letters name fixed ones; write the sequence in "
+                   "lower case, or the orientations as quat")
+    for element in document.iter():
+        if element.tag in ("body", "inertial", "geom") and "axisangle" in element.attrib:
+            norm = np.linalg.norm([float(x) for x in element.get("axisangle").split()[:3]])
+            if abs(norm - 1.0) > UNIT_AXIS_RTOL:
+                yield (f'<{element.tag} axisangle="{element.get("axisangle")}">: Pinocchio\'s MJCF parser does '
+                       f"not normalise the axis (its norm is {norm:.17g}), MuJoCo's compiler does; write a unit axis")
+        if element.tag == "include":
+            yield (f'<include file="{element.get("file")}">: Pinocchio\'s MJCF parser skips included files; '
+                   "write their elements into the scene")
+
+
+def _joint_stiffness(document, path):
+    """{joint: stiffness} of an MJCF's named joints with a spring, as MuJoCo's compiler resolves it: the joint's
+    own attribute, else the joint default of its class (its `class`, else the `childclass` of the nearest
+    element around it that has one, else "main"), else of the classes around that one.  ValueError for a
+    polynomial spring (stiffness="a b c"): this adapter's springs are linear."""
+    defaults = {}
+
+    def collect(default, inherited):
+        joint = default.find("joint")
+        own = joint.get("stiffness", inherited) if joint is not None else inherited
+        defaults[default.get("class", "main")] = own
+        for child in default.findall("default"):
+            collect(child, own)
+
+    for default in document.findall("default"):
+        collect(default, "0")
+    stiffness = {}
+
+    def walk(element, childclass):
+        childclass = element.get("childclass", childclass)
+        for child in element:
+            if child.tag == "joint" and child.get("name"):  # an unnamed joint: the case cannot move it (refused)
+                text = child.get("stiffness", defaults.get(child.get("class", childclass), "0"))
+                a, *higher = [float(x) for x in text.split()]
+                if any(higher):
+                    raise ValueError(f'{path}: joint \'{child.get("name")}\' stiffness="{text}": a polynomial '
+                                     "spring, which the Pinocchio side does not model; give the linear stiffness only")
+                if a:
+                    stiffness[child.get("name")] = a
+            else:
+                walk(child, childclass)
+
+    walk(document.find("worldbody"), "main")
+    return stiffness
 
 
 # URDF cannot write an unlimited revolute or prismatic joint (urdfdom requires <limit> and refuses inf):

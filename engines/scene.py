@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from engines import euler
+
 COMPARED, REFUSED, NO_EFFECT = "modelled, compared", "refused", "no effect"
 
 
@@ -41,6 +43,23 @@ class Rule:
     status: str
     why: str
     fix: str = "remove it"  # what a refusal asks the author to do
+
+
+def case_mass_matrix(mass, layout, q):
+    """An engine's dof mass matrix `mass` (nv, nv) in the case's coordinates q: J^T mass J, J (nv, n) the map
+    from the coordinates' rates to the dofs' velocities, so that it multiplies the case's accelerations in its
+    equations of motion.  `layout`: (kind, first dof, coordinate indices) of each joint the case's coordinates
+    move: a hinge or slide ("scalar") is its own coordinate; a ball joint's Euler angles ("euler") give the
+    body's angular velocity J_ball rates (engines.euler), linear in the rates: its columns are the angular
+    velocities of unit rates.  Prescribed dofs are no coordinates: their rows and columns drop out."""
+    q = np.asarray(q, dtype=float)
+    rates_to_dofs = np.zeros((len(mass), len(q)))
+    for kind, dof, idx in layout:
+        if kind == "scalar":
+            rates_to_dofs[dof, idx[0]] = 1.0
+        else:
+            rates_to_dofs[dof:dof + 3, idx] = euler.angular_velocity(q[idx], np.eye(3)).T
+    return rates_to_dofs.T @ mass @ rates_to_dofs
 
 
 # Joint names the case's [scene] moves; any other joint would sit locked at its reference position.

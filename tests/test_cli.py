@@ -30,7 +30,7 @@ def test_list_names_both_cases(capsys):
 def test_list_shows_each_parameter_with_its_unit_bounds_and_sampled_range(capsys):
     assert cli.main(["list", "spring_pendulum"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert "== spring_pendulum (1.8.3)" in lines[1] and not any("== piston" in line for line in lines)
+    assert "== spring_pendulum: 1.8.3 " in lines[1] and not any("== piston" in line for line in lines)
     header = next(line for line in lines if line.startswith("parameter"))
     assert header.split() == ["parameter", "value", "unit", "allowed", "sampled", "about"]
     k = next(line for line in lines if line.startswith("k "))
@@ -51,7 +51,8 @@ def test_run_exits_0_and_writes_the_json_of_the_design(canned, tmp_path, capsys)
     data = json.loads(path.read_text())
     spring = next(c for c in data["cases"] if c["case"] == "spring_pendulum")
     assert data["version"] == RESULTS_VERSION
-    assert set(spring) == {"case", "section", "status", "counts", "params", "overrides", "checks", "findings"}
+    assert set(spring) == {"case", "section", "status", "counts", "params", "overrides", "checks", "findings",
+                           "localisations"}
     assert set(spring["checks"][0]) == {"check", "quantity", "sources", "error", "tolerance", "ceiling", "status", "finding",
                                        "detail", "reason"}
     finding = next(f for f in spring["findings"] if f["id"] == "1.8.3-R")

@@ -267,8 +267,14 @@ def test_the_case_file_reference_is_current():
         "regenerate: python -c 'import dyncheck.schema as s; print(s.markdown(), end=\"\")' > docs/case-file.md"
 
 
+def test_without_its_urdf_pinocchio_reads_the_mjcf(cases):
+    """A hand-written scene.urdf is a second model of the scene; without one, Pinocchio reads scene.xml."""
+    (cases / "double_pendulum" / "scene.urdf").unlink()
+    case = Case(cases / "double_pendulum")
+    assert case.pinocchio_scene.name == "scene.xml" and case.model("pinocchio").path.endswith("scene.xml")
+
+
 @pytest.mark.parametrize("scene, text, message", [
-    ("scene.urdf", None, "scene.urdf: no such scene file (case 'double_pendulum' needs it for pinocchio)"),
     ("scene.xml", None, "scene.xml: no such scene file (case 'double_pendulum' needs it for mujoco)"),
     ("scene.xml", "<mujoco><worldbody><body", "scene.xml: XML parse error"),
     ("scene.urdf", "<robot name='x'><link", "scene.urdf: The file"),

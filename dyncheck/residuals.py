@@ -1,0 +1,175 @@
+"""The derivation's equations of motion one by one against the engines', and the term a wrong one lacks.
+
+At a state, the residual of equation i is r_i = (M_e (q''_d - q''_e))_i: M_e the engine's mass matrix in
+the case's coordinates, q''_d the derivation's accelerations, q''_e the engine's.  It is the generalised
+force by which the derivation's equation i, written M q'' = f, differs from the engine's: where the
+derivation's M is right, r_i = f_d,i - f_e,i exactly, so a term missing from equation i shows in r_i and
+in no other (the accelerations, coupled through M^-1, all go wrong together).  Where the derivation also
+gives M and f (mass_matrix, forces), they are compared with the engine's directly.
+
+A failing equation is then localised: its residual, over random states and random parameter sets, is
+fitted by a few terms of a library built from the derivation's own symbols (dyncheck.terms), naming the
+term to add to its force side with its coefficient as a product of the parameters.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dyncheck import ceilings, terms
+from dyncheck.results import Localisation, Status, no_number, row
+
+ENGINES = ("mujoco", "pinocchio")
+CHECK = "equation"
+
+
+def derivation_sources(case):
+    """The sources whose equations are under test: the book's and the reference's, or a researcher's one
+    derivation (Case.one_derivation)."""
+    return ("reference",) if case.one_derivation else ("reference", "book")
+
+
+def quantity(coordinate):
+    return f"{coordinate} residual"
+
+
+@dataclass(frozen=True)
+class Residuals:
+    """One derivation against one engine at some states: the engine's mass matrices M_e and generalised
+    forces f_e = M_e q''_e, the derivation's accelerations put in the engine's form M_e q''_d, and the
+    derivation's own M and f where it gives them (None where not)."""
+    t: np.ndarray  # (N,)
+    q: np.ndarray  # (N, n)
+    v: np.ndarray
+    mass: np.ndarray  # (N, n, n)
+    engine_forces: np.ndarray  # (N, n)
+    derivation_forces: np.ndarray
+    given_mass: np.ndarray | None
+    given_forces: np.ndarray | None
+
+    def of(self, place):
+        """The residual at `place`, over the states, and the size it is judged against: ("residual", i)
+        the equation's, ("f", i) its given force side's, ("M", i, j) a given mass matrix entry's."""
+        kind, i, *j = place
+        if kind == "M":
+            return self.given_mass[:, i, j[0]] - self.mass[:, i, j[0]], np.max(np.abs(self.mass))
+        mine = self.derivation_forces if kind == "residual" else self.given_forces
+        scale = max(np.max(np.abs(self.engine_forces[:, i])), np.max(np.abs(mine[:, i])))
+        return mine[:, i] - self.engine_forces[:, i], scale
+
+
+def residuals(case, source, engine, states, derived_acc=None, engine_acc=None):
+    """Residuals of `source`'s equations against `engine`'s at `states`; the accelerations may be given
+    (the pointwise check has them)."""
+    model, derivation = case.model(engine), case.model(source)
+    n = len(case.coords)
+    with np.errstate(all="ignore"):
+        each = lambda method: np.array([method(t, q, v) for t, q, v in states], dtype=float)
+        mass = each(model.mass_matrix).reshape(len(states), n, n)
+        a_e = each(model.accelerations) if engine_acc is None else engine_acc
+        a_d = each(derivation.accelerations) if derived_acc is None else derived_acc
+        given_mass = each(derivation.mass_matrix).reshape(mass.shape) if hasattr(derivation, "mass_matrix") else None
+        given_forces = each(derivation.forces).reshape(a_e.shape) if hasattr(derivation, "forces") else None
+    return Residuals(np.array([t for t, _, _ in states]), np.array([q for _, q, _ in states]),
+                     np.array([v for _, _, v in states]), mass,
+                     np.einsum("nij,nj->ni", mass, a_e), np.einsum("nij,nj->ni", mass, a_d), given_mass, given_forces)
+
+
+def accelerations_of(values, case):
+    return np.column_stack([values[f"{c}_acc"] for c in case.coords]).reshape(-1, len(case.coords))
+
+
+def places(case, r):
+    """(row quantity, place, what its row says) of every comparison that residuals `r` allow: each
+    equation's residual; each entry of a given M (both triangles: a derivation's M may be asymmetric,
+    which is itself an error); each given force side."""
+    coords, out = case.coords, []
+    out += [(quantity(c), ("residual", i), "M_e (q''_d - q''_e), relative to the equation's largest generalised force")
+            for i, c in enumerate(coords)]
+    if r.given_mass is not None:
+        out += [(f"M[{a},{b}]", ("M", i, j), "mass matrix entry, relative to the engine's largest entry")
+                for i, a in enumerate(coords) for j, b in enumerate(coords)]
+    if r.given_forces is not None:
+        out += [(f"f[{a}]", ("f", i), "force side against M_e q''_e, relative to its largest") for i, a in enumerate(coords)]
+    return out
+
+
+def equation_rows(case, sample):
+    """One row per equation, derivation and engine: its residual relative to the size of its generalised
+    forces, to the pointwise tolerance; and the derivation's own M and f where it gives them."""
+    if not case.coords:
+        return [], {}
+    states, values, failures = sample["states"], sample["values"], sample["failures"]
+    tolerance = case.tolerance["pointwise"]["value"]
+    rows, found = [], {}
+    for source in derivation_sources(case):
+        for engine in ENGINES:
+            failed = [failures[s] for s in (source, engine) if s in failures]
+            if failed:
+                rows.append(no_number(CHECK, "every equation", (source, engine), failed[0], Status.FAIL))
+                continue
+            try:
+                found[source, engine] = r = residuals(case, source, engine, states, accelerations_of(values[source], case),
+                                                      accelerations_of(values[engine], case))
+            except Exception as error:  # a singular matrix, or any error of a derivation's own mass_matrix or forces
+                rows.append(no_number(CHECK, "every equation", (source, engine), f"{type(error).__name__}: {error}",
+                                      Status.FAIL))
+                continue
+            for name, place, what in places(case, r):
+                residual, scale = r.of(place)
+                error = float(np.max(np.abs(residual)) / scale) if scale > 0 else 0.0
+                rows.append(row(CHECK, name, (source, engine), error, tolerance, f"{what}, at {len(states)} random states",
+                                ceiling=ceilings.POINTWISE))
+    return rows, found
+
+
+def localise(case, rows, found, drawn):
+    """For each comparison of a derivation's equations that fails against MuJoCo, the terms that explain it
+    (dyncheck.terms), fitted over the pointwise states at the case's parameters and at its random parameter
+    sets `drawn` (dyncheck.checks.parameter_sets): a given mass matrix entry or force side where those
+    fail, else the equation's residual (which a wrong M spoils: it is then M's error times q'')."""
+    failing = {(r.sources[0], r.quantity) for r in rows
+               if r.check == CHECK and r.sources[1] == "mujoco" and r.status == Status.FAIL}
+    if not failing:
+        return ()
+    sets = [dict(case.params)] + [dict(case.params) | values for values in drawn]
+    units = case.spec["coord_units"]
+    kinds = {body.joint: body.joint_type for body in case.model("mujoco").tree()}
+    driven = tuple((joint, "rad" if kinds[joint] == "hinge" else "m") for joint in case.scene["driven"])
+    out = []
+    for source in sorted({s for s, _ in failing}):
+        samples = [(sets[0], case, found[source, "mujoco"])]
+        for params in sets[1:]:
+            other = case.with_params(**{k: v for k, v in params.items() if k not in case.overrides})
+            try:
+                samples.append((params, other, residuals(other, source, "mujoco", other.sample_states())))
+            except Exception:  # a set where a source fails: the random-parameters rows say so
+                continue
+        named = {name: place for name, place, _ in places(case, samples[0][2])}
+        wrong = [named[name] for s, name in sorted(failing) if s == source and name in named]
+        # the coordinates whose given M or f is wrong: their residual is explained there, not refitted
+        explained = {i for place in wrong if place[0] != "residual" for i in place[1:]}
+        for place in wrong:
+            kind, i, *_ = place
+            if kind == "residual" and i in explained:
+                continue
+            name = next(name for name, p in named.items() if p == place)
+            fitted = [(params, with_driven(other, r), r.v, *r.of(place)) for params, other, r in samples]
+            usable = [(params, q, v, residual) for params, q, v, residual, _ in fitted if np.all(np.isfinite(residual))]
+            if not usable:  # a source's arithmetic failed: its rows say where
+                continue
+            floor = case.tolerance["pointwise"]["value"] * fitted[0][4]
+            fit = terms.fit(case.coords, units, list(case.params), usable, floor, driven)
+            where = "its force side f (M q'' = f)" if kind != "M" else "it"
+            out.append(Localisation(source=source, equation=case.coords[i],
+                                    place=f"equation {case.coords[i]}" if kind != "M" else name,
+                                    text=fit.says(where), exact=fit.exact, identified=fit.identified,
+                                    residual=fit.before, left=fit.left, sets=len(usable)))
+    return tuple(out)
+
+
+def with_driven(case, r):
+    """The states' coordinates and, after them, the prescribed motions' positions at each state's time:
+    the terms of a scene on a driven base depend on its angle, alpha0 + alpha_rate t."""
+    motions = [angle + rate * r.t + 0.5 * acc * r.t**2 for angle, rate, acc in case.scene["driven"].values()]
+    return np.column_stack([r.q, *motions]) if motions else r.q

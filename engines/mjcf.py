@@ -1,0 +1,75 @@
+"""What an MJCF scene holds, read once by MuJoCo's compiler: its joints, its force sensors and the
+numbers a case's parameter may be bound to.  A case without a case file (a researcher's scene.xml and
+equations.py) gets its coordinates, bindings and time scales from this (dyncheck.derived), and
+`dyncheck new` its scaffold."""
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Joint:
+    name: str
+    kind: str  # "hinge" | "slide" | "ball" | "free"
+    body: str
+    range: tuple | None  # (lower, upper) where the joint is limited, in rad or m
+
+
+@dataclass(frozen=True)
+class Value:
+    """A number of the compiled scene that a parameter can set: a binding location (as in case.toml's
+    [scene.bindings]) and its value there."""
+    location: dict
+    value: float
+
+    @property
+    def where(self):
+        loc = self.location
+        index = f"[{loc['index']}]" if "index" in loc else ""
+        return f"{loc['element']} '{loc['name']}' {loc.get('attribute', '')}{index}".replace("  ", " ")
+
+
+@dataclass(frozen=True)
+class SceneFile:
+    path: str
+    joints: tuple  # of Joint, in the file's order
+    force_sensors: dict  # sensor name -> the body its site is on
+    values: tuple  # of Value
+    masses: dict  # body name -> mass, kg
+    length: float  # the largest distance between two bodies' origins or a body and its centre of mass, m
+
+
+def describe(path):
+    """The scene file at `path` as dyncheck reads it; ValueError naming the file if MuJoCo cannot compile it."""
+    try:
+        m = mujoco.MjSpec.from_file(str(path)).compile()
+    except ValueError as error:
+        hint = (" (a body that only carries a joint needs a placeholder: mass at most 1e-12 kg, inertia "
+                "1e-14 kg m^2, docs/own-case.md)" if "mjMINVAL" in str(error) else "")
+        raise ValueError(f"{path}: {error}{hint}") from None
+    name = lambda kind, i: mujoco.mj_id2name(m, kind, i)
+    body_name = lambda b: name(mujoco.mjtObj.mjOBJ_BODY, b)
+    joints = tuple(Joint(name(mujoco.mjtObj.mjOBJ_JOINT, j), mujoco.mjtJoint(m.jnt_type[j]).name[6:].lower(),
+                         body_name(m.jnt_bodyid[j]), tuple(map(float, m.jnt_range[j])) if m.jnt_limited[j] else None)
+                   for j in range(m.njnt))
+    sensors = {name(mujoco.mjtObj.mjOBJ_SENSOR, s): body_name(m.site_bodyid[m.sensor_objid[s]])
+               for s in range(m.nsensor) if m.sensor_type[s] == mujoco.mjtSensor.mjSENS_FORCE}
+    values = [Value({"element": "option", "name": "gravity", "index": i}, float(m.opt.gravity[i]))
+              for i in range(3) if m.opt.gravity[i]]
+    for b in range(1, m.nbody):
+        body = body_name(b)
+        values.append(Value({"element": "body", "name": body, "attribute": "mass"}, float(m.body_mass[b])))
+        for attribute in ("pos", "ipos"):
+            array = getattr(m, "body_" + attribute)[b]
+            values += [Value({"element": "body", "name": body, "attribute": attribute, "index": i}, float(array[i]))
+                       for i in range(3) if array[i]]
+    for j, joint in enumerate(joints):
+        if m.jnt_stiffness[j]:
+            values.append(Value({"element": "joint", "name": joint.name, "attribute": "stiffness"},
+                                float(m.jnt_stiffness[j])))
+    lengths = [np.linalg.norm(m.body_pos[b]) for b in range(1, m.nbody)] + \
+              [np.linalg.norm(m.body_ipos[b]) for b in range(1, m.nbody)]
+    return SceneFile(str(path), joints, sensors, tuple(values),
+                     {body_name(b): float(m.body_mass[b]) for b in range(1, m.nbody)}, float(max(lengths, default=0.0)))

@@ -1,0 +1,198 @@
+"""Planted errors (issue 13): how often does dyncheck name the term a wrong equation lacks?
+
+Single-term errors (tests/planting.py) are planted in the code that computes the accelerations of the
+book's cases with coordinates and of docs/own-case.md's cart-pendulum, and each mutant's equations are
+checked as `dyncheck run` checks them (pointwise, per-equation residuals, localisation), without the
+runs, which add nothing to where the error is.  A mutant is
+  no effect  every equation row passes (it hit only the reactions or the energy, or a term that vanishes)
+  detected   an equation row fails
+  named      detected, and every equation the error changes, and no other, has a localisation that is
+             exact and whose every coefficient is a product of the parameters.
+A named term is the right term: exact means the fitted terms cancel the mutant's residual to the
+engines' rounding at every state of every parameter set (~50 states x 9 sets for at most 3 terms),
+and that residual is the planted change itself, since the unmutated derivation's residual is at
+rounding (checked: `test_the_subjects_pass_unmutated`); two texts that agree at all those random
+states are one function (a trigonometric identity at most, which TermFit reports as an alternative).
+"""
+
+import re
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import planting
+from dyncheck import checks, residuals
+from dyncheck.case import Case
+from dyncheck.results import Status
+from test_own_case_doc import steps
+
+ROOT = Path(__file__).resolve().parent.parent
+# The functions that compute each book case's accelerations (the others' joints are all driven: no
+# equations of motion).  Their modules import reference.* absolutely, so a mutant runs from the copied
+# case folder.  The reference's kinematic chain (reference/spinning_base.py) is not planted in.
+BOOK = {"double_pendulum": ("Reference._solve", "Book._solve"),
+        "spring_pendulum": ("Book.accelerations", "Reference._motion"),
+        "rotating_pendulum": ("Book.accelerations", "Reference._motion"),
+        "spinning_top": ("Book.accelerations", "Book._cm_inertias")}
+TUTORIAL = "cart_pendulum"
+TUTORIAL_FUNCTIONS = ("mass_matrix", "forces")
+OUT = Path("/tmp/dyncheck_planted")
+
+
+@dataclass(frozen=True)
+class Subject:
+    """A case whose derivation errors are planted in: its folder, the derivation's file in a copy of the
+    folder and its source, the functions planted in."""
+    name: str
+    folder: Path
+    file: str
+    source: str
+    functions: tuple
+
+    def planted(self, mutant, where):
+        """A copy of the case folder in `where` with the mutant as its derivation."""
+        folder = where / self.name
+        shutil.copytree(self.folder, folder)
+        (folder / self.file).write_text(mutant.source)
+        if self.file != "equations.py":  # a book case: its case file names the mutant
+            toml = folder / "case.toml"
+            text, count = re.subn(r'^derivation = "reference\.\w+"$', f'derivation = "{self.file}"',
+                                  toml.read_text(), flags=re.M)
+            assert count == 1, f"{toml}: no single derivation line"
+            toml.write_text(text)
+        return folder
+
+
+def book_subject(name):
+    return Subject(name, ROOT / "cases" / name, "mutant.py", (ROOT / "reference" / f"{name}.py").read_text(),
+                   BOOK[name])
+
+
+def tutorial_subject(where, functions=TUTORIAL_FUNCTIONS):
+    """docs/own-case.md's case as the guide writes it, before its planted error."""
+    for kind, path, text in steps():
+        if kind == "file" and path.startswith(TUTORIAL + "/"):
+            (where / path).parent.mkdir(parents=True, exist_ok=True)
+            (where / path).write_text(text)
+    folder = where / TUTORIAL
+    return Subject(TUTORIAL, folder, "equations.py", (folder / "equations.py").read_text(), functions)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    case: str
+    mutant: planting.Mutant
+    changed: tuple  # (source, equation) the planted error changes beyond the pointwise tolerance
+    failing: tuple  # the equation rows that fail: (check quantity, sources)
+    localisations: tuple
+
+    @property
+    def detected(self):
+        return bool(self.failing)
+
+    @property
+    def miss(self):
+        """Why a detected error is not named; None when it is (or when it is not detected)."""
+        if not self.detected:
+            return None
+        if {(l.source, l.equation) for l in self.localisations} != set(self.changed):
+            return "localised in other equations than those changed"
+        exact = [l.exact for l in self.localisations]
+        if not any(exact):
+            return "no exact fit"
+        if not all(exact):
+            return "exact in some equations only"
+        if not all(l.identified for l in self.localisations):
+            return "a coefficient is no product of parameters"
+        return None
+
+    @property
+    def named(self):
+        return self.detected and self.miss is None
+
+    @property
+    def outcome(self):
+        return "named" if self.named else "detected" if self.detected else "no effect"
+
+
+def equations(case):
+    """dyncheck's equation rows of a case, their residuals against the engines and the localisations."""
+    _, sample = checks.pointwise(case)
+    rows, found = residuals.equation_rows(case, sample)
+    return sample, rows, residuals.localise(case, rows, found, checks.parameter_sets(case)[0])
+
+
+def judge(subject, mutant, where):
+    original, case = Case(subject.folder), Case(subject.planted(mutant, where))
+    sample, rows, localisations = equations(case)
+    tolerance = case.tolerance["pointwise"]["value"]
+    changed = []
+    for source in residuals.derivation_sources(case):
+        before = residuals.residuals(original, source, "mujoco", sample["states"])
+        if source in sample["failures"]:  # the mutant cannot be evaluated: every equation changed
+            changed += [(source, c) for c in case.coords]
+            continue
+        after = before.mass @ residuals.accelerations_of(sample["values"][source], case)[:, :, None]
+        change = np.abs(after[:, :, 0] - before.derivation_forces)
+        changed += [(source, c) for i, c in enumerate(case.coords)
+                    if np.max(change[:, i]) > tolerance * before.of(("residual", i))[1]]
+    failing = tuple((r.quantity, r.sources) for r in rows if r.status == Status.FAIL)
+    return Verdict(subject.name, mutant, tuple(changed), failing, localisations)
+
+
+def test_the_subjects_pass_unmutated(tmp_path):
+    """Every planted error is measured against a derivation whose equations agree with the engines."""
+    for subject in [book_subject(name) for name in BOOK] + [tutorial_subject(tmp_path)]:
+        _, rows, localisations = equations(Case(subject.folder))
+        assert [r for r in rows if r.status != Status.PASS] == [] and localisations == (), subject.name
+
+
+def test_four_planted_errors_in_the_tutorial_are_named(tmp_path):
+    """One error of each kind in the cart-pendulum's force side, as the issue asks: each detected, and
+    its wrong equation named with the term."""
+    subject = tutorial_subject(tmp_path / "original", functions=("forces",))
+    mutants = planting.mutants(subject.source, subject.functions, per_kind=1, seed=13)
+    assert sorted(m.kind for m in mutants) == sorted(planting.KINDS)
+    for number, mutant in enumerate(mutants):
+        verdict = judge(subject, mutant, tmp_path / f"mutant{number}")
+        assert verdict.named, (str(mutant), verdict.changed, verdict.failing, [str(l) for l in verdict.localisations])
+
+
+@pytest.mark.slow
+def test_campaign(tmp_path):
+    """>= 100 seeded planted errors over the four book cases with coordinates and the tutorial: a table
+    per case and kind (printed, and saved to /tmp/dyncheck_planted/).  Every error that changes an
+    equation is detected; the hit rate named / detected is measured, not asserted."""
+    start = time.perf_counter()
+    subjects = [book_subject(name) for name in BOOK] + [tutorial_subject(tmp_path / "original")]
+    verdicts = []
+    for subject in subjects:
+        for mutant in planting.mutants(subject.source, subject.functions, per_kind=8, seed=2024):
+            verdicts.append(judge(subject, mutant, tmp_path / f"mutant{len(verdicts)}"))
+    wall = time.perf_counter() - start
+    frame = pd.DataFrame({"case": v.case, "kind": v.mutant.kind, "outcome": v.outcome, "miss": v.miss,
+                          "mutant": str(v.mutant), "changed": " ".join(f"{s}:{c}" for s, c in v.changed),
+                          "localisations": " | ".join(str(l) for l in v.localisations)} for v in verdicts)
+    table = pd.concat([tally(frame), tally(frame.assign(kind="all")), tally(frame.assign(case="all", kind="all"))])
+    OUT.mkdir(parents=True, exist_ok=True)
+    table.to_csv(OUT / "campaign.csv")
+    frame.to_csv(OUT / "mutants.csv", index=False)
+    print(f"\n{table.to_string()}\n\n{len(verdicts)} mutants in {wall:.0f} s; per mutant: {OUT / 'mutants.csv'}")
+    print(f"misses by reason:\n{frame.groupby(['case', 'miss']).size().to_string()}")
+    assert len(verdicts) >= 100
+    assert [str(v.mutant) for v in verdicts if v.changed and not v.detected] == []
+    assert [str(v.mutant) for v in verdicts if v.detected and not v.changed] == []
+
+
+def tally(frame):
+    """Per case and kind: mutants, no effect, detected, named, and the hit rate named / detected."""
+    table = frame.groupby(["case", "kind"]).outcome.agg(mutants="size", no_effect=lambda o: (o == "no effect").sum(),
+                                          detected=lambda o: (o != "no effect").sum(),
+                                          named=lambda o: (o == "named").sum())
+    table["hit rate"] = (table.named / table.detected).round(3)
+    return table
