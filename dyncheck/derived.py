@@ -213,7 +213,7 @@ def case_file(folder, module, scene, given):
     derived = {
         "name": folder.name,
         "title": (module.__doc__ or folder.name).strip().splitlines()[0].rstrip("."),
-        "summary": (module.__doc__ or "").strip(),
+        "summary": summary(module.__doc__),
         "derivation": EQUATIONS,
         "coords": list(coords),
         "reactions": reactions,
@@ -243,6 +243,12 @@ def case_file(folder, module, scene, given):
         "work_precision": work_precision(omega),
     }
     return merged(derived, given)
+
+
+def summary(docstring):
+    """The page's opening paragraph: the module's docstring after its first line (the title), or that line."""
+    lines = (docstring or "").strip().splitlines()
+    return "\n".join(lines[1:]).strip() or (lines[0] if lines else "")
 
 
 def work_precision(omega):

@@ -419,8 +419,9 @@ def scene_table(case):
     scene = case.scene
     rows = [{"joint": joint, "role": f"prescribed: {angle:g} + {rate:.6g} t" + (f" + {acc / 2:g} t^2" if acc else "")}
             for joint, (angle, rate, acc) in scene["driven"].items()]
-    rows += [{"joint": joint, "role": "free: the book's " + ", ".join(case.coords[i] for i in idx)
-              + (" (ball joint, in the book's Euler angles)" if kind == "euler" else "")}
+    whose = "the coordinate " if case.one_derivation else "the book's "
+    rows += [{"joint": joint, "role": "free: " + whose + ", ".join(case.coords[i] for i in idx)
+              + (" (ball joint, in Euler angles)" if kind == "euler" else "")}
              for kind, joint, idx in scene["layout"]]
     rows += [{"joint": joint, "role": f"applied generalized force {list(force)} (joint frame)"}
              for joint, force in scene["applied"].items()]
@@ -479,7 +480,8 @@ def write_case_page(result, case, tmp):
         f"# {heading(case.spec)}",
         "",
         f"**{result.status}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
-        + f"; worst pointwise error among reference, MuJoCo and Pinocchio: {worst_engine_error(rows):.1e}"
+        + f"; worst pointwise error among {'MuJoCo and Pinocchio' if case.one_derivation else 'reference, MuJoCo and Pinocchio'}"
+        f": {worst_engine_error(rows):.1e}"
         + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md), [errata](errata.md)"
         + (f"  \nParameters overridden (`--set`): {case.overrides_text()}; the book's figures and printed data"
            " do not apply to them" if case.overrides else ""),
@@ -503,7 +505,8 @@ def write_case_page(result, case, tmp):
         "\n\n".join(" ".join(p.split()) for p in case.prose(case.spec["report"]["modelling"], "report.modelling")
                     .strip().split("\n\n")),
         "",
-        f"Joints of `scene.xml` (MuJoCo) and `{case.pinocchio_scene.name}` (Pinocchio), the same in both:",
+        "Joints of `scene.xml`, which MuJoCo and Pinocchio both read:" if case.pinocchio_scene.name == "scene.xml"
+        else f"Joints of `scene.xml` (MuJoCo) and `{case.pinocchio_scene.name}` (Pinocchio), the same in both:",
         "",
         scene_table(case),
         "",

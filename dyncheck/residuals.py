@@ -35,27 +35,51 @@ def quantity(coordinate):
 
 @dataclass(frozen=True)
 class Residuals:
-    """One derivation against one engine at some states: the engine's mass matrices M_e and generalised
-    forces f_e = M_e q''_e, the derivation's accelerations put in the engine's form M_e q''_d, and the
-    derivation's own M and f where it gives them (None where not)."""
+    """One derivation against one engine at some states: the engine's mass matrices M_e and accelerations
+    q''_e, the derivation's accelerations q''_d, and the derivation's own M and f where it gives them
+    (None where not)."""
     t: np.ndarray  # (N,)
     q: np.ndarray  # (N, n)
     v: np.ndarray
     mass: np.ndarray  # (N, n, n)
-    engine_forces: np.ndarray  # (N, n)
-    derivation_forces: np.ndarray
+    engine_acc: np.ndarray  # (N, n)
+    derived_acc: np.ndarray
     given_mass: np.ndarray | None
     given_forces: np.ndarray | None
 
+    @property
+    def engine_forces(self):
+        """f_e = M_e q''_e, the engine's generalised forces."""
+        return np.einsum("nij,nj->ni", self.mass, self.engine_acc)
+
+    @property
+    def derivation_forces(self):
+        """M_e q''_d: the derivation's accelerations in the engine's form."""
+        return np.einsum("nij,nj->ni", self.mass, self.derived_acc)
+
     def of(self, place):
-        """The residual at `place`, over the states, and the size it is judged against: ("residual", i)
-        the equation's, ("f", i) its given force side's, ("M", i, j) a given mass matrix entry's."""
+        """The residual at `place`, over the states, and the size it is judged against:
+        ("residual", i) equation i's, M_e (q''_d - q''_e); ("f", i) its given force side's, f_d - f_e;
+        ("M", i, j) a given mass matrix entry's, M_d - M_e; ("acceleration", i) q''_d - q''_e, the
+        residual of a derivation that writes each acceleration as an expression; ("numerator", i)
+        det(M_e) (q''_d - q''_e), of one that solves M q'' = f by Cramer's rule, q''_i = N_i / det M."""
         kind, i, *j = place
         if kind == "M":
             return self.given_mass[:, i, j[0]] - self.mass[:, i, j[0]], np.max(np.abs(self.mass))
-        mine = self.derivation_forces if kind == "residual" else self.given_forces
-        scale = max(np.max(np.abs(self.engine_forces[:, i])), np.max(np.abs(mine[:, i])))
-        return mine[:, i] - self.engine_forces[:, i], scale
+        if kind in ("acceleration", "numerator"):
+            factor = np.linalg.det(self.mass) if kind == "numerator" else np.ones(len(self.t))
+            mine, theirs = factor * self.derived_acc[:, i], factor * self.engine_acc[:, i]
+        else:
+            mine = (self.derivation_forces if kind == "residual" else self.given_forces)[:, i]
+            theirs = self.engine_forces[:, i]
+        return mine - theirs, max(np.max(np.abs(mine)), np.max(np.abs(theirs)))
+
+
+# Where a wrong equation's terms are looked for, in order, and what the terms are added to: its force
+# side in the engine's form, its acceleration as the derivation may write it, or the numerator of that
+# acceleration solved by Cramer's rule.  The first whose fit names parameter products is reported.
+FORMS = (("residual", "its force side f (M q'' = f)"), ("acceleration", "its acceleration {c}''"),
+         ("numerator", "the numerator N of its acceleration {c}'' = N / det M"))
 
 
 def residuals(case, source, engine, states, derived_acc=None, engine_acc=None):
@@ -71,8 +95,8 @@ def residuals(case, source, engine, states, derived_acc=None, engine_acc=None):
         given_mass = each(derivation.mass_matrix).reshape(mass.shape) if hasattr(derivation, "mass_matrix") else None
         given_forces = each(derivation.forces).reshape(a_e.shape) if hasattr(derivation, "forces") else None
     return Residuals(np.array([t for t, _, _ in states]), np.array([q for _, q, _ in states]),
-                     np.array([v for _, _, v in states]), mass,
-                     np.einsum("nij,nj->ni", mass, a_e), np.einsum("nij,nj->ni", mass, a_d), given_mass, given_forces)
+                     np.array([v for _, _, v in states]), mass, np.asarray(a_e, dtype=float).reshape(-1, n),
+                     np.asarray(a_d, dtype=float).reshape(-1, n), given_mass, given_forces)
 
 
 def accelerations_of(values, case):
@@ -129,7 +153,8 @@ def localise(case, rows, found, drawn):
     sets `drawn` (dyncheck.checks.parameter_sets): a given mass matrix entry or force side where those
     fail, else the equation's residual (which a wrong M spoils: it is then M's error times q'')."""
     failing = {(r.sources[0], r.quantity) for r in rows
-               if r.check == CHECK and r.sources[1] == "mujoco" and r.status == Status.FAIL}
+               if r.check == CHECK and r.sources[1] == "mujoco" and r.status == Status.FAIL
+               and (r.sources[0], "mujoco") in found}  # not where a source gave no numbers: its row says why
     if not failing:
         return ()
     sets = [dict(case.params)] + [dict(case.params) | values for values in drawn]
@@ -154,18 +179,39 @@ def localise(case, rows, found, drawn):
             if kind == "residual" and i in explained:
                 continue
             name = next(name for name, p in named.items() if p == place)
-            fitted = [(params, with_driven(other, r), r.v, *r.of(place)) for params, other, r in samples]
-            usable = [(params, q, v, residual) for params, q, v, residual, _ in fitted if np.all(np.isfinite(residual))]
-            if not usable:  # a source's arithmetic failed: its rows say where
+            forms = FORMS if kind == "residual" else [(kind, "it" if kind == "M" else "its force side f (M q'' = f)")]
+            fits = []
+            for form, where in forms:
+                fit = fit_at(case, samples, (form, *place[1:]), units, driven)
+                if fit is not None:
+                    fits.append((fit, where.format(c=case.coords[i])))
+                    if fit.identified:
+                        break
+            if not fits:  # a source's arithmetic failed at every set: its rows say where
                 continue
-            floor = case.tolerance["pointwise"]["value"] * fitted[0][4]
-            fit = terms.fit(case.coords, units, list(case.params), usable, floor, driven)
-            where = "its force side f (M q'' = f)" if kind != "M" else "it"
+            # the first that names parameter products, else the first exact, else the force side's closest
+            fit, where = next((f for f in fits if f[0].identified), next((f for f in fits if f[0].exact), fits[0]))
+            text, identified = fit.says(where), fit.identified
+            if fit.exact and not fit.terms:  # this equation's acceleration is right: M_e couples it to a wrong one
+                text = (f"{where} agrees with the engines (to {fit.before:.1e}): this equation's residual comes "
+                        "through the mass matrix from another acceleration's error")
+                identified = False
             out.append(Localisation(source=source, equation=case.coords[i],
                                     place=f"equation {case.coords[i]}" if kind != "M" else name,
-                                    text=fit.says(where), exact=fit.exact, identified=fit.identified,
-                                    residual=fit.before, left=fit.left, sets=len(usable)))
+                                    text=text, exact=fit.exact, identified=identified,
+                                    residual=fit.before, left=fit.left, sets=fit.sets))
     return tuple(out)
+
+
+def fit_at(case, samples, place, units, driven):
+    """The terms that explain the residual at `place` over the sets `samples` ((params, case, Residuals));
+    None where no set gives finite residuals."""
+    fitted = [(params, with_driven(other, r), r.v, *r.of(place)) for params, other, r in samples]
+    usable = [(params, q, v, residual) for params, q, v, residual, _ in fitted if np.all(np.isfinite(residual))]
+    if not usable:
+        return None
+    floor = case.tolerance["pointwise"]["value"] * fitted[0][4]
+    return terms.fit(case.coords, units, list(case.params), usable, floor, driven)
 
 
 def with_driven(case, r):
@@ -173,3 +219,41 @@ def with_driven(case, r):
     the terms of a scene on a driven base depend on its angle, alpha0 + alpha_rate t."""
     motions = [angle + rate * r.t + 0.5 * acc * r.t**2 for angle, rate, acc in case.scene["driven"].values()]
     return np.column_stack([r.q, *motions]) if motions else r.q
+
+
+PRINTED_ROWS = "printed row"
+
+
+def printed_rows(case, sample):
+    """The book's printed equations, each before it is solved (a Newton or Euler row), with MuJoCo's
+    accelerations and reactions put in: one row per printed equation, its residual (the sum of its terms,
+    which is zero where the printed equation holds) relative to its largest term over the random states.
+    Only where the book's module gives them (Book.printed_rows, docs/model-interface.md)."""
+    book = case.model("book")
+    if not hasattr(book, "printed_rows") or "mujoco" in sample["failures"] or "book" in sample["failures"]:
+        return []
+    engine, states = sample["values"]["mujoco"], sample["states"]
+    terms_at = []
+    for k, (t, q, v) in enumerate(states):
+        acc = np.array([engine[f"{c}_acc"][k] for c in case.coords])
+        reactions = {name: float(engine[name][k]) for name in case.reaction_names}
+        try:
+            with np.errstate(all="ignore"):
+                terms_at.append({label: np.asarray(terms, dtype=float)
+                                 for label, terms in book.printed_rows(t, q, v, acc, reactions).items()})
+        except Exception as error:  # the book's module's own error: a failing row that says where
+            return [no_number(PRINTED_ROWS, "every printed row", ("book", "mujoco"),
+                              f"book: printed rows at random state {k}: {type(error).__name__}: {error}", Status.FAIL)]
+    # At least the case's force scale (the weight): a row whose terms all vanish at these parameters (a
+    # Newton row along an axis nothing loads) is not judged by its rounding relative to zero.
+    floor = case.value(case.tolerance["pointwise"]["force_scale"])
+    rows = []
+    for label in terms_at[0]:
+        sums = np.array([np.sum(at[label]) for at in terms_at])
+        scale = max(max(np.max(np.abs(at[label])) for at in terms_at), floor)
+        error = float(np.max(np.abs(sums)) / scale) if scale > 0 else 0.0
+        rows.append(row(PRINTED_ROWS, label, ("book", "mujoco"), error, case.tolerance["pointwise"]["value"],
+                        f"the printed equation's terms with MuJoCo's accelerations and reactions at {len(states)} "
+                        "random states, their sum relative to the largest term (at least the force scale)",
+                        ceiling=ceilings.POINTWISE))
+    return rows

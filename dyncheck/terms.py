@@ -41,7 +41,7 @@ class Factor:
     function: str  # "sin", "cos", "coordinate" or "velocity"
     of: tuple[str, ...]  # a coordinate, or two angles (sin(of[0] - of[1]), or with `sum` of[0] + of[1])
     power: int = 1
-    sum: bool = False  # of two angles: their sum (a double pendulum's absolute angle), not their difference
+    sum: bool = False  # of two angles: their sum (the absolute angle of a link hung from another), not their difference
 
     @property
     def text(self):

@@ -139,6 +139,42 @@ class Book(Reference):
                - g * l1 * l2 * m1 * m2**2 * c12 - g * l1 * l2 * m1 * m2**2 * s1 * s2) / den
         return np.array([tr1, tr2, ddt1, ddt2])
 
+    def printed_rows(self, t, q, v, acc, reactions):
+        """Newton's law for each mass as printed before it is solved, left side minus right side: in I,
+        1.9.1's (1.25) (mass 1) and (1.26) (mass 2),
+
+            (1.25)  X: -T1 sin(t1) + T2 sin(t1 + t2)          = m1 a_Bx
+                    Y: -m1 g + T1 cos(t1) - T2 cos(t1 + t2)   = m1 a_By
+            (1.26)  X: -T2 sin(t1 + t2)                       = m2 a_Ax
+                    Y: -m2 g + T2 cos(t1 + t2)                = m2 a_Ay
+
+        with 1.9.1's a_B and a_A (p. 60-61); and in B1 and B2, 1.9.2's (1.27) and (1.28), the rows that
+        (1.29)-(1.32) solve.  Lost signs are restored from the printed cross products and terms that each
+        sum adds: T1 = T^T (0, T1) = (-T1 sin, T1 cos) as printed with T_theta1, and so on.  The printed
+        sum a_A shows a '+' before -theta1'^2 l2 sin(t1 + t2) and before -theta2'^2 l2 sin(t1 + t2) in its
+        X row, where its own terms, printed just above it (the normal term I theta1' x (I theta1' x I l2)
+        and I a_RelAB), have minus signs, and no '+' at all in its Y row, where every term is positive:
+        '+' glyphs displaced in the extraction, not the book's signs, so the terms are written with theirs."""
+        p = self.p
+        m1, m2, l1, l2, g = p["m1"], p["m2"], p["l1"], p["l2"], p["g"]
+        (t1, t2), (d1, d2), (dd1, dd2) = q, v, acc
+        T1, T2 = reactions["T1"], reactions["T2"]
+        s1, c1, s2, c2 = np.sin(t1), np.cos(t1), np.sin(t2), np.cos(t2)
+        s12, c12 = np.sin(t1 + t2), np.cos(t1 + t2)
+        a_b = ([-d1**2 * l1 * s1, dd1 * l1 * c1], [d1**2 * l1 * c1, dd1 * l1 * s1])
+        # a_A: a_B, then the terms in l2 of p. 60-61, normal, tangential, Coriolis, relative (two)
+        a_a = (a_b[0] + [-d1**2 * l2 * s12, dd1 * l2 * c12, -2 * d1 * d2 * l2 * s12, -d2**2 * l2 * s12,
+                         dd2 * l2 * c12],
+               a_b[1] + [d1**2 * l2 * c12, dd1 * l2 * s12, 2 * d1 * d2 * l2 * c12, d2**2 * l2 * c12, dd2 * l2 * s12])
+        return {"(1.25) X": [-T1 * s1, T2 * s12] + [-m1 * a for a in a_b[0]],
+                "(1.25) Y": [-m1 * g, T1 * c1, -T2 * c12] + [-m1 * a for a in a_b[1]],
+                "(1.26) X": [-T2 * s12] + [-m2 * a for a in a_a[0]],
+                "(1.26) Y": [-m2 * g, T2 * c12] + [-m2 * a for a in a_a[1]],
+                "(1.27) X1": [-m1 * g * s1, T2 * s2, -m1 * l1 * dd1],
+                "(1.27) Y1": [-m1 * g * c1, T1, -T2 * c2, -m1 * l1 * d1**2],
+                "(1.28) X2": [-m2 * g * s12, -m2 * l1 * dd1 * c2, -m2 * l1 * d1**2 * s2, -m2 * l2 * (dd1 + dd2)],
+                "(1.28) Y2": [-m2 * g * c12, T2, m2 * l1 * dd1 * s2, -m2 * l1 * d1**2 * c2, -m2 * l2 * (d1 + d2) ** 2]}
+
 
 class Program:
     """The 1.9.3 Pascal listing `program pend2`, transcribed line by line.

@@ -183,6 +183,27 @@ class Book:
         T = t_z(self._motion(t)[0])
         return float((T.T @ self._force(t)) @ self._velocity_inertial(t))
 
+    def printed_rows(self, t, q, v, acc, reactions):
+        """(1.23) and (1.24), X and Y in I, term by term as printed, each times m against the arm's force.
+
+        1.7 prints no Newton row: Examples 3-4 stop at the acceleration.  Its two printed accelerations
+        are put to the engine through Newton's law for the mass, m I a_B = I F + m I g, with I F = T^T
+        (F1, F2, F3) the arm's force that the engine measures (X = cos F1 - sin F2, Y = sin F1 + cos F2);
+        gravity has no X or Y component.  The Z rows are left out: the book prints 0 there, and F3 = m g
+        is this project's (1.7 never mentions gravity).  The four terms of Example 4 are those of (1.23)
+        one by one, so they add no row of their own; (1.24) Y carries its printed 2 L' theta' sin(theta)
+        (finding 1.7-eq1.24)."""
+        th, w, wd, L, Ld, Ldd = self._motion(t)
+        m, s, c = self.p["m"], np.sin(th), np.cos(th)
+        force_x = [-c * reactions["F1"], s * reactions["F2"]]
+        force_y = [-s * reactions["F1"], -c * reactions["F2"]]
+        # (1.23) = (1.20) collected, and (1.24) whose X row is the same
+        x = [m * Ldd * c, -2 * m * Ld * w * s, -m * L * wd * s, -m * L * w**2 * c, *force_x]
+        return {"(1.23) X": x,
+                "(1.23) Y": [m * Ldd * s, 2 * m * Ld * w * c, m * L * wd * c, -m * L * w**2 * s, *force_y],
+                "(1.24) X": x,
+                "(1.24) Y": [m * Ldd * s, 2 * m * Ld * w * s, m * L * wd * c, -m * L * w**2 * s, *force_y]}
+
 
 class Reference(Book):
     """Right: (1.24) replaced by the vector sum of the five terms of (1.10); the rest is the book's."""

@@ -106,6 +106,23 @@ class Book(_FixedParticle):
                 "R2": p["m"] * (p["g"] * s - k * c - p["l"] * omega**2 * s * c),
                 "T": p["m"] * (p["g"] * c + k * s + p["l"] * omega**2 * s**2)}
 
+    def printed_rows(self, t, q, v, acc, reactions):
+        """(i), B3 R + B3 T + B3 P = m B3 a_E, row by row as printed before it is solved:
+
+            X3:  R1                = m (-b alpha'^2 sin(beta))
+            Y3:  -m g sin(psi) + R2 = m (-K cos(psi) - l Omega^2 sin(psi) cos(psi))
+            Z3:  -m g cos(psi) + T  = m (K sin(psi) + l Omega^2 sin^2(psi))
+
+        (lost signs as in the class docstring), each as left side minus right side.  Nothing is
+        free, so the rows check the engine's three reactions against the prescribed motion."""
+        p = self.p
+        m, g, l, psi = p["m"], p["g"], p["l"], p["psi"]
+        beta, omega, k = base_terms(p, t)
+        s, c = np.sin(psi), np.cos(psi)
+        return {"Newton X3 (1.8.2)": [reactions["R1"], m * p["b"] * p["alpha_rate"] ** 2 * np.sin(beta)],
+                "Newton Y3 (1.8.2)": [-m * g * s, reactions["R2"], m * k * c, m * l * omega**2 * s * c],
+                "Newton Z3 (1.8.2)": [-m * g * c, reactions["T"], -m * k * s, -m * l * omega**2 * s**2]}
+
 
 class Reference(_FixedParticle):
     """m (a_E - g) in B3 from 1.8.1's numerical Newton-Euler at psi' = psi'' = 0; energy from it too."""

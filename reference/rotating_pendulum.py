@@ -154,6 +154,26 @@ class Book:
         _, v_e = book_velocities(self.p, t, q[0], v[0], self.p["l"])
         return f["R"] * v_e[0] + f["T"] * v_e[2]
 
+    def printed_rows(self, t, q, v, acc, reactions):
+        """(i), B3 R + B3 T + B3 P = m B3 a_E, row by row as printed before it is solved:
+
+            X3:  R               = m (-b alpha'^2 sin(beta) - 2 l psi' Omega cos(psi))
+            Y3:  -m g sin(psi)    = m (-K cos(psi) - l Omega^2 sin(psi) cos(psi) + l psi'')
+            Z3:  -m g cos(psi) + T = m (K sin(psi) + l (psi'^2 + Omega^2 sin^2(psi)))
+
+        (lost signs as in the class docstring: those of the printed a_E (g) and B3 P), each as
+        left side minus right side."""
+        p = self.p
+        m, g, l = p["m"], p["g"], p["l"]
+        (psi,), (psi_rate,), (psi_acc,) = q, v, acc
+        beta, omega, k = base_terms(p, t)
+        s, c = np.sin(psi), np.cos(psi)
+        return {"Newton X3 (1.8.1)": [reactions["R"], m * p["b"] * p["alpha_rate"] ** 2 * np.sin(beta),
+                                      2 * m * l * psi_rate * omega * c],
+                "Newton Y3 (1.8.1)": [-m * g * s, m * k * c, m * l * omega**2 * s * c, -m * l * psi_acc],
+                "Newton Z3 (1.8.1)": [-m * g * c, reactions["T"], -m * k * s, -m * l * psi_rate**2,
+                                      -m * l * omega**2 * s**2]}
+
 
 class Reference:
     """Newton's law in B3 with B3 a_E from `particle_motion`; psi'' from Y3, where the rod pushes nothing."""

@@ -59,11 +59,12 @@ Lost signs, restored term by term (the extraction keeps '+' and loses '-'):
   + Dpsi Dteta (-Iyy + Ixx) sin + Mz); the visible '+' between CM_Ixx and CM_Iyy and before
   2 m h^2 leave no other reading.  (CM_Ixx - CM_Iyy + CM_Izz) from the Z2 row (p. 81,
   [CM_Iyy - CM_Ixx - CM_Izz] for p' n' sin n on the left-hand side).
-Two cosmetic points that change nothing: the X2 row prints p'[s' CM_Izz sin n + (p'/2) sin 2n (...)]
-(= p'^2 sin n cos n (...)); the Y2 row's first term shows the precession glyph where the spin
-rate belongs (-n' s' CM_Izz; the book's p. 80 product Omega x (I omega) and its final precession
-equation have the spin).  The precession equation divides by CM_Ixx + m h^2 where the Y2 row has
-CM_Iyy + m h^2: equal for the symmetric top.  The equations are right: `Reference` keeps them.
+The X2 row prints p'[s' CM_Izz sin n + (p'/2) sin 2n (...)] (= p'^2 sin n cos n (...)).  The Y2
+row's first term shows the precession glyph where the spin rate belongs (-n' s' CM_Izz; the book's
+p. 80 product Omega x (I omega) and its final precession equation have the spin): a slip of the
+printed row only, which `Book.printed_rows` keeps (finding 1.10-euler-Y2).  The precession equation
+divides by CM_Ixx + m h^2 where the Y2 row has CM_Iyy + m h^2: equal for the symmetric top.  The
+equations of motion are right: `Reference` keeps them.
 
 Reactions, Newton (the book's (10)): B2 R + B2 P = m B2 a, R = (Rx, Ry, Rz) in I, so
 B2 R = T_x(n) T_z(p) I R and
@@ -337,6 +338,42 @@ class Book:
     def drive_power(self, t, q, v):
         """Power of the moment Mz about Z2: Mz omega_z = Mz (p' cos n + s')."""
         return self.p["Mz"] * (v[0] * np.cos(q[1]) + v[2])
+
+    def printed_rows(self, t, q, v, acc, reactions):
+        """(10) as printed on p. 81 before it is solved, in B2, each row left side minus right side.
+
+        Newton, "T_theta T_varphi R = (0, m g sin n, m g cos n) + m h (2 n' p' cos n + p'' sin n,
+        p'^2 cos n sin n - n'', -p'^2 sin^2 n - n'^2)": R in I is turned into B2 by T_x(n) T_z(p), the
+        order the book writes; the acceleration is (7), with Omega.  (Its errors, finding 1.10-R, come
+        after, in the components of p. 82.)
+
+        Euler, with the CM inertias of (9) (CM_Iyy = CM_Ixx = Ixx - m h^2, CM_Izz = Izz):
+            X2:  m g h sin n = p' [s' CM_Izz sin n + (p'/2) sin 2n (CM_Izz - CM_Iyy - m h^2)]
+                               + n'' (CM_Ixx + m h^2)
+            Y2:  0           = -n' p' CM_Izz + n' p' cos n [CM_Ixx - CM_Izz + CM_Iyy + 2 m h^2]
+                               + p'' sin n (CM_Iyy + m h^2)
+            Z2:  Mz          = p' n' sin n [CM_Iyy - CM_Ixx - CM_Izz] + (p'' cos n + s'') CM_Izz
+        Signs as restored in the module docstring; Y2's first term as printed, with the precession rate
+        p' where its own p. 80 product Omega x (I_O omega) and the precession equation solved from it
+        have the spin rate s' (finding 1.10-euler-Y2); -n' s' CM_Izz there, from p. 80."""
+        p = self.p
+        m, g, h = p["m"], p["g"], p["h"]
+        (prec, n, _), (dp, dn, ds), (ddp, ddn, dds) = q, v, acc
+        cxx, cyy, czz = self._cm_inertias()
+        mh2 = m * h**2
+        sn, cn, sp, cp = np.sin(n), np.cos(n), np.sin(prec), np.cos(prec)
+        rx, ry, rz = reactions["Rx"], reactions["Ry"], reactions["Rz"]
+        # T_x(n) T_z(p) (Rx, Ry, Rz), term by term
+        return {"Newton X2 (1.10)": [cp * rx, sp * ry, -m * h * 2 * dn * dp * cn, -m * h * ddp * sn],
+                "Newton Y2 (1.10)": [-cn * sp * rx, cn * cp * ry, sn * rz, -m * g * sn, -m * h * dp**2 * cn * sn,
+                                     m * h * ddn],
+                "Newton Z2 (1.10)": [sn * sp * rx, -sn * cp * ry, cn * rz, -m * g * cn, m * h * dp**2 * sn**2,
+                                     m * h * dn**2],
+                "Euler X2 (1.10)": [m * g * h * sn, -dp * ds * czz * sn,
+                                    -dp * (dp / 2) * np.sin(2 * n) * (czz - cyy - mh2), -ddn * (cxx + mh2)],
+                "Euler Y2 (1.10)": [dn * dp * czz, -dn * dp * cn * (cxx - czz + cyy + 2 * mh2),
+                                    -ddp * sn * (cyy + mh2)],
+                "Euler Z2 (1.10)": [p["Mz"], -dp * dn * sn * (cyy - cxx - czz), -ddp * cn * czz, -dds * czz]}
 
 
 class Reference(Book):

@@ -119,6 +119,29 @@ class Book:
         v_d, v_e = book_velocities(p, t, q[0], v[0], p["l0"] + q[1], v[1])
         return self.reactions(t, q, v)["R"] * v_e[0] + p["k"] * q[1] * v_d[2]
 
+    def printed_rows(self, t, q, v, acc, reactions):
+        """(h), B3 R + B3 T + B3 P = m B3 a_E with the spring's B3 T = (0, 0, k l), row by row as
+        printed before it is solved (L = l0 + l, K the base's bracket, `base`):
+
+            X3:  R                   = m (-b alpha'^2 sin(beta) - L psi' Omega cos(psi) - 2 l' Omega sin(psi))
+            Y3:  -m g sin(psi)        = m (-K cos(psi) - L Omega^2 sin(psi) cos(psi) + L psi'' + 2 l' psi')
+            Z3:  -m g cos(psi) + k l  = m (K sin(psi) + L (psi'^2 + Omega^2 sin^2(psi)) - l'')
+
+        each as left side minus right side.  X3 keeps (f)'s single L psi' Omega cos(psi) (finding
+        1.8.3-R); Y3 and Z3 are the rows that (h) solves for psi'' and l''."""
+        p = self.p
+        m, g = p["m"], p["g"]
+        (psi, l), (psi_rate, l_rate), (psi_acc, l_acc) = q, v, acc
+        beta, omega, base = base_terms(p, t)
+        length = p["l0"] + l
+        s, c = np.sin(psi), np.cos(psi)
+        return {"Newton X3 (1.8.3)": [reactions["R"], m * p["b"] * p["alpha_rate"] ** 2 * np.sin(beta),
+                                      m * length * psi_rate * omega * c, 2 * m * l_rate * omega * s],
+                "Newton Y3 (1.8.3)": [-m * g * s, m * base * c, m * length * omega**2 * s * c, -m * length * psi_acc,
+                                      -2 * m * l_rate * psi_rate],
+                "Newton Z3 (1.8.3)": [-m * g * c, p["k"] * l, -m * base * s, -m * length * psi_rate**2,
+                                      -m * length * omega**2 * s**2, m * l_acc]}
+
 
 class Reference:
     """The book's method evaluated numerically: B3 a_E from the five-term formula frame by frame
