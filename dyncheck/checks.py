@@ -13,7 +13,7 @@ from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.expressions import evaluate as evaluate_expression
 from dyncheck.expressions import namespace
 from dyncheck.localise import localise
-from dyncheck.results import CaseResult, Finding, Outcome, Status, no_number, row
+from dyncheck.results import OWN_WORDS, CaseResult, Finding, Outcome, Status, no_number, row
 from dyncheck.simulate import (ERROR_EXPONENT, Escape, Unstable, energy_residual, fastest_frequency, simulate,
                                state_columns)
 from dyncheck.stability.long_runs import agreement_horizon
@@ -485,10 +485,6 @@ def run_case(case, localise=True):
     return CaseResult(folder=str(case.folder), spec=case.spec, overrides=dict(case.overrides), rows=tuple(rows),
                       findings=findings, sample=sample, runs=runs, program=program, drawings=drawings(case, runs),
                       wall=time.perf_counter() - start, localisations=localisations)
-
-
-# A researcher's case has one derivation: no book beside a reference that corrects it.
-OWN_WORDS = {"reference": "derivation", "book": "derivation", "tight reference": "tight solution"}
 
 
 def in_own_words(rows):

@@ -25,7 +25,7 @@ import pandas as pd
 from dyncheck import stability, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
-from dyncheck.results import (RESULTS_VERSION, Status, case_json, consequences, format_rows, heading, inside_or_outside, load_result,
+from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, consequences, format_rows, heading, inside_or_outside, load_result,
                               reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
 from dyncheck.style import SOURCE_STYLE as STYLE
@@ -160,7 +160,7 @@ def trajectories(result):
     return out
 
 
-def figure_scene(result, case, path):
+def figure_scene(result, case, path, words):
     tight = trajectories(result)["tight reference"]
     scene = result.drawings["scene"]
     origins, parents = scene["origins"], scene["parents"]
@@ -178,7 +178,8 @@ def figure_scene(result, case, path):
     for b, name in enumerate(case.scene["paths"]):
         arm = np.vstack([origins[scene["path_origins"][b]], paths[0, b]])  # body origin to its point mass
         ax.plot(*arm[:, :dims].T, color="0.3", lw=2)
-        ax.plot(*paths[:, b, :dims].T, lw=0.6, label=f"{name} (tight reference, 0-{tight.index[-1]:g} s)")
+        ax.plot(*paths[:, b, :dims].T, lw=0.6,
+                label=f"{name} ({words.get('tight reference', 'tight reference')}, 0-{tight.index[-1]:g} s)")
         ax.scatter(*paths[0, b, :dims], s=40, marker="o", zorder=5)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -194,8 +195,9 @@ def figure_scene(result, case, path):
     plt.close(fig)
 
 
-def figure_series(result, columns, ylabel, title, path, log_error=False):
-    """Columns over time from every source, overlaid; with log_error, |source - tight reference|."""
+def figure_series(result, columns, ylabel, title, path, words, log_error=False):
+    """Columns over time from every source, overlaid; with log_error, |source - tight reference|.  `words`:
+    the sources' names as the case's pages say them (dyncheck.results.OWN_WORDS for a case of one derivation)."""
     runs = trajectories(result)
     tight = runs["tight reference"]
     fig, axes = plt.subplots(len(columns), 1, figsize=(7.5, 2.3 * len(columns)), sharex=True, squeeze=False)
@@ -204,10 +206,10 @@ def figure_series(result, columns, ylabel, title, path, log_error=False):
             if log_error:
                 if label == "tight reference":
                     continue
-                ax.semilogy(run.index, (run[column] - tight[column]).abs() + 1e-300, label=label,
+                ax.semilogy(run.index, (run[column] - tight[column]).abs() + 1e-300, label=words.get(label, label),
                             **{**STYLE[label], "ls": "-", "lw": 0.8, "alpha": 0.8})
             else:
-                ax.plot(run.index, run[column], label=label, **STYLE[label])
+                ax.plot(run.index, run[column], label=words.get(label, label), **STYLE[label])
         ax.set_ylabel(ylabel(column), fontsize=8)
         ax.grid(alpha=0.3)
         if log_error:
@@ -220,7 +222,7 @@ def figure_series(result, columns, ylabel, title, path, log_error=False):
     plt.close(fig)
 
 
-def figure_energy(result, case, path):
+def figure_energy(result, case, path, words):
     runs = trajectories(result)
     driven = case.driven
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True)
@@ -230,11 +232,11 @@ def figure_energy(result, case, path):
         top.plot(tight.index, tight["work"], label="W(t), work of the prescribed motions", color="tab:purple", lw=1)
     top.set_ylabel("[J]")
     top.set_title("energy balance" + (": E(t) - E(0) = W(t)" if driven else ": E(t) = E(0)")
-                  + " (tight reference)", fontsize=9)
+                  + f" ({words.get('tight reference', 'tight reference')})", fontsize=9)
     top.legend(fontsize=7, loc="upper right", framealpha=0.9)
     top.grid(alpha=0.3)
     for label, run in runs.items():
-        bottom.semilogy(run.index, energy_residual(run).abs() + 1e-300, label=label,
+        bottom.semilogy(run.index, energy_residual(run).abs() + 1e-300, label=words.get(label, label),
                         **{**STYLE[label], "ls": "-", "lw": 0.8})
     bottom.set_ylim(bottom=1e-16)
     bottom.set_ylabel("|E(t) - E(0) - W(t)| [J]", fontsize=8)
@@ -432,16 +434,18 @@ def write_case_page(result, case, tmp):
     rows = result.rows
     name = case.name
     coord_unit = dict(zip(case.coords, case.spec["coord_units"]))
+    words = OWN_WORDS if case.one_derivation else {}
     plots = {  # figure -> how to draw it; the coordinate plots only where there are coordinates
-        "scene": lambda path: figure_scene(result, case, path),
+        "scene": lambda path: figure_scene(result, case, path, words),
         "coordinates": lambda path: figure_series(result, state_columns(case)[::2],
                                                   lambda c: f"{c} [{coord_unit[c]}]",
-                                                  "coordinates over time, every source overlaid", path),
+                                                  "coordinates over time, every source overlaid", path, words),
         "errors": lambda path: figure_series(result, state_columns(case), lambda c: f"|{c} error|",
-                                             "error against the tight reference solution", path, log_error=True),
-        "energy": lambda path: figure_energy(result, case, path),
+                                             "error against the tight solution" if words else
+                                             "error against the tight reference solution", path, words, log_error=True),
+        "energy": lambda path: figure_energy(result, case, path, words),
         "reactions": lambda path: figure_series(result, list(case.reaction_names), lambda c: f"{c} [N]",
-                                                "reactions over time, every source", path),
+                                                "reactions over time, every source", path, words),
         "pointwise": lambda path: figure_pointwise(result, path),
     }
     if "reference" not in result.sample["values"]:  # nothing to measure the deviations from

@@ -203,6 +203,9 @@ class CaseResult:
 
 
 TIGHT = {"reference": "tight reference", "derivation": "tight solution"}  # a derivation's tight run, as rows name it
+# A researcher's case has one derivation, no book beside a reference that corrects it: its rows and pages
+# name the sources so (dyncheck.checks.in_own_words).
+OWN_WORDS = {"reference": "derivation", "book": "derivation", "tight reference": "tight solution"}
 
 
 def consequences(result):
