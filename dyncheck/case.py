@@ -184,7 +184,7 @@ class Case:
 
     def overrides_text(self):
         """The overrides in words, as pages and rows show them: "k = 500 N/m (book: 2000)"."""
-        return overrides_in_words(self.overrides, self.spec["params"])
+        return overrides_in_words(self.overrides, self.spec)
 
     def with_params(self, **params):
         """This case with further parameters overridden (on top of its own overrides)."""

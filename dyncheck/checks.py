@@ -2,6 +2,7 @@
 
 import itertools
 import math
+import re
 import time
 from dataclasses import dataclass, replace
 
@@ -11,8 +12,9 @@ from dyncheck import ceilings, residuals, schema
 from dyncheck.case import SOURCES
 from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.expressions import evaluate as evaluate_expression
-from dyncheck.expressions import namespace
+from dyncheck.expressions import namespace, of_parameters
 from dyncheck.localise import localise
+from dyncheck.messages import suggest
 from dyncheck.results import OWN_WORDS, CaseResult, Finding, Outcome, Status, no_number, row
 from dyncheck.simulate import (ERROR_EXPONENT, Escape, Unstable, energy_residual, fastest_frequency, simulate,
                                state_columns)
@@ -538,7 +540,8 @@ def program_checks(case, sample):
     derived equations integrated by the same integrator and step (isolates formula errors from
     integrator errors); (3) its run against the tight reference solution (the integrator's own
     error, allowed up to `safety` times the Richardson estimate of that integrator at that step);
-    (4) its run inside the ranges of the book's figures.  Returns rows and the runs.
+    (4) its run inside the ranges of the book's figures; (5) what it writes out against MuJoCo at its
+    own states (program_output_checks).  Returns rows and the runs.
     """
     if not case.has_program:
         return [], {}
@@ -567,8 +570,8 @@ def program_checks(case, sample):
 
 
 def program_run_checks(case, program):
-    """The program's run against the book's equations run the same way, the tight reference solution
-    and the book's figures (see program_checks)."""
+    """The program's run against the book's equations run the same way, the tight reference solution,
+    the book's figures and MuJoCo at its own states (see program_checks)."""
     rows = []
     reference = case.model("reference")
     q0, v0, _ = case.initial
@@ -608,8 +611,60 @@ def program_run_checks(case, program):
             rows.append(row("figure", name, (source, "book figure"), outside, ceilings.FIGURE,
                             f"{figure['where']}: range [{lo:g}, {hi:g}]; run [{np.min(values):.4g}, {np.max(values):.4g}]",
                             ceiling=ceilings.FIGURE))
+    rows += program_output_checks(case, listing)
     return rows, {"listing": listing, "same integrator": twin_runs["same"], "tight": tight,
                   "integrator": program.integrator, "dt": program.dt}
+
+
+OUTPUT_ROWS = 200  # the program's output rows compared with MuJoCo: evenly over its run, ends included
+
+
+def program_output_checks(case, listing):
+    """What the program writes out (its figures' positions, its reactions) against MuJoCo at the same
+    states: each column of [program.outputs] against its expression of MuJoCo's values at that row's
+    (t, q, v), at up to OUTPUT_ROWS of the program's own rows.  At the same state both evaluate closed
+    forms (the listing's formula, MuJoCo's kinematics or dynamics) in doubles, so the pointwise
+    tolerance, argued for the same kind of evaluation, applies; a wrong sign, axis or term is of the
+    order of the value itself.  The difference is relative to the largest value of either side and at
+    least a scale, as the pointwise check's: for a position the scene's size (the farthest body origin
+    or traced centre of mass from the world origin over these rows), so that a coordinate that stays
+    zero (the plane's normal) is not judged by rounding noise; for a reaction the case's force scale."""
+    outputs = case.spec.get("program", {}).get("outputs", {})
+    if not outputs:
+        return []
+    chosen = np.unique(np.linspace(0, len(listing) - 1, min(OUTPUT_ROWS, len(listing))).round().astype(int))
+    rows_at = listing.iloc[chosen]
+    model = case.model("mujoco")
+    states = list(zip(rows_at.index, rows_at[list(case.coords)].to_numpy(),
+                      rows_at[[f"{c}_rate" for c in case.coords]].to_numpy()))
+    # The engine's values only: the program's own columns (R, x, ...) must not shadow them.
+    names = of_parameters(case.params)
+    points = [model.points(t, q) for t, q, _ in states]  # traced centres of mass, body origins
+    paths = np.array([traced for traced, _, _ in points])  # (row, body, xyz)
+    names.update({f"{body}_{axis}": paths[:, b, i]
+                  for b, body in enumerate(case.scene["paths"]) for i, axis in enumerate("xyz")})
+    size = max(np.max(np.linalg.norm(np.vstack([traced, origins]), axis=1)) for traced, origins, _ in points)
+    reactions = [model.reactions(t, q, v) for t, q, v in states]
+    names.update({name: np.array([r[name] for r in reactions]) for name in case.reaction_names})
+    force_scale = case.value(case.tolerance["pointwise"]["force_scale"])
+    rows = []
+    for column, expression in outputs.items():
+        if column not in listing:
+            rows.append(no_number("program", column, ("program", "mujoco at the program's states"),
+                                  f"{case.file}: program.outputs.{column}: the program writes no column '{column}'"
+                                  f"{suggest(column, listing.columns)}", Status.FAIL))
+            continue
+        engine = np.broadcast_to(evaluate_expression(expression, names), len(states))
+        printed = rows_at[column].to_numpy()
+        floor = force_scale if set(re.findall(r"[A-Za-z_]\w*", expression)) & set(case.reaction_names) else size
+        scale = max(np.max(np.abs(printed)), np.max(np.abs(engine)), floor)
+        at = int(np.argmax(np.abs(printed - engine)))
+        rows.append(row("program", column, ("program", "mujoco at the program's states"),
+                        relative_error(printed, engine, scale), case.tolerance["pointwise"]["value"],
+                        f"{len(states)} of the program's rows; {column} = {expression}; largest difference at "
+                        f"t = {rows_at.index[at]:.4g} s: program {printed[at]:.6g}, MuJoCo {engine[at]:.6g} "
+                        f"(scale {scale:.3g})", ceiling=ceilings.POINTWISE))
+    return rows
 
 
 def finding_effect(case, finding, runs):

@@ -196,7 +196,7 @@ class CaseResult:
 
     @property
     def overrides_text(self):
-        return overrides_in_words(self.overrides, self.spec["params"])
+        return overrides_in_words(self.overrides, self.spec)
 
     def with_studies(self, studies):
         return replace(self, studies=studies)
@@ -224,9 +224,11 @@ def heading(spec):
     return " ".join(filter(None, (spec.get("section", ""), spec["title"])))
 
 
-def overrides_in_words(overrides, params):
-    """Overrides as pages and rows show them: "k = 500 N/m (book: 2000)"; `params`: the case file's table."""
-    return ", ".join(f"{name} = {value:g} {params[name]['unit']} (book: {float(params[name]['value']):g})"
+def overrides_in_words(overrides, spec):
+    """Overrides as pages and rows show them: "k = 500 N/m (book: 2000)", or "(default: 2000)" for a case that
+    is no section of the book (a case of your own); `spec`: the case file."""
+    params, source = spec["params"], "book" if spec.get("section") else "default"
+    return ", ".join(f"{name} = {value:g} {params[name]['unit']} ({source}: {float(params[name]['value']):g})"
                      for name, value in overrides.items())
 
 

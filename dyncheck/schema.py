@@ -90,6 +90,7 @@ SCHEMA = ("table", {
     "program?": ("table", {
         "figures?": ("map", ("table", {"expression": "str", "range": RANGE, "where": "str"})),
         "plots?": ("list", ("table", {"x": "str", "y": "str", "title": "str", "xlim?": RANGE, "ylim?": RANGE})),
+        "outputs?": ("map", "str"),
     }),
     "findings?": ("list", ("table", {"id": "str", "title": "str", "where": "str", "effect?": "str",
                                      "sources": ("list", "str"), "quantities": ("list", "str"),
@@ -390,6 +391,16 @@ def _cross_references(spec, file):
         lo, hi = figure["range"]
         if not lo < hi:
             raise _error(file, f"program.figures.{key}.range", figure["range"], "is not an interval lo < hi")
+    # What dyncheck.checks.program_output_checks evaluates: arrays (a division by zero is then inf, not an error).
+    engine = {**expressions.of_parameters({p: item["value"] for p, item in params.items()}),
+              **{f"{body}_{axis}": np.ones(1) for body in scene.get("paths", []) for axis in "xyz"},
+              **{name: np.ones(1) for name in spec["reactions"]}}
+    for key, expression in spec.get("program", {}).get("outputs", {}).items():
+        try:
+            evaluate(expression, engine)
+        except ValueError as error:
+            raise _error(file, f"program.outputs.{key}", expression, f"cannot be evaluated from MuJoCo's values at "
+                         f"the program's states: {error}") from None
 
 
 def _derivation(derivation, file):
@@ -634,6 +645,10 @@ MEANINGS = {
     "program.figures.<name>.expression": f"What the figure shows: {ALONG_RUN}.",
     "program.figures.<name>.range": "The figure's axis range.",
     "program.figures.<name>.where": "Where the book shows the figure.",
+    "program.outputs": "What the program writes out, by its column: an expression of MuJoCo's values at the "
+                       "program's state on the same row (see Expressions), compared at up to 200 of its rows "
+                       "(check `program`, `program vs mujoco at the program's states`), e.g. `h1x = \"-link1_x\"` "
+                       "where the listing's x axis is the mirror of the scene's.",
     "program.plots": "The book's figures redrawn from the program's run and the tight solution.",
     "program.plots[i].x": f"The abscissa: {ALONG_RUN}.",
     "program.plots[i].y": f"The ordinate: {ALONG_RUN}.",
@@ -788,5 +803,8 @@ def markdown():
               "reaction, `energy`, `work`, and `<body>_x`, `<body>_y`, `<body>_z` of each body of `scene.paths`), "
               "`t`, the parameters, `pi`, numpy's " + ", ".join(f"`{name}`" for name in expressions.FUNCTIONS)
               + ", and `first(condition)`, the first time the condition holds (NaN if never).  With a "
-              "`report.stop`, every array ends where it first holds."]
+              "`report.stop`, every array ends where it first holds;",
+              "- `program.outputs`: MuJoCo's values at the program's rows' states, arrays over those rows "
+              "(`<body>_x`, `<body>_y`, `<body>_z` of each body of `scene.paths` and each reaction), the parameters, "
+              "`pi` and numpy's " + ", ".join(f"`{name}`" for name in expressions.FUNCTIONS) + "."]
     return "\n".join(lines) + "\n"
