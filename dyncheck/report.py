@@ -160,7 +160,7 @@ def trajectories(result):
     return out
 
 
-def figure_scene(result, case, path, words):
+def figure_scene(result, case, path, *, words):
     tight = trajectories(result)["tight reference"]
     scene = result.drawings["scene"]
     origins, parents = scene["origins"], scene["parents"]
@@ -195,7 +195,7 @@ def figure_scene(result, case, path, words):
     plt.close(fig)
 
 
-def figure_series(result, columns, ylabel, title, path, words, log_error=False):
+def figure_series(result, columns, ylabel, title, path, *, words, log_error=False):
     """Columns over time from every source, overlaid; with log_error, |source - tight reference|.  `words`:
     the sources' names as the case's pages say them (dyncheck.results.OWN_WORDS for a case of one derivation)."""
     runs = trajectories(result)
@@ -222,7 +222,7 @@ def figure_series(result, columns, ylabel, title, path, words, log_error=False):
     plt.close(fig)
 
 
-def figure_energy(result, case, path, words):
+def figure_energy(result, case, path, *, words):
     runs = trajectories(result)
     driven = case.driven
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True)
@@ -436,16 +436,16 @@ def write_case_page(result, case, tmp):
     coord_unit = dict(zip(case.coords, case.spec["coord_units"]))
     words = OWN_WORDS if case.one_derivation else {}
     plots = {  # figure -> how to draw it; the coordinate plots only where there are coordinates
-        "scene": lambda path: figure_scene(result, case, path, words),
+        "scene": lambda path: figure_scene(result, case, path, words=words),
         "coordinates": lambda path: figure_series(result, state_columns(case)[::2],
                                                   lambda c: f"{c} [{coord_unit[c]}]",
-                                                  "coordinates over time, every source overlaid", path, words),
+                                                  "coordinates over time, every source overlaid", path, words=words),
         "errors": lambda path: figure_series(result, state_columns(case), lambda c: f"|{c} error|",
                                              "error against the tight solution" if words else
-                                             "error against the tight reference solution", path, words, log_error=True),
-        "energy": lambda path: figure_energy(result, case, path, words),
+                                             "error against the tight reference solution", path, words=words, log_error=True),
+        "energy": lambda path: figure_energy(result, case, path, words=words),
         "reactions": lambda path: figure_series(result, list(case.reaction_names), lambda c: f"{c} [N]",
-                                                "reactions over time, every source", path, words),
+                                                "reactions over time, every source", path, words=words),
         "pointwise": lambda path: figure_pointwise(result, path),
     }
     if "reference" not in result.sample["values"]:  # nothing to measure the deviations from
