@@ -9,7 +9,10 @@ gives M and f (mass_matrix, forces), they are compared with the engine's directl
 
 A failing equation is then localised: its residual, over random states and random parameter sets, is
 fitted by a few terms of a library built from the derivation's own symbols (dyncheck.terms), naming the
-term to add to its force side with its coefficient as a product of the parameters.
+term to add to its force side (or to its acceleration as written, or to that acceleration's Cramer
+numerator; or to a given M entry) with its coefficient as a product of the parameters.  A reaction
+that fails while the equations hold is fitted the same way.  The book's printed Newton and Euler rows
+are checked here too, each with MuJoCo's accelerations and reactions put in (printed_rows).
 """
 
 from dataclasses import dataclass
@@ -159,8 +162,7 @@ def localise(case, rows, found, drawn):
         return ()
     sets = [dict(case.params)] + [dict(case.params) | values for values in drawn]
     units = case.spec["coord_units"]
-    kinds = {body.joint: body.joint_type for body in case.model("mujoco").tree()}
-    driven = tuple((joint, "rad" if kinds[joint] == "hinge" else "m") for joint in case.scene["driven"])
+    driven = driven_units(case)
     out = []
     for source in sorted({s for s, _ in failing}):
         samples = [(sets[0], case, found[source, "mujoco"])]
@@ -206,7 +208,7 @@ def localise(case, rows, found, drawn):
 def fit_at(case, samples, place, units, driven):
     """The terms that explain the residual at `place` over the sets `samples` ((params, case, Residuals));
     None where no set gives finite residuals."""
-    fitted = [(params, with_driven(other, r), r.v, *r.of(place)) for params, other, r in samples]
+    fitted = [(params, with_driven(other, r.t, r.q), r.v, *r.of(place)) for params, other, r in samples]
     usable = [(params, q, v, residual) for params, q, v, residual, _ in fitted if np.all(np.isfinite(residual))]
     if not usable:
         return None
@@ -214,11 +216,17 @@ def fit_at(case, samples, place, units, driven):
     return terms.fit(case.coords, units, list(case.params), usable, floor, driven)
 
 
-def with_driven(case, r):
-    """The states' coordinates and, after them, the prescribed motions' positions at each state's time:
+def driven_units(case):
+    """(joint, unit) of each prescribed motion: candidates of the fit as functions of time (dyncheck.terms)."""
+    kinds = {body.joint: body.joint_type for body in case.model("mujoco").tree()}
+    return tuple((joint, "rad" if kinds[joint] == "hinge" else "m") for joint in case.scene["driven"])
+
+
+def with_driven(case, t, q):
+    """The states' coordinates q and, after them, the prescribed motions' positions at the states' times t:
     the terms of a scene on a driven base depend on its angle, alpha0 + alpha_rate t."""
-    motions = [angle + rate * r.t + 0.5 * acc * r.t**2 for angle, rate, acc in case.scene["driven"].values()]
-    return np.column_stack([r.q, *motions]) if motions else r.q
+    motions = [angle + rate * t + 0.5 * acc * t**2 for angle, rate, acc in case.scene["driven"].values()]
+    return np.column_stack([q, *motions]) if motions else q
 
 
 PRINTED_ROWS = "printed row"
@@ -264,3 +272,44 @@ def printed_rows(case, sample):
                         "largest)",
                         ceiling=ceilings.POINTWISE))
     return rows
+
+
+def localise_reactions(case, rows, sample, drawn, wrong_equations):
+    """For each reaction of a derivation that fails against MuJoCo at the random states while its equations
+    of motion hold (`wrong_equations`: the sources whose equations are wrong, whose reactions follow from
+    them), the terms that explain it, as for an equation: R_derivation - R_engine over the random states
+    and parameter sets."""
+    failing = [(r.sources[0], r.quantity) for r in rows
+               if r.check == "pointwise" and r.sources[1:] == ("mujoco",) and r.quantity in case.reaction_names
+               and r.status == Status.FAIL and r.sources[0] in derivation_sources(case)
+               and r.sources[0] not in wrong_equations and r.sources[0] not in sample["failures"]]
+    if not failing or "mujoco" in sample["failures"]:
+        return ()
+    driven = driven_units(case)
+    others = [case] + [case.with_params(**{k: v for k, v in values.items() if k not in case.overrides})
+                       for values in drawn]
+    out = []
+    for source, name in failing:
+        samples = []
+        for other in others:
+            states = sample["states"] if other is case else other.sample_states()
+            try:
+                with np.errstate(all="ignore"):
+                    mine = np.array([other.model(source).reactions(t, q, v)[name] for t, q, v in states])
+                    theirs = np.array([other.model("mujoco").reactions(t, q, v)[name] for t, q, v in states])
+            except Exception:  # a set where a source fails: the random-parameters rows say so
+                continue
+            t = np.array([t for t, _, _ in states])
+            q, v = (np.array([state[k] for state in states]).reshape(len(states), -1) for k in (1, 2))
+            if np.all(np.isfinite(mine - theirs)):
+                samples.append((dict(other.params), with_driven(other, t, q), v, mine - theirs))
+        if not samples:
+            continue
+        # judged as the pointwise rows judge a reaction: against its largest size, at least the force scale
+        scale = max(np.max(np.abs(samples[0][3])), case.value(case.tolerance["pointwise"]["force_scale"]))
+        fit = terms.fit(case.coords, case.spec["coord_units"], list(case.params), samples,
+                        case.tolerance["pointwise"]["value"] * scale, driven)
+        out.append(Localisation(source=source, equation="", place=f"reaction {name}", text=fit.says("it"),
+                                exact=fit.exact, identified=fit.identified, residual=fit.before, left=fit.left,
+                                sets=fit.sets))
+    return tuple(out)

@@ -153,8 +153,8 @@ class Finding:
 class Localisation:
     """A failing equation of a derivation (dyncheck.residuals) and the terms its residual is fitted by."""
     source: str  # the derivation: "reference", "book" or "derivation"
-    equation: str  # the coordinate whose equation is wrong
-    place: str  # where in it: "equation x" (its force side, or its residual), or a mass matrix entry "M[x,theta]"
+    equation: str  # the coordinate whose equation is wrong; "" for a reaction
+    place: str  # where: "equation x" (its force side, or its residual), a mass matrix entry "M[x,theta]", "reaction R"
     text: str  # what the fit found, in the derivation's own symbols
     exact: bool  # whether the terms explain the residual down to the engines' rounding
     identified: bool  # exact, and every coefficient a simple number times a product of the parameters
@@ -213,7 +213,7 @@ def consequences(result):
     whose equations are wrong (result.localisations): its accelerations feed its runs, the tight run every
     other run is compared with, their energy and whatever it computes from them.  Consequences, not
     further errors."""
-    sources = {loc.source for loc in result.localisations}
+    sources = {loc.source for loc in result.localisations if loc.equation}  # a wrong reaction feeds nothing
     sources |= {TIGHT[s] for s in sources if s in TIGHT}
     return [r for r in result.rows if not r.status.ok and r.check != "equation" and sources & set(r.sources)]
 

@@ -76,3 +76,37 @@ def test_new_refuses_an_existing_folder(tmp_path, capsys):
     (tmp_path / "scene.xml").write_text("<mujoco/>")
     assert main(["new", "cart", "--scene", str(tmp_path / "scene.xml"), "--cases", str(tmp_path / "cases")]) == 2
     assert "exists" in capsys.readouterr().err
+
+
+REACTION = '''
+
+def reactions(t, q, v, p):
+    """The force of the cart on the bob along the rod (the bob's z axis), from Newton on the bob."""
+    x, theta = q
+    x_rate, theta_rate = v
+    m, l, g = p["m"], p["l"], p["g"]
+    x_acc, theta_acc = accelerations(t, q, v, p)
+    fx = m * (x_acc + l * (np.cos(theta) * theta_acc - np.sin(theta) * theta_rate**2))
+    fz = m * (l * (np.sin(theta) * theta_acc + np.cos(theta) * theta_rate**2) + g)
+    return {"rod_z": -np.sin(theta) * fx + np.cos(theta) * fz}
+'''
+
+
+def test_a_wrong_reaction_is_named_while_the_equations_hold(tmp_path, capsys):
+    """A reaction named after a force sensor of the scene (<sensor>_z) is compared with the engines'; with g
+    dropped from it, the run names the term, and counts no consequences: the equations hold."""
+    files = {path: text for kind, path, text in steps() if kind == "file"}
+    folder = tmp_path / "cart_pendulum"
+    folder.mkdir()
+    (folder / "scene.xml").write_text(files["cart_pendulum/scene.xml"]
+                                      .replace('diaginertia="1e-14 1e-14 1e-14"/>', 'diaginertia="1e-14 1e-14 1e-14"/>\n'
+                                               '        <site name="pin"/>')
+                                      .replace("</worldbody>", '</worldbody>\n  <sensor><force name="rod" site="pin"/></sensor>'))
+    (folder / "equations.py").write_text(files["cart_pendulum/equations.py"] + REACTION)
+    assert main(["run", "--cases", str(tmp_path)]) == 0, capsys.readouterr().out[-2000:]
+    capsys.readouterr()
+    (folder / "equations.py").write_text(files["cart_pendulum/equations.py"] + REACTION.replace(" + g)", ")"))
+    assert main(["run", "--cases", str(tmp_path)]) == 1
+    out = capsys.readouterr().out
+    assert "the derivation's reaction rod_z: add + m g cos(theta) to it to agree with the engines" in out
+    assert "consequences" not in out
