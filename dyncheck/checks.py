@@ -475,9 +475,10 @@ def run_case(case, localise=True):
     program_rows, program = program_checks(case, sample)
     rows = book_numbers_only(case, apply_findings(case, rows + program_rows + data_checks(case)))
     rows = runaway_rows(limit, runs, rows)  # a bounded run's failure is no finding of the book
-    drawn = parameter_sets(case)[0]
-    localisations = residuals.localise(case, rows, residuals_found, drawn)
-    localisations += residuals.localise_reactions(case, rows, sample, drawn, {loc.source for loc in localisations})
+    parameter_draws = parameter_sets(case)[0]
+    localisations = residuals.localise(case, rows, residuals_found, parameter_draws)
+    localisations += residuals.localise_reactions(case, rows, sample, parameter_draws,
+                                                  {loc.source for loc in localisations})
     # What the pages draw along runs: each source's run, and the reference's tight twin (report.trajectories).
     drawn = lambda source, outcome: replace(outcome, **({"twin": with_paths(case, outcome.twin)} if source == "reference"
                                                         else {"run": with_paths(case, outcome.run)}))

@@ -65,8 +65,8 @@ def recap(results, seconds):
 
 
 def wrong_equations(result):
-    """Where a case's derivation is wrong (dyncheck.residuals): each failing equation with the terms that
-    explain it, then how many other failing rows follow from it."""
+    """Where a case's derivation is wrong (dyncheck.residuals): each failing equation (or reaction) with the
+    terms that explain it, then how many other failing rows follow from the equations."""
     if not result.localisations:
         return []
     follow = consequences(result)

@@ -221,12 +221,12 @@ def case_file(folder, module, scene, given):
         "params": {p: {"value": value, "unit": param_units[p],
                        "about": ABOUT[bound[p][0].get("attribute")].format(
                            name=bound[p][0]["name"], index=AXES[bound[p][0].get("index", 0)])}
-                   for p, value in params.items() if p in bound},
+                   for p, value in params.items()},  # every parameter is bound (bindings refuses the others)
         "initial": {"q": q0.tolist(), "v": v0.tolist(), "t_end": t_end},
         "sample": {"count": 50, "seed": 1, "t": [0.0, t_end],
                    "q": [span(c, u) for c, u in zip(coords, units)], "v": [[-rate(u), rate(u)] for u in units],
                    "params": {"sets": 8, "states": 20, "seed": 2,
-                              "ranges": {p: sorted([0.5 * v, 2.0 * v]) for p, v in params.items() if p in bound}}},
+                              "ranges": {p: sorted([0.5 * v, 2.0 * v]) for p, v in params.items()}}},
         "integration": {"output_step": output_step, "rtol": 1e-10, "tight_rtol": 1e-12,
                         "mujoco_step": output_step / substeps},
         "tolerance": {
@@ -235,9 +235,8 @@ def case_file(folder, module, scene, given):
                                  "and MuJoCo's placeholder inertias (1e-14 kg m^2): far below 1e-9."},
             "trajectory": {"safety": 10.0, "why": "Ten times each run's own error estimate."},
             "energy": {"safety": 10.0, "why": "Ten times each balance's own error estimate."}},
-        "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; "
-                                f"{EQUATIONS} the derivation; no case.toml" if not given else
-                                f"{SCENE} as written, read by MuJoCo and by Pinocchio; {EQUATIONS} the derivation"},
+        "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; {EQUATIONS} the derivation"
+                                + ("" if given else "; no case.toml")},
         "scene": {"coords": joints, "driven": {}, "reactions": reaction_sensors(reactions, scene, file),
                   "bindings": bound},
         "work_precision": work_precision(omega),

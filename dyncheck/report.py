@@ -25,8 +25,8 @@ import pandas as pd
 from dyncheck import stability, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
-from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, consequences, format_rows, heading, inside_or_outside, load_result,
-                              reason, save_results)
+from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, consequences, format_rows, heading,
+                              inside_or_outside, load_result, reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
 from dyncheck.style import SOURCE_STYLE as STYLE
 from dyncheck.style import plt
@@ -629,8 +629,9 @@ def wrong_equations(result):
         return []
     follow = consequences(result)
     return ["### Where the derivation is wrong", "",
-            "Each equation whose residual M_engine (q''_derivation - q''_engine) fails against MuJoCo, fitted over"
-            " the random states and parameter sets by a few terms in the derivation's own symbols:", "",
+            "Each equation whose residual M_engine (q''_derivation - q''_engine) fails against MuJoCo, and each"
+            " reaction that fails while the equations hold, fitted over the random states and parameter sets by a"
+            " few terms in the derivation's own symbols:", "",
             *[f"- {loc}" for loc in result.localisations], "",
             *([f"{len(follow)} other failing rows compare quantities computed from these equations (accelerations,"
                " runs, energy): consequences, not further errors.", ""] if follow else [])]

@@ -160,27 +160,25 @@ def localise(case, rows, found, drawn):
                and (r.sources[0], "mujoco") in found}  # not where a source gave no numbers: its row says why
     if not failing:
         return ()
-    sets = [dict(case.params)] + [dict(case.params) | values for values in drawn]
+    others = parameter_cases(case, drawn)
     units = case.spec["coord_units"]
     driven = driven_units(case)
     out = []
     for source in sorted({s for s, _ in failing}):
-        samples = [(sets[0], case, found[source, "mujoco"])]
-        for params in sets[1:]:
-            other = case.with_params(**{k: v for k, v in params.items() if k not in case.overrides})
+        samples = [(dict(case.params), case, found[source, "mujoco"])]
+        for other in others[1:]:
             try:
-                samples.append((params, other, residuals(other, source, "mujoco", other.sample_states())))
+                samples.append((dict(other.params), other, residuals(other, source, "mujoco", other.sample_states())))
             except Exception:  # a set where a source fails: the random-parameters rows say so
                 continue
         named = {name: place for name, place, _ in places(case, samples[0][2])}
-        wrong = [named[name] for s, name in sorted(failing) if s == source and name in named]
+        wrong = [(name, named[name]) for s, name in sorted(failing) if s == source and name in named]
         # the coordinates whose given M or f is wrong: their residual is explained there, not refitted
-        explained = {i for place in wrong if place[0] != "residual" for i in place[1:]}
-        for place in wrong:
+        explained = {i for _, place in wrong if place[0] != "residual" for i in place[1:]}
+        for name, place in wrong:
             kind, i, *_ = place
             if kind == "residual" and i in explained:
                 continue
-            name = next(name for name, p in named.items() if p == place)
             forms = FORMS if kind == "residual" else [(kind, "it" if kind == "M" else "its force side f (M q'' = f)")]
             fits = []
             for form, where in forms:
@@ -214,6 +212,12 @@ def fit_at(case, samples, place, units, driven):
         return None
     floor = case.tolerance["pointwise"]["value"] * fitted[0][4]
     return terms.fit(case.coords, units, list(case.params), usable, floor, driven)
+
+
+def parameter_cases(case, drawn):
+    """The case itself, then the case at each random parameter set `drawn` (dyncheck.checks.parameter_sets:
+    random values of the parameters that are not overridden), over which a residual is fitted."""
+    return [case] + [case.with_params(**values) for values in drawn]
 
 
 def driven_units(case):
@@ -286,27 +290,31 @@ def localise_reactions(case, rows, sample, drawn, wrong_equations):
     if not failing or "mujoco" in sample["failures"]:
         return ()
     driven = driven_units(case)
-    others = [case] + [case.with_params(**{k: v for k, v in values.items() if k not in case.overrides})
-                       for values in drawn]
+    others = parameter_cases(case, drawn)
     out = []
     for source, name in failing:
-        samples = []
+        samples, scale = [], None
         for other in others:
-            states = sample["states"] if other is case else other.sample_states()
-            try:
-                with np.errstate(all="ignore"):
-                    mine = np.array([other.model(source).reactions(t, q, v)[name] for t, q, v in states])
-                    theirs = np.array([other.model("mujoco").reactions(t, q, v)[name] for t, q, v in states])
-            except Exception:  # a set where a source fails: the random-parameters rows say so
-                continue
+            if other is case:  # the pointwise check has them
+                states, mine, theirs = sample["states"], sample["values"][source][name], sample["values"]["mujoco"][name]
+            else:
+                states = other.sample_states()
+                try:
+                    with np.errstate(all="ignore"):
+                        mine, theirs = (np.array([other.model(s).reactions(t, q, v)[name] for t, q, v in states])
+                                        for s in (source, "mujoco"))
+                except Exception:  # a set where a source fails: the random-parameters rows say so
+                    continue
             t = np.array([t for t, _, _ in states])
             q, v = (np.array([state[k] for state in states]).reshape(len(states), -1) for k in (1, 2))
             if np.all(np.isfinite(mine - theirs)):
                 samples.append((dict(other.params), with_driven(other, t, q), v, mine - theirs))
-        if not samples:
+                if other is case:  # judged as the pointwise rows judge a reaction: against its largest
+                    # size at the case's parameters, at least the force scale
+                    scale = max(np.max(np.abs(mine)), np.max(np.abs(theirs)),
+                                case.value(case.tolerance["pointwise"]["force_scale"]))
+        if scale is None:  # no numbers at the case's own parameters: the pointwise rows say why
             continue
-        # judged as the pointwise rows judge a reaction: against its largest size, at least the force scale
-        scale = max(np.max(np.abs(samples[0][3])), case.value(case.tolerance["pointwise"]["force_scale"]))
         fit = terms.fit(case.coords, case.spec["coord_units"], list(case.params), samples,
                         case.tolerance["pointwise"]["value"] * scale, driven)
         out.append(Localisation(source=source, equation="", place=f"reaction {name}", text=fit.says("it"),

@@ -7,7 +7,7 @@ file) carries RESULTS_VERSION; docs/results.md describes it.
 
 import enum
 import math
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import pandas as pd
 
@@ -282,9 +282,7 @@ def case_json(result):
 
 
 def localisations_json(localisations):
-    return [{"source": loc.source, "equation": loc.equation, "place": loc.place, "text": loc.text, "exact": loc.exact,
-             "identified": loc.identified, "residual": loc.residual, "left": loc.left, "sets": loc.sets}
-            for loc in localisations]
+    return [asdict(loc) for loc in localisations]
 
 
 def to_json(results, tool=None, interrupted=None):
