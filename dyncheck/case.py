@@ -296,8 +296,17 @@ class Case:
 
     @property
     def driven(self):
-        """Whether anything does work on the scene: prescribed motions or applied forces."""
-        return bool(self.scene["driven"] or self.scene["applied"])
+        """Whether anything does work on the scene: prescribed motions, applied forces or dampers."""
+        return bool(self.scene["driven"] or self.scene["applied"] or self.damped)
+
+    @cached_property
+    def damped(self):
+        """Whether a joint of the scene has a damper: in scene.xml, or bound to a parameter that is not 0."""
+        from engines.mjcf import describe  # the harness reads a scene only through engines/
+        bound = [p for p, locations in self.spec["scene"].get("bindings", {}).items()
+                 for loc in locations if loc.get("attribute") == "damping"]
+        return any(self.params[p] for p in bound) or any(
+            v.location.get("attribute") == "damping" for v in describe(self.folder / derived.SCENE).values)
 
     @cached_property
     def derivation(self):
@@ -415,7 +424,7 @@ class Case:
         return model
 
     def _verify(self, model, path, bindings):
-        """Refuse an engine model whose masses, lengths, stiffness or gravity differ from the case."""
+        """Refuse an engine model whose masses, lengths, springs, dampers or gravity differ from the case."""
         for param, locations in bindings.items():
             for loc in locations:
                 expected = self.params[param] * loc.get("scale", 1.0)
@@ -471,7 +480,7 @@ def compare_scenes(mujoco_model, pinocchio_model, case_name):
             if getattr(mj, attribute) != getattr(pn, attribute):
                 raise ValueError(f"{mjcf} and {urdf} of case '{case_name}' disagree: body '{name}' {attribute} "
                                  f"is '{getattr(mj, attribute)}' in {mjcf} and '{getattr(pn, attribute)}' in {urdf}")
-        for attribute in ("axis", "position", "rotation", "stiffness"):
+        for attribute in ("axis", "position", "rotation", "stiffness", "springref", "damping"):
             differ(f"body '{name}' {attribute}", getattr(mj, attribute), getattr(pn, attribute))
         differ(f"body '{name}' mass", mj.mass, pn.mass, PLACEHOLDER_MASS)
         if max(mj.mass, pn.mass) > PLACEHOLDER_MASS:

@@ -59,8 +59,9 @@ def evaluate(case, source, states):
         for name in case.scene["points"]:
             for axis, label in enumerate("xyz"):
                 values[f"{name}_{label}"] = np.array([p[name][axis] for p in points])
-    values["energy"] = np.array(each("energy", model.energy))
-    if case.driven:
+    if hasattr(model, "energy"):  # optional of a derivation: its rows are then not applicable (`pointwise`)
+        values["energy"] = np.array(each("energy", model.energy))
+    if case.driven and hasattr(model, "drive_power"):  # optional of a derivation, as energy
         values["drive_power"] = np.array(each("drive power", model.drive_power))
     for quantity, x in values.items():
         if not np.all(np.isfinite(x)):
@@ -88,8 +89,8 @@ def quantity_scales(case, a, b):
     forces = max([case.value(case.tolerance["pointwise"]["force_scale"])]
                  + [np.max(np.abs(s[name])) for s in (a, b) for name in case.reaction_names if name in s])
     scales.update(dict.fromkeys([name for name in case.reaction_names if name in a], forces))
-    if "drive_power" in a:
-        energy = max(np.max(np.abs(a["energy"])), np.max(np.abs(b["energy"])))
+    if "drive_power" in a and "drive_power" in b:
+        energy = max([np.max(np.abs(s["energy"])) for s in (a, b) if "energy" in s], default=0.0)
         scales["drive_power"] = max(np.max(np.abs(a["drive_power"])), np.max(np.abs(b["drive_power"])),
                                     energy / 1.0)  # J per 1 s
     for name, spec in case.scene["points"].items():
@@ -103,9 +104,19 @@ def quantity_scales(case, a, b):
 
 
 def compare(case, a, b):
-    """{quantity: relative error} between two sources' values at the same states."""
+    """{quantity: relative error} between two sources' values at the same states, for the quantities both give."""
     scales = quantity_scales(case, a, b)
-    return {quantity: relative_error(a[quantity], b[quantity], scales.get(quantity)) for quantity in a}
+    return {quantity: relative_error(a[quantity], b[quantity], scales.get(quantity)) for quantity in a if quantity in b}
+
+
+def not_defined(case, quantity, sources, lacking, method):
+    """The `not applicable` row of a check of what a source's derivation does not define (energy or
+    drive_power are optional)."""
+    who = OWN_WORDS.get(lacking, lacking) if case.one_derivation else lacking
+    needs = "" if method == "energy" else ": the work-energy balance needs the power of the dampers, applied forces " \
+                                          "and prescribed motions"
+    return no_number(quantity[0], quantity[1], sources, f"the {who} defines no {method}{needs}; there is nothing of "
+                     "its own to check (optional, docs/model-interface.md)", Status.NOT_APPLICABLE)
 
 
 def pointwise(case):
@@ -126,6 +137,10 @@ def pointwise(case):
         for quantity, error in compare(case, values[a], values[b]).items():
             rows.append(row("pointwise", quantity, (a, b), error, tolerance,
                             f"{len(states)} random states", ceiling=ceilings.POINTWISE))
+        for quantity in ("energy", "drive_power") if case.driven else ("energy",):
+            lacking = [s for s in (a, b) if quantity not in values[s]]
+            if lacking:
+                rows.append(not_defined(case, ("pointwise", quantity), (a, b), lacking[0], quantity))
     return rows, {"states": states, "values": values, "failures": failures}
 
 
@@ -329,6 +344,10 @@ def energy(case, runs):
             rows.append(no_number("energy", quantity, label, runs[source].failure))
             continue
         run, twin = runs[source].run, runs[source].twin
+        lacking = [method for method, column in (("energy", "energy"), ("drive_power", "work")) if column not in run]
+        if lacking:
+            rows.append(not_defined(case, ("energy", quantity), label, source, lacking[0]))
+            continue
         scale = max(run["energy"].abs().max(), run["work"].abs().max()) or 1.0  # at rest: in joules
         residual = energy_residual(run)
         estimate = (residual - energy_residual(twin)).abs().max()

@@ -7,6 +7,7 @@ import xml.etree.ElementTree as ET
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
+from dyncheck.messages import plural
 from dyncheck.results import Status, consequences, reason, status_counts
 
 CHECKOUT = Path(__file__).resolve().parent.parent  # where the package runs from, if it is a git checkout
@@ -59,7 +60,7 @@ def recap(results, seconds):
     lines = [f"failing rows ({len(rows)}):"] + [f"  {name}: {describe(r)}" for name, r in rows] if rows else []
     lines += [line for result in results for line in wrong_equations(result)]
     failed_cases = len({name for name, _ in rows})
-    cases = f"{len(results)} case" + ("s" if len(results) != 1 else "")
+    cases = plural(len(results), "case")
     verdict = f"FAIL: {failed_cases} of {cases}" if rows else f"PASS: {cases}"
     return lines + [f"dyncheck: {verdict}; {tally([r for result in results for r in result.rows])} ({seconds:.0f} s)"]
 

@@ -12,17 +12,21 @@ from dyncheck.messages import suggest
 
 EQUATIONS = "equations.py"
 SCENE = "scene.xml"
-OPTIONAL = ("drive_power", "mass_matrix", "forces")  # methods of Equations only where the module has them
+OPTIONAL = ("drive_power", "mass_matrix", "forces", "energy")  # methods of Equations only where the module has them
 # A parameter binds to a scene number equal to it, or to minus it where a sign is a direction (a position,
 # gravity), to within the decimal text's rounding: the MJCF's text and the module's float of one number.
 MATCH_RTOL = 4 * np.finfo(float).eps
 SIGNED = {"pos", "ipos", None}  # the attributes (None: gravity) a parameter may bind to with scale -1
 UNITS = {"mass": "kg", "pos": "m", "ipos": "m", "inertia_about_origin": "kg m^2", None: "m/s^2",
-         ("stiffness", "slide"): "N/m", ("stiffness", "hinge"): "N m/rad"}
+         ("stiffness", "slide"): "N/m", ("stiffness", "hinge"): "N m/rad",
+         ("damping", "slide"): "N s/m", ("damping", "hinge"): "N m s/rad",
+         ("springref", "slide"): "m", ("springref", "hinge"): "rad"}
+JOINT_ATTRIBUTES = ("stiffness", "damping", "springref")  # whose unit depends on the joint's kind
 ABOUT = {"mass": "mass of body '{name}'", "pos": "position of body '{name}' in its parent, component {index}",
          "ipos": "centre of mass of body '{name}', component {index}", None: "gravity, component {index}",
          "inertia_about_origin": "moment of inertia of body '{name}' about its origin, axis {index}",
-         "stiffness": "stiffness of joint '{name}'"}
+         "stiffness": "stiffness of joint '{name}'", "damping": "viscous damping of joint '{name}'",
+         "springref": "rest position of joint '{name}''s spring"}
 AXES = "xyz"
 DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)  # of an output step into MuJoCo's steps: 1-2-5 steps
 
@@ -50,7 +54,7 @@ class Equations:
     def reactions(self, t, q, v):
         return dict(self._module.reactions(t, q, v, self._p)) if self.reaction_names else {}
 
-    def energy(self, t, q, v):
+    def _energy(self, t, q, v):
         return float(self._module.energy(t, q, v, self._p))
 
     def _drive_power(self, t, q, v):
@@ -75,12 +79,9 @@ def module_values(module, file):
     for name, value in params.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ValueError(f"{file}: PARAMS['{name}'] = {value!r} is not a finite number (SI units)")
-    for name in OPTIONAL + ("accelerations", "reactions", "energy"):
+    for name in OPTIONAL + ("accelerations", "reactions"):
         if hasattr(module, name) and not callable(getattr(module, name)):
             raise ValueError(f"{file}: {name} is not a function")
-    if not callable(getattr(module, "energy", None)):
-        raise ValueError(f"{file}: defines no energy(t, q, v, p): the work-energy checks need the derivation's "
-                         "total energy, kinetic plus potential (docs/own-case.md)")
     return tuple(coords), {name: float(value) for name, value in params.items()}
 
 
@@ -110,7 +111,7 @@ def bindings(params, scene, joints_kind, file, given):
     or gravity); no match or several is refused, naming them."""
     found, units = {}, {}
     unit = lambda location: UNITS[(location.get("attribute"), joints_kind.get(location["name"]))
-                                  if location.get("attribute") == "stiffness" else location.get("attribute")]
+                                  if location.get("attribute") in JOINT_ATTRIBUTES else location.get("attribute")]
     for name, value in params.items():
         if name in given:
             found[name] = given[name]
@@ -121,7 +122,8 @@ def bindings(params, scene, joints_kind, file, given):
                    if value != 0 and abs(v.value - scale * value) <= MATCH_RTOL * abs(value)]
         if not matches:
             raise ValueError(f"{file}: PARAMS['{name}'] = {value!r} is no number of {scene.path} (a body's mass, "
-                             "position or centre of mass, a joint's stiffness, gravity), so the engines cannot follow "
+                             "position or centre of mass, a joint's stiffness, damping or spring rest position, gravity), so the "
+                             "engines cannot follow "
                              "it; bind it in a case.toml [scene.bindings] (docs/own-case.md) or make it equal to the "
                              "scene's number")
         if len(matches) > 1:
@@ -289,7 +291,8 @@ def scaffold(name, scene):
         attribute = loc.get("attribute")
         if attribute == "mass" and v.value <= 1e-12:  # a placeholder: no parameter
             continue
-        label = {"mass": f"m_{loc['name']}", "stiffness": f"k_{loc['name']}", None: "g",
+        label = {"mass": f"m_{loc['name']}", "stiffness": f"k_{loc['name']}", "damping": f"c_{loc['name']}",
+                 "springref": f"{loc['name']}_rest", None: "g",
                  "pos": f"{loc['name']}_pos_{AXES[loc.get('index', 0)]}",
                  "ipos": f"{loc['name']}_com_{AXES[loc.get('index', 0)]}"}[attribute]
         scale = -1.0 if v.value < 0 and attribute in SIGNED else 1.0
@@ -338,7 +341,8 @@ def accelerations(t, q, v, p):
 
 
 def energy(t, q, v, p):
-    """Kinetic plus potential energy (gravity's zero at the world origin, springs' at coordinate 0), J."""
+    """Kinetic plus potential energy (gravity's zero at the world origin, springs' at coordinate 0), J.
+    Optional: without it the derivation's energy rows are not applicable (the engines' stay)."""
     {unpack(coords)} = q
     {unpack(rates)} = v
     raise NotImplementedError("energy: write T + V")

@@ -25,6 +25,7 @@ import pandas as pd
 from dyncheck import stability, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
+from dyncheck.messages import plural
 from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, consequences, format_rows, heading,
                               inside_or_outside, load_result, reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
@@ -60,7 +61,9 @@ def write_reports(results, out):
                 written += write_case_page(result, case, tree)
                 written.append(write_summary(result, case, tree))
             cases = summaries(tree, out)
-            written += [write_index(tree, cases), write_errata(tree, cases)]
+            written.append(write_index(tree, cases))
+            if not all(c["one_derivation"] for c in cases):  # the book's errata; a researcher's case has no book
+                written.append(write_errata(tree, cases))
             swap(tree, out)
         finally:  # this run's tree after a failure, or the previous report after the swap
             if tree.exists():
@@ -137,10 +140,11 @@ def exchange(a, b):
 def write_summary(result, case, tmp):
     """data/<case>.json: the case's results (the schema of `dyncheck run --json`) for the index."""
     rows = result.rows
-    sweep = result.studies["work_precision"] if result.studies else None
+    sweep = sweep_in_words(result.studies["work_precision"], case) if result.studies else None
     worst = worst_engine_error(rows)
     summary = {"version": RESULTS_VERSION, **case_json(result), "title": case.title,
                "overridden": case.overrides_text(),  # in words, for the index and errata
+               "one_derivation": case.one_derivation,  # the index's words: a researcher's or the book's
                "worst_engine_error": worst if math.isfinite(worst) else None,  # JSON has no NaN
                "random": random_tried(result, case),
                "cheapest": None if sweep is None or sweep.empty else  # for the index: level -> method
@@ -222,18 +226,25 @@ def figure_series(result, columns, ylabel, title, path, *, words, log_error=Fals
     plt.close(fig)
 
 
-def figure_energy(result, case, path, *, words):
-    runs = trajectories(result)
-    driven = case.driven
+def figure_energy(result, path, *, words):
+    # A derivation may define no energy: its runs have none, and the balance drawn is the first engine's.
+    runs = {label: run for label, run in trajectories(result).items() if {"energy", "work"} <= set(run)}
+    driven = any(run["work"].abs().max() > 0 for run in runs.values())  # from the results: no scene file read
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True)
-    tight = runs["tight reference"]
-    top.plot(tight.index, tight["energy"] - tight["energy"].iloc[0], label="E(t) - E(0)", **STYLE["tight reference"])
-    if driven:
-        top.plot(tight.index, tight["work"], label="W(t), work of the prescribed motions", color="tab:purple", lw=1)
+    shown = next(iter(runs), None)
+    if shown is None:
+        top.text(0.5, 0.5, "no run has an energy: the derivation defines none and the engines' runs failed",
+                 ha="center", transform=top.transAxes, fontsize=8)
+    else:
+        balance = runs[shown]
+        top.plot(balance.index, balance["energy"] - balance["energy"].iloc[0], label="E(t) - E(0)", **STYLE[shown])
+        if driven:
+            top.plot(balance.index, balance["work"], label="W(t), work of the drives, forces and dampers",
+                     color="tab:purple", lw=1)
+        top.set_title("energy balance" + (": E(t) - E(0) = W(t)" if driven else ": E(t) = E(0)")
+                      + f" ({words.get(shown, shown)})", fontsize=9)
+        top.legend(fontsize=7, loc="upper right", framealpha=0.9)
     top.set_ylabel("[J]")
-    top.set_title("energy balance" + (": E(t) - E(0) = W(t)" if driven else ": E(t) = E(0)")
-                  + f" ({words.get('tight reference', 'tight reference')})", fontsize=9)
-    top.legend(fontsize=7, loc="upper right", framealpha=0.9)
     top.grid(alpha=0.3)
     for label, run in runs.items():
         bottom.semilogy(run.index, energy_residual(run).abs() + 1e-300, label=words.get(label, label),
@@ -416,6 +427,16 @@ def not_passed(rows):
             *[f"- {'; '.join(names)}: **{status}**: {text}" for (status, text), names in why.items()], ""]
 
 
+def not_checked(rows):
+    """Page lines naming the `not applicable` rows that have nothing to compare (a derivation without
+    energy), and why; those under overrides show their comparison in the table."""
+    why = {}
+    for r in rows:
+        if r.status == Status.NOT_APPLICABLE and r.error is None:
+            why.setdefault(r.detail, []).append(f"{r.check} {r.quantity} ({r.comparison})")
+    return [line for text, names in why.items() for line in (f"Not applicable: {'; '.join(names)}: {text}.", "")]
+
+
 def scene_table(case):
     """The joints of the engine models: what is free, what is prescribed, what is applied."""
     scene = case.scene
@@ -443,7 +464,7 @@ def write_case_page(result, case, tmp):
         "errors": lambda path: figure_series(result, state_columns(case), lambda c: f"|{c} error|",
                                              "error against the tight solution" if words else
                                              "error against the tight reference solution", path, words=words, log_error=True),
-        "energy": lambda path: figure_energy(result, case, path, words=words),
+        "energy": lambda path: figure_energy(result, path, words=words),
         "reactions": lambda path: figure_series(result, list(case.reaction_names), lambda c: f"{c} [N]",
                                                 "reactions over time, every source", path, words=words),
         "pointwise": lambda path: figure_pointwise(result, path),
@@ -479,7 +500,7 @@ def write_case_page(result, case, tmp):
     table["finding"] = [r.finding or "" for r in rows]
     findings = result.findings
     runs = result.runs
-    cost = cost_table(runs).drop(columns="wall time [s]")
+    cost = cost_table(runs, case.one_derivation).drop(columns="wall time [s]")
     lines = [
         f"# {heading(case.spec)}",
         "",
@@ -514,7 +535,7 @@ def write_case_page(result, case, tmp):
         "",
         scene_table(case),
         "",
-        *(["## Results", "", "Computed along each source's run of the book's initial conditions.", "",
+        *(["## Results", "", f"Computed along each source's run of {initial_words(case)}.", "",
            values_table(case, spaces), ""] if values else []),
         "## Checks",
         "",
@@ -522,13 +543,15 @@ def write_case_page(result, case, tmp):
         "",
         "Errors are relative: pointwise to the largest magnitude of the quantity over the random states,"
         " trajectories to the largest magnitude of the coordinate over the run, energy to the largest"
-        " |E| or |W|.  `finding` marks a disagreement explained by a registered error of the book.",
+        " |E| or |W|." + ("" if case.one_derivation else
+                          "  `finding` marks a disagreement explained by a registered error of the book."),
         "",
         "In short, the worst row of each comparison (error over its tolerance):",
         "",
         markdown_table(summary_table(rows)),
         "",
         *not_passed(rows),
+        *not_checked(rows),
         *wrong_equations(result),
         f"<details><summary>All {len(rows)} checks</summary>",
         "",
@@ -565,15 +588,32 @@ def write_case_page(result, case, tmp):
     return [page] + list(figures.values()) + study_files + write_timing_page(result, case, tmp)
 
 
-def cost_table(runs):
-    """Each source's run of the book's initial conditions and its twin: method, setting, wall time,
-    right-hand-side evaluations."""
+def cost_table(runs, one_derivation):
+    """Each source's run of the initial state and its twin: method, setting, wall time, right-hand-side
+    evaluations.  A case of one derivation names them in its own words: its run and twin (the book's)
+    and the tight solution (the reference's twin; the reference's run repeats the book's)."""
+    shown = ([("derivation", runs["book"].run), ("derivation", runs["book"].twin),
+              ("tight solution", runs["reference"].twin)] if runs["book"].ok else []) if one_derivation else \
+        [(s, run) for s in ("reference", "book") if runs[s].ok for run in (runs[s].run, runs[s].twin)]
+    shown += [(s, run) for s in ("pinocchio", "mujoco") if runs[s].ok for run in (runs[s].run, runs[s].twin)]
     return pd.DataFrame([{"source": s, "method": run.attrs["method"],
                           "setting": f"dt = {run.attrs['dt']:g} s" if run.attrs["dt"] else f"rtol = {run.attrs['rtol']:g}",
                           "wall time [s]": f"{run.attrs['wall']:.3f}", "evaluations": run.attrs["evaluations"]}
-                         for s in ("reference", "book", "pinocchio", "mujoco") if runs[s].ok
-                         for run in (runs[s].run, runs[s].twin)],
-                        columns=["source", "method", "setting", "wall time [s]", "evaluations"])
+                         for s, run in shown], columns=["source", "method", "setting", "wall time [s]", "evaluations"])
+
+
+def sweep_in_words(sweep, case):
+    """The work-precision sweep with its sources named as the case's pages name them (OWN_WORDS for a case
+    of one derivation), for its tables and charts."""
+    if not case.one_derivation:
+        return sweep
+    shown = sweep.assign(source=sweep["source"].map(lambda s: OWN_WORDS.get(s, s)))
+    shown.attrs = sweep.attrs
+    return shown
+
+
+def initial_words(case):
+    return "the initial state" if case.one_derivation else "the book's initial conditions"
 
 
 def timing_page_name(case):
@@ -587,10 +627,11 @@ def write_timing_page(result, case, tmp):
     lines = [f"# {heading(case.spec)}: wall times", "",
              f"Wall times of this run on this machine, which differ from run to run; [the case page]({case.name}.md).",
              "", f"All checks of this case took {result.wall:.1f} s.", "",
-             "## The runs of the book's initial conditions", "", markdown_table(cost_table(result.runs)), ""]
+             f"## The runs of {initial_words(case)}", "",
+             markdown_table(cost_table(result.runs, case.one_derivation)), ""]
     files = [timing_page_name(case)]
     if studies and not studies["work_precision"].empty:
-        frame = studies["work_precision"]
+        frame = sweep_in_words(studies["work_precision"], case)
         csv, chart = (f"data/{case.name}_work_precision_timing.csv",
                       f"figures/{case.name}_work_precision_timing.png")
         work_precision.write_csv(frame, tmp / csv, timing=True)
@@ -648,7 +689,7 @@ def study_sections(result, case, tmp):
     elif studies["work_precision"].empty:
         lines += [work_precision.NO_SWEEP, ""]
     else:
-        frame = studies["work_precision"]
+        frame = sweep_in_words(studies["work_precision"], case)
         csv, chart = f"data/{case.name}_work_precision.csv", f"figures/{case.name}_work_precision.png"
         work_precision.write_csv(frame, tmp / csv)
         work_precision.figure(frame, case, tmp / chart)
@@ -660,8 +701,10 @@ def study_sections(result, case, tmp):
         for column in ("evaluations", "runner_up_evaluations"):
             best[column] = best[column].map(lambda x: "-" if pd.isna(x) else f"{x:.0f}")
         best["error"] = best["error"].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")
-        lines += [f"Every method from the book's initial conditions over {reference['t_end']:g} s, against the"
-                  f" reference solution: {reference['label']}.  Error is the largest deviation of any"
+        solution = ("the tight solution: the derivation" if case.one_derivation else
+                    "the reference solution: the reference's equations")
+        lines += [f"Every method from {initial_words(case)} over {reference['t_end']:g} s, against"
+                  f" {solution} by {reference['label']}.  Error is the largest deviation of any"
                   " coordinate or rate, relative to its largest magnitude; the rows behind the chart are in"
                   f" [{csv}]({csv}).  {work_precision.EVALUATIONS_NOTE}", "",
                   f"![work-precision]({chart})", "",
@@ -705,7 +748,7 @@ def _state(coords, q, v):
 
 
 SUMMARY_KEYS = {"case", "section", "params", "checks", "findings", "title", "status", "worst_engine_error",
-                "random", "cheapest"}  # what write_summary writes
+                "random", "cheapest", "one_derivation"}  # what write_summary writes
 
 
 def summaries(tree, out):
@@ -796,17 +839,21 @@ def write_index(tmp, cases):
     tried = [c["random"] for c in cases]
     states = sum(t["states"] + t["parameter_sets"] * t["states_per_set"] for t in tried)
     disagreed = [c["case"] for c in cases if not c["random"]["agreed"]]
+    book = not any(c["one_derivation"] for c in cases)  # the book's examples, or (also) researchers' own cases
+    derivations = "`reference`" if book else "the derivations"
     lines = ["# dyncheck reports", "",
-             "The worked examples of I. F. Santos, *Dynamics of Machines*, ch. 1, checked against MuJoCo"
-             " and Pinocchio.  *Worst engine error* is the largest pointwise relative error among"
-             " `reference`, MuJoCo and Pinocchio (accelerations, reactions, energy, drive power);"
-             " a finding is an error of the book, with the largest relative error it causes: all of them"
-             " are in the [errata](errata.md).", "",
+             ("The worked examples of I. F. Santos, *Dynamics of Machines*, ch. 1, checked against MuJoCo"
+              " and Pinocchio." if book else "Each case's derivation checked against MuJoCo and Pinocchio.")
+             + f"  *Worst engine error* is the largest pointwise relative error among {derivations}, MuJoCo and"
+             " Pinocchio (accelerations, reactions, energy, drive power)"
+             + ("; a finding is an error of the book, with the largest relative error it causes: all of them"
+                " are in the [errata](errata.md)." if any(c["findings"] for c in cases) else "."), "",
              markdown_table(pd.DataFrame(rows)), "",
              *speed_table(cases),
-             f"The last run tried {sum(t['parameter_sets'] for t in tried)} random parameter sets besides the book's"
-             f" and {states} random states in all ({len(cases)} cases; seeds on each case page): reference, MuJoCo"
-             " and Pinocchio " + (f"disagreed in {', '.join(disagreed)}." if disagreed else
-                                  "agreed at every one of them within the pointwise tolerance."), ""]
+             f"The last run tried {sum(t['parameter_sets'] for t in tried)} random parameter sets besides"
+             f" {'the book' if book else 'each case'}'s and {states} random states in all ({plural(len(cases), 'case')};"
+             f" seeds on each case page): {derivations}, MuJoCo and Pinocchio "
+             + (f"disagreed in {', '.join(disagreed)}." if disagreed else
+                "agreed at every one of them within the pointwise tolerance."), ""]
     (tmp / "index.md").write_text("\n".join(lines))
     return "index.md"

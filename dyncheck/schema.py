@@ -109,7 +109,7 @@ CONDITIONS = {"> 0": (lambda x: x > 0, "must be > 0"), ">= 0": (lambda x: x >= 0
 # What a binding can set in the scene files (the engines' `_write` and `read`): element and
 # attribute -> the number of components `index` may pick.  An option binding is gravity.
 BINDABLE = {("body", "mass"): 1, ("body", "pos"): 3, ("body", "ipos"): 3, ("body", "inertia_about_origin"): 3,
-            ("joint", "stiffness"): 1, ("option", None): 3}
+            ("joint", "stiffness"): 1, ("joint", "damping"): 1, ("joint", "springref"): 1, ("option", None): 3}
 
 # -- parameters ---------------------------------------------------------------------------------
 # A parameter's unit (params.<name>.unit) is any SI unit that pint reads ("N s/m", "kg m^2", "rad/s"),

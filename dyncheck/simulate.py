@@ -146,15 +146,20 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
     FIXED_METHODS (driven by model.accelerations at step `dt`: the explicit Euler of the book's
     Matlab program, the semi-implicit Euler of its Pascal programs, classical RK4), or
     MUJOCO_METHODS (MuJoCo's own mj_step at step `dt`; the model must be a MujocoModel).
-    Returns a DataFrame indexed by t: coordinates, their rates, reactions, energy, and the work
-    of the prescribed motions and applied forces so far (`work`; pass work=False for a scene where
-    nothing does work, to skip the drive power), with the cost in `.attrs`.
+    Returns a DataFrame indexed by t: coordinates, their rates, reactions, energy (where the model has it), and the work
+    of the prescribed motions, applied forces and dampers so far (`work`; pass work=False for a scene where
+    nothing does work, to skip the drive power; absent where work is asked of a model without drive_power),
+    with the cost in `.attrs`.
     Raises Unstable (when, which method, which step) for a run that blows up, whose model's arithmetic
     fails, or that goes past its Budget; a fixed-step run longer than MAX_STEPS is not started.  With
     `bound` = (coordinate name, its index, limit), raises Escaped at the first step that ends with the
     coordinate beyond +-limit.
     """
     q0, v0 = (np.asarray(x, dtype=float) for x in ic)
+    # A derivation may define no drive power (docs/model-interface.md): its run then has no work column,
+    # and its energy balance cannot be drawn up.
+    unknown_work = work and not hasattr(model, "drive_power")
+    work = work and not unknown_work
     n_out = int(round(t_end / output_step))
     grid = np.linspace(0.0, t_end, n_out + 1)
     if method in SCIPY_METHODS:
@@ -167,7 +172,7 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
         t, q, v, w, cost = run(model, q0, v0, grid, method, dt, every, work, budget, bound)
     else:
         raise ValueError(f"unknown method '{method}'; methods are {', '.join(METHODS)}")
-    return _frame(model, t, q, v, w, {"method": method, "rtol": rtol, "dt": dt, **cost})
+    return _frame(model, t, q, v, None if unknown_work else w, {"method": method, "rtol": rtol, "dt": dt, **cost})
 
 
 def _arithmetic(method, t, step, call, *args):
@@ -339,8 +344,11 @@ def _frame(model, t, q, v, work, attrs):
         reactions = [_arithmetic(method, ti, None, model.reactions, ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
         for name in model.reaction_names:
             columns[name] = [r[name] for r in reactions]
-        columns["energy"] = [_arithmetic(method, ti, None, model.energy, ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
-    columns["work"] = work
+        if hasattr(model, "energy"):  # optional of a derivation (docs/model-interface.md)
+            columns["energy"] = [_arithmetic(method, ti, None, model.energy, ti, qi, vi)
+                                 for ti, qi, vi in zip(t, q, v)]
+    if work is not None:
+        columns["work"] = work
     frame = pd.DataFrame(columns, index=pd.Index(t, name="t"))
     finite = np.isfinite(frame.to_numpy(dtype=float))
     if not finite.all():  # a finite state whose reactions, energy or work overflow

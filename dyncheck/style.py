@@ -15,8 +15,8 @@ SOURCE_STYLE = {
     "reference": dict(color="tab:orange", lw=1.0, ls=(0, (1, 3))),
 }
 # A source's points in a sweep (work-precision): marker and line.
-SWEEP_STYLE = {"reference": dict(marker="o", ls="-"), "pinocchio": dict(marker="s", ls="--"),
-               "mujoco": dict(marker="^", ls=":")}
+SWEEP_STYLE = {"reference": dict(marker="o", ls="-"), "derivation": dict(marker="o", ls="-"),  # a researcher's
+               "pinocchio": dict(marker="s", ls="--"), "mujoco": dict(marker="^", ls=":")}
 # The integration scheme: MuJoCo's Euler is the semi-implicit Euler and its RK4 the classical RK4, so
 # they share a colour and differ by marker.
 METHOD_COLOUR = {"explicit Euler": "tab:red", "semi-implicit Euler": "tab:orange", "mujoco:Euler": "tab:orange",

@@ -38,6 +38,8 @@ RESOLUTION = 10.0
 LEVELS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
 EXPECTED_ORDER = {"explicit Euler": 1, "semi-implicit Euler": 1, "RK4": 4,
                   "mujoco:Euler": 1, "mujoco:implicitfast": 1, "mujoco:RK4": 4}
+ENGINES = ("pinocchio", "mujoco")  # a sweep's engine sources, named in its chart's legend
+GLYPHS = {"o": "\u25cb", "s": "\u25a1", "^": "\u25b3", "-": "\u2014", "--": "- -", ":": "\u00b7\u00b7\u00b7"}  # legend title
 SWEEP_METHODS = {"reference": SCIPY_METHODS + FIXED_METHODS, "pinocchio": SCIPY_METHODS, "mujoco": MUJOCO_METHODS}
 KEYS = ("t_end", "output_step", "repeat", "repeat_under", "why", "solution", "sweep", "convergence")
 CONVERGENCE_KEYS = ("omega", "omega_t", "omega_h", "why")
@@ -163,7 +165,7 @@ def reference_solution(case):
     distance = trajectory_error(verification, solution, state_columns(case))
     # Below a thousand ulps the distance is luck: rounding along the run is that large.
     accuracy = max(distance, ROUNDING_FLOOR)
-    label = (f"reference by DOP853, rtol = atol = {rtol:g}, steps <= {max_step:g} s; verified to {accuracy:.1e} "
+    label = (f"DOP853, rtol = atol = {rtol:g}, steps <= {max_step:g} s; verified to {accuracy:.1e} "
              f"by the same with steps <= {2 * max_step:g} s" + ("" if distance >= ROUNDING_FLOOR else
                                                               f" ({distance:.1e} away; rounding floor)"))
     return solution, label, accuracy
@@ -181,13 +183,22 @@ def _progress(progress, text):
         progress(text)
 
 
+def energy_error(run, scale=None):
+    """max |E(t) - E(0) - W(t)| of `run` relative to `scale` (by default the run's own largest |E| or |W|);
+    NaN for a run without energy or work (a derivation that defines no energy or drive_power)."""
+    if "energy" not in run or "work" not in run:
+        return np.nan
+    scale = scale or max(run["energy"].abs().max(), run["work"].abs().max())
+    return float(energy_residual(run).abs().max() / scale)
+
+
 def sweep(case, progress=None):
     """Every method of the case's sweep against the reference solution: a DataFrame of COLUMNS, one row
     per point of plan(case), with the reference solution's label and accuracy in .attrs["reference"].
 
     error: max over time and state coordinates of |x - x_ref| / max |x_ref| (per coordinate);
     energy_error: max |E(t) - E(0) - W(t)| / max(|E_ref|, |W_ref|), the energy drift of a closed scene
-    or the work-energy balance of a driven one; wall, wall_min, wall_max: median, least and most of
+    or the work-energy balance of a driven one (energy_error); wall, wall_min, wall_max: median, least and most of
     `repeats` timed runs (`repeat`, or fewer when they take longer than `repeat_under` seconds in all); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
     steps: fixed steps (NaN for scipy, which does not report them).  A run that blows up is a row
     with status "unstable", NaN errors and the time and step in `detail`.  resolved: whether the error
@@ -198,7 +209,10 @@ def sweep(case, progress=None):
         return pd.DataFrame(columns=COLUMNS)
     reference, label, accuracy = reference_solution(case)
     columns = state_columns(case)
-    scale = max(reference["energy"].abs().max(), reference["work"].abs().max())
+    # A derivation without energy() gives its runs none: their energy error is NaN, and the engines' runs
+    # are judged against their own energy and work.
+    scale = max(reference["energy"].abs().max(), reference["work"].abs().max()) \
+        if {"energy", "work"} <= set(reference) else None
     q0, v0, _ = case.initial
     rows = []
     for source, method, setting, value in plan(case):
@@ -223,7 +237,7 @@ def sweep(case, progress=None):
             _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: unstable")
             continue
         error = trajectory_error(run, reference, columns)
-        rows.append({**point, "error": error, "energy_error": float(energy_residual(run).abs().max() / scale),
+        rows.append({**point, "error": error, "energy_error": energy_error(run, scale),
                      "wall": float(np.median(walls)), "wall_min": min(walls), "wall_max": max(walls),
                      "repeats": len(walls), "evaluations": run.attrs["evaluations"],
                      "steps": run.attrs.get("steps", np.nan), "status": "ok",
@@ -293,7 +307,7 @@ def figure(frame, case, path, cost="evaluations"):
     for (source, method), points in ok.groupby(["source", "method"], sort=False):
         points = points.sort_values("value", ascending=False)  # along the sweep: loose to tight
         style = dict(color=METHOD_COLOUR[method], ms=5, lw=1.1, **SWEEP_STYLE[source])
-        label = f"{method} ({source})" if source != "reference" or method in SCIPY_METHODS else method
+        label = f"{method} ({source})" if source in ENGINES or method in SCIPY_METHODS else method
         errors = points.set_index("value")["error"]
         same = [other for other, e in drawn.items() if e.index.equals(errors.index) and np.array_equal(e, errors)]
         drawn[label] = errors
@@ -317,15 +331,22 @@ def figure(frame, case, path, cost="evaluations"):
     axes[0].set_ylabel("trajectory error\nmax |x - x_ref| / max |x_ref|")
     axes[1].set_ylabel("energy error\nmax |E - E(0) - W| / max(|E|, |W|)")
     axes[1].set_xlabel(COSTS[cost])
-    axes[0].text(0.02, 0.02, f"shaded: within {RESOLUTION:g}x of the reference's accuracy (hollow points)",
+    if ok["energy_error"].isna().any():
+        axes[1].text(0.02, 0.02, "the derivation defines no energy or drive power: its own methods have no energy "
+                     "error here",
+                     transform=axes[1].transAxes, fontsize=7, color="0.3")
+    solution = "tight solution" if "derivation" in set(frame["source"]) else "reference solution"
+    axes[0].text(0.02, 0.02, f"shaded: within {RESOLUTION:g}x of the {solution}'s accuracy (hollow points)",
                  transform=axes[0].transAxes, fontsize=7, color="0.3")
     fig.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False,
-               title="colour: method; marker and line: source\n\u25cb \u2014 reference, \u25a1 - - pinocchio, \u25b3 \u00b7\u00b7\u00b7 mujoco",
+               title="colour: method; marker and line: source\n" + ", ".join(
+                   f"{GLYPHS[SWEEP_STYLE[s]['marker']]} {GLYPHS[SWEEP_STYLE[s]['ls']]} {s}"
+                   for s in SWEEP_STYLE if s in set(frame["source"])),
                title_fontsize=8)
     unstable = frame[frame["status"] == "unstable"]
     notes = "; ".join(f"{point_label(r)} ({r['detail'].split(':')[0]})" for _, r in unstable.iterrows())
     fig.suptitle(f"{case.name}: error against {'wall time' if cost == 'wall' else 'cost'} over "
-                 f"{ref.get('t_end', 0):g} s\n{ref.get('label', '')}", fontsize=10)
+                 f"{ref.get('t_end', 0):g} s\n{solution}: {ref.get('label', '')}", fontsize=10)
     if notes:
         fig.text(0.01, 0.005, "unstable (not drawn): " + notes, fontsize=7, wrap=True)
     fig.tight_layout(rect=(0, 0.03, 1, 1))

@@ -66,9 +66,11 @@ def describe(path):
             values += [Value({"element": "body", "name": body, "attribute": attribute, "index": i}, float(array[i]))
                        for i in range(3) if array[i]]
     for j, joint in enumerate(joints):
-        if m.jnt_stiffness[j]:
-            values.append(Value({"element": "joint", "name": joint.name, "attribute": "stiffness"},
-                                float(m.jnt_stiffness[j])))
+        scalar = joint.kind in ("hinge", "slide")
+        for attribute, value in (("stiffness", m.jnt_stiffness[j]), ("damping", m.dof_damping[m.jnt_dofadr[j]]),
+                                 ("springref", m.qpos_spring[m.jnt_qposadr[j]] if scalar else 0.0)):
+            if value:
+                values.append(Value({"element": "joint", "name": joint.name, "attribute": attribute}, float(value)))
     lengths = [np.linalg.norm(m.body_pos[b]) for b in range(1, m.nbody)] + \
               [np.linalg.norm(m.body_ipos[b]) for b in range(1, m.nbody)]
     return SceneFile(str(path), joints, sensors, tuple(values),

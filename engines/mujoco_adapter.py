@@ -159,7 +159,9 @@ class MujocoModel:
                                axis=m.jnt_axis[j].copy() if kind != "ball" else np.zeros(3),
                                position=m.body_pos[b].copy(), rotation=_matrix(m.body_quat[b]),
                                mass=float(m.body_mass[b]), com=m.body_ipos[b].copy(), inertia=inertia,
-                               stiffness=np.r_[m.jnt_stiffness[j], m.jnt_stiffnesspoly[j]]))
+                               stiffness=np.r_[m.jnt_stiffness[j], m.jnt_stiffnesspoly[j]],
+                               springref=float(m.qpos_spring[m.jnt_qposadr[j]]) if kind != "ball" else 0.0,
+                               damping=float(m.dof_damping[m.jnt_dofadr[j]])))
         return bodies
 
     @property
@@ -181,7 +183,10 @@ class MujocoModel:
         if element == "body":
             array = getattr(self.m, "body_" + location["attribute"])[self.body_id(name)]
         else:
-            array = getattr(self.m, "jnt_" + location["attribute"])[self._id(mujoco.mjtObj.mjOBJ_JOINT, name)]
+            qadr, dof = self._joint(name)
+            array = {"stiffness": lambda: self.m.jnt_stiffness[self._id(mujoco.mjtObj.mjOBJ_JOINT, name)],
+                     "springref": lambda: self.m.qpos_spring[qadr], "damping": lambda: self.m.dof_damping[dof]
+                     }[location["attribute"]]()
         return float(np.atleast_1d(array)[index])
 
     # -- state -------------------------------------------------------------
@@ -293,7 +298,8 @@ class MujocoModel:
         return float(self.d.energy[0] + self.d.energy[1])
 
     def drive_power(self, t, q, v):
-        """Power of the prescribed motions (inverse-dynamics forces) and of the applied forces."""
+        """Power of the prescribed motions (inverse-dynamics forces), of the applied forces and of the joints'
+        dampers (negative): what changes the scene's energy."""
         return float(self.drive_powers(t, q, v))
 
     def drive_powers(self, t, q, v):
@@ -302,7 +308,8 @@ class MujocoModel:
         # mj_inverse's force, M qacc + bias - passive = M qacc - smooth + applied, from what _solve has
         inverse = (mass @ qacc[..., None])[..., 0] - smooth + self.applied
         dofs = self._driven_dofs
-        return np.sum(inverse[..., dofs] * qvel[..., dofs], axis=-1) + qvel @ self.applied
+        dampers = -np.sum(self.m.dof_damping * qvel**2, axis=-1)
+        return np.sum(inverse[..., dofs] * qvel[..., dofs], axis=-1) + qvel @ self.applied + dampers
 
     def ball_joint_acceleration(self, quaternion, omega):
         """The body's angular acceleration, in its own frame, of the scene's ball joint from MuJoCo's own
@@ -442,10 +449,10 @@ def _unmodelled(m, scene):
         on_world_ball = kind == mujoco.mjtJoint.mjJNT_BALL and m.body_parentid[m.jnt_bodyid[j]] == 0
         checks = [("pos", m.jnt_pos[j]), ("limited", m.jnt_limited[j]), ("springyield", m.jnt_springyield[j]),
                   ("frictionloss", m.dof_frictionloss[dofs]),
-                  ("damping", np.r_[m.dof_damping[dofs], m.dof_dampingpoly[dofs].ravel()]),
+                  ("damping", m.dof_dampingpoly[dofs].ravel()),  # the linear damping is compared (tree)
                   ("armature", 0.0 if name in driven or on_world_ball else m.dof_armature[dofs])]
         if scalar:
-            checks += [("ref", m.qpos0[qadr]), ("springref", m.qpos_spring[qadr])]
+            checks += [("ref", m.qpos0[qadr])]
         for attribute, value in checks:
             if np.any(value):
                 yield "body-joint", attribute, owner, _text(value)

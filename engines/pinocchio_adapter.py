@@ -2,9 +2,12 @@
 
 Prescribed joints are handled by partitioning: RNEA with the driven joints'
 imposed accelerations gives the free joints' bias, CRBA's free block is solved.
-URDF has no springs and no gravity, so joint stiffness and gravity come from
-the case's bindings (`write`), and `read` reports them back from this adapter.
-An MJCF has both, but Pinocchio's parser drops them: this adapter reads them from the file.
+URDF has no springs and no gravity, so joint stiffness, spring rest positions and
+gravity come from the case's bindings (`write`), and `read` reports them back from
+this adapter; its dampers are the joints' <dynamics damping>.  An MJCF has them all,
+but Pinocchio's parser drops them: this adapter reads them from the file.  Pinocchio's
+algorithms model no spring and no damper: their forces -k (q - springref) - d q' are
+generalised forces here.
 """
 
 import functools
@@ -48,7 +51,11 @@ class PinocchioModel:
         if _is_mjcf(self.path):
             self._complete_mjcf(document, scene)
         else:
-            self.stiffness = {}
+            # URDF has no springs: bindings set them; its dampers are Pinocchio's model.damping
+            self.joint_values = {"stiffness": {}, "springref": {},
+                                 "damping": {self.m.names[j]: float(self.m.damping[self.m.joints[j].idx_v])
+                                             for j in range(1, self.m.njoints) if self.m.joints[j].nv == 1
+                                             and self.m.damping[self.m.joints[j].idx_v]}}
             self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
         for location, value in writes:
             self._write(location, value)
@@ -72,7 +79,16 @@ class PinocchioModel:
             self.applied[iv:iv + len(force)] = force
         self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
-        self.springs = [(self._joint(j).idx_q, self._joint(j).idx_v, k) for j, k in self.stiffness.items()]
+        # (idx_q, idx_v, stiffness, rest position, damping) of each joint with a spring or a damper
+        passive = set(self.joint_values["stiffness"]) | set(self.joint_values["damping"])
+        self.passive = [(self._joint(j).idx_q, self._joint(j).idx_v, self.joint_values["stiffness"].get(j, 0.0),
+                         self.joint_values["springref"].get(j, 0.0), self.joint_values["damping"].get(j, 0.0))
+                        for j in sorted(passive)]
+        wound = [j for j in self.joint_values["stiffness"] if self._joint(j).nq == 2]
+        if wound:  # Pinocchio's continuous joint holds (cos q, sin q): no q for the spring beyond +-pi
+            raise ValueError(f"{self.path}: joint '{wound[0]}' is continuous and has a spring: Pinocchio's continuous "
+                             "joint cannot say how far it has wound; make it revolute with lower=\"-1e300\" "
+                             "upper=\"1e300\"")
         # (nq, idx_q, idx_v) of the joints, read once: each of Pinocchio's attributes is a call.
         self._coord_joints = [(kind, (joint.nq, joint.idx_q, joint.idx_v), idx) for kind, joint, idx in self.layout]
         self._driven_joints = [((joint.nq, joint.idx_q, joint.idx_v), motion) for joint, motion in self.driven]
@@ -86,8 +102,8 @@ class PinocchioModel:
         self._free_columns = np.minimum.outer(every, self.free), np.maximum.outer(every, self.free)
 
     def _complete_mjcf(self, document, scene):
-        """What Pinocchio's MJCF parser leaves out: the file's gravity and joint stiffness, which it drops; and
-        the armature of MuJoCo's evaluation model (engines.mujoco_adapter): none on the prescribed joints, and
+        """What Pinocchio's MJCF parser leaves out: the file's gravity and joints' springs and dampers, which it
+        drops; and the armature of MuJoCo's evaluation model (engines.mujoco_adapter): none on the prescribed joints, and
         a ball joint's armature a on a body on the world as what it is there, the isotropic inertia a I about
         the joint (MujocoModel.tree), held in the body's inertia so that `tree`, `read` and `_write` count it
         as the URDF side's inertia does.  Refuses what the parser reads otherwise than MuJoCo's compiler."""
@@ -97,7 +113,7 @@ class PinocchioModel:
         option = document.find("option")
         gravity = option.get("gravity", DEFAULT_GRAVITY) if option is not None else DEFAULT_GRAVITY
         self.m.gravity.linear[:] = [float(x) for x in gravity.split()]
-        self.stiffness = _joint_stiffness(document, self.path)
+        self.joint_values = _joint_values(document, self.path)
         for joint in scene["driven"]:
             self.m.armature[self._joint(joint).idx_v] = 0.0
         for j in range(1, self.m.njoints):
@@ -141,7 +157,7 @@ class PinocchioModel:
         if element == "option":
             return self.m.gravity, "linear"
         if element == "joint":
-            return self.stiffness, name
+            return self.joint_values[attribute], name
         joint = self._body_joint(name)
         if attribute == "pos":
             return self.m.jointPlacements[joint], "translation"
@@ -156,8 +172,8 @@ class PinocchioModel:
             lever, inertia = holder.lever, holder.inertia.copy()
             inertia[i, i] = value - holder.mass * (lever @ lever - lever[i] ** 2)
             self.m.inertias[self._body_joint(location["name"])] = pin.Inertia(holder.mass, lever, inertia)
-        elif holder is self.stiffness:
-            self.stiffness[key] = value
+        elif location["element"] == "joint":
+            holder[key] = value
         elif np.ndim(getattr(holder, key)) == 0:
             setattr(holder, key, value)
         else:  # Pinocchio's bindings return these arrays by reference
@@ -182,7 +198,9 @@ class PinocchioModel:
                                joint_type=kind, axis=axis.copy(), position=placement.translation.copy(),
                                rotation=placement.rotation.copy(), mass=float(inertia.mass),
                                com=inertia.lever.copy(), inertia=inertia.inertia.copy(),
-                               stiffness=np.array([self.stiffness.get(self.m.names[j], 0.0), 0.0, 0.0])))
+                               stiffness=np.array([self.joint_values["stiffness"].get(self.m.names[j], 0.0), 0.0, 0.0]),
+                               springref=self.joint_values["springref"].get(self.m.names[j], 0.0),
+                               damping=self.joint_values["damping"].get(self.m.names[j], 0.0)))
         return bodies
 
     @property
@@ -194,8 +212,8 @@ class PinocchioModel:
         i = location.get("index", 0)
         if key == "inertia_about_origin":
             return float(holder.inertia[i, i] + holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2))
-        if holder is self.stiffness:
-            return float(self.stiffness.get(key, 0.0))
+        if location["element"] == "joint":
+            return float(holder.get(key, 0.0))
         return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
 
     # -- state -------------------------------------------------------------
@@ -227,8 +245,8 @@ class PinocchioModel:
         """Pinocchio alone, on its own configuration and velocity: every dof's acceleration, and the
         inverse-dynamics forces M acc + nle that give it (`algorithm` names the branch it takes)."""
         force = self.applied.copy()
-        for iq, iv, k in self.springs:
-            force[iv] -= k * config[iq]
+        for iq, iv, k, rest, damping in self.passive:
+            force[iv] -= k * (config[iq] - rest) + damping * velocity[iv]
         if len(self.free) == self.m.nv:  # nothing prescribed: Pinocchio's ABA solves it directly
             return pin.aba(self.m, self.d, config, velocity, force).copy(), force
         acc = self._driven_acc.copy()
@@ -317,14 +335,16 @@ class PinocchioModel:
         config, velocity = self.engine_state(t, q, v)
         kinetic = pin.computeKineticEnergy(self.m, self.d, config, velocity)
         potential = pin.computePotentialEnergy(self.m, self.d, config)
-        springs = sum(0.5 * k * config[iq] ** 2 for iq, _, k in self.springs)
+        springs = sum(0.5 * k * (config[iq] - rest) ** 2 for iq, _, k, rest, _ in self.passive)
         return float(kinetic + potential + springs)
 
     def drive_power(self, t, q, v):
-        """Power of the prescribed motions (inverse-dynamics torques) and of the applied forces."""
+        """Power of the prescribed motions (inverse-dynamics torques), of the applied forces and of the joints'
+        dampers (negative): what changes the scene's energy."""
         _, velocity, _, tau = self._dynamics(t, q, v)
         driven = sum(tau[iv] * velocity[iv] for (_, _, iv), _ in self._driven_joints)
-        return float(driven + self.applied @ velocity)
+        dampers = -sum(damping * velocity[iv] ** 2 for _, iv, _, _, damping in self.passive)
+        return float(driven + self.applied @ velocity + dampers)
 
 
 def _is_mjcf(path):
@@ -347,6 +367,12 @@ def _misread(document):
             yield (f'<compiler eulerseq="{sequence}">: Pinocchio\'s MJCF parser turns every Euler angle about '
                    "the moving axes, where MuJoCo's upper-case letters name fixed ones; write the sequence in "
                    "lower case, or the orientations as quat")
+    worldbody = document.find("worldbody")
+    roots = [] if worldbody is None else worldbody.findall("body")
+    if len(roots) > 1:
+        yield (f"<worldbody> holds {len(roots)} bodies ({', '.join(b.get('name', '?') for b in roots)}): Pinocchio's "
+               "MJCF parser (4.1) reads the first and drops the others without a word; give the scene one body on "
+               "the world, or a scene.urdf")
     for element in document.iter():
         if element.tag in ("body", "inertial", "geom") and "axisangle" in element.attrib:
             norm = np.linalg.norm([float(x) for x in element.get("axisangle").split()[:3]])
@@ -358,40 +384,45 @@ def _misread(document):
                    "write their elements into the scene")
 
 
-def _joint_stiffness(document, path):
-    """{joint: stiffness} of an MJCF's named joints with a spring, as MuJoCo's compiler resolves it: the joint's
-    own attribute, else the joint default of its class (its `class`, else the `childclass` of the nearest
-    element around it that has one, else "main"), else of the classes around that one.  ValueError for a
-    polynomial spring (stiffness="a b c"): this adapter's springs are linear."""
+JOINT_VALUES = {"stiffness": "spring", "springref": "spring's rest position", "damping": "damper"}
+
+
+def _joint_values(document, path):
+    """{attribute: {joint: value}} of an MJCF's named joints for each of JOINT_VALUES, where not 0, as MuJoCo's
+    compiler resolves it: the joint's own attribute, else the joint default of its class (its `class`, else the
+    `childclass` of the nearest element around it that has one, else "main"), else of the classes around that
+    one.  ValueError for a polynomial spring or damper ("a b c"): this adapter's are linear."""
     defaults = {}
 
     def collect(default, inherited):
         joint = default.find("joint")
-        own = joint.get("stiffness", inherited) if joint is not None else inherited
+        own = {a: joint.get(a, inherited[a]) for a in JOINT_VALUES} if joint is not None else inherited
         defaults[default.get("class", "main")] = own
         for child in default.findall("default"):
             collect(child, own)
 
     for default in document.findall("default"):
-        collect(default, "0")
-    stiffness = {}
+        collect(default, dict.fromkeys(JOINT_VALUES, "0"))
+    values = {attribute: {} for attribute in JOINT_VALUES}
 
     def walk(element, childclass):
         childclass = element.get("childclass", childclass)
         for child in element:
             if child.tag == "joint" and child.get("name"):  # an unnamed joint: the case cannot move it (refused)
-                text = child.get("stiffness", defaults.get(child.get("class", childclass), "0"))
-                a, *higher = [float(x) for x in text.split()]
-                if any(higher):
-                    raise ValueError(f'{path}: joint \'{child.get("name")}\' stiffness="{text}": a polynomial '
-                                     "spring, which the Pinocchio side does not model; give the linear stiffness only")
-                if a:
-                    stiffness[child.get("name")] = a
+                inherited = defaults.get(child.get("class", childclass), dict.fromkeys(JOINT_VALUES, "0"))
+                for attribute, what in JOINT_VALUES.items():
+                    text = child.get(attribute, inherited[attribute])
+                    a, *higher = [float(x) for x in text.split()]
+                    if any(higher):
+                        raise ValueError(f'{path}: joint \'{child.get("name")}\' {attribute}="{text}": a polynomial '
+                                         f"{what}, which the Pinocchio side does not model; give the linear term only")
+                    if a:
+                        values[attribute][child.get("name")] = a
             else:
                 walk(child, childclass)
 
     walk(document.find("worldbody"), "main")
-    return stiffness
+    return values
 
 
 # URDF cannot write an unlimited revolute or prismatic joint (urdfdom requires <limit> and refuses inf):
@@ -416,8 +447,7 @@ def _unmodelled(robot, scene):
                 if abs(float(limit.get(bound, 0.0))) < NO_LIMIT:
                     yield "joint/limit", bound, owner, limit.get(bound, "0 (by default)")
         dynamics = joint.find("dynamics")
-        for attribute in ("damping", "friction"):
-            if dynamics is not None and float(dynamics.get(attribute, 0.0)):
-                yield "joint/dynamics", attribute, owner, dynamics.get(attribute)
+        if dynamics is not None and float(dynamics.get("friction", 0.0)):
+            yield "joint/dynamics", "friction", owner, dynamics.get("friction")
         if joint.find("mimic") is not None:
             yield "joint/mimic", "*", owner, ""

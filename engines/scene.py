@@ -32,7 +32,9 @@ class Body:
     mass: float
     com: np.ndarray
     inertia: np.ndarray
-    stiffness: np.ndarray  # (a, b, c) of the joint's spring force -(a x + b x^2 + c x^3)
+    stiffness: np.ndarray  # (a, b, c) of the joint's spring force -(a x + b x^2 + c x^3), x = q - springref
+    springref: float  # the joint position at which its spring is relaxed (rad or m; 0 for a ball joint)
+    damping: float  # viscous damping of the joint's dofs, force -damping q' (N s/m, N m s/rad)
 
 
 @dataclass(frozen=True)
@@ -121,11 +123,14 @@ RULES = [
     Rule("MJCF", "body-joint", "pos", REFUSED, "a URDF joint sits at its link's origin", "move the body instead"),
     Rule("MJCF", "body-joint", "stiffness", COMPARED,
          "a b c of the spring force -(a x + b x^2 + c x^3), against the Pinocchio side's (the case's k, 0, 0)"),
-    Rule("MJCF", "body-joint", "springdamper", COMPARED, "sets stiffness (compared) and damping (refused)"),
-    Rule("MJCF", "body-joint", "springref", REFUSED, "a spring's rest position; the Pinocchio side's springs rest at 0"),
+    Rule("MJCF", "body-joint", "springdamper", COMPARED, "sets stiffness and damping (both compared)"),
+    Rule("MJCF", "body-joint", "springref", COMPARED,
+         "a spring's rest position, against the Pinocchio side's (the case's binding for a URDF, which has none)"),
     Rule("MJCF", "body-joint", "springyield", REFUSED, "a plastic spring; " + NO_COUNTERPART),
     Rule("MJCF", "body-joint", "ref", REFUSED, "shifts the joint's coordinate; URDF's are 0 at the link's placement"),
-    Rule("MJCF", "body-joint", "damping", REFUSED, "a joint damper; the Pinocchio side has none"),
+    Rule("MJCF", "body-joint", "damping", COMPARED,
+         "a viscous joint damper, force -d q' (linear only: a polynomial damper is refused), against the Pinocchio"
+         " side's generalised force; MuJoCo's Euler integrator treats it implicitly, its RK4 explicitly"),
     Rule("MJCF", "body-joint", "frictionloss", REFUSED, "dry friction; the Pinocchio side has none"),
     Rule("MJCF", "body-joint", "limited", REFUSED, "a joint limit; Pinocchio's dynamics have none"),
     Rule("MJCF", "body-joint", "range", NO_EFFECT, "acts only when limited, which is refused"),
@@ -199,7 +204,8 @@ RULES = [
          'write lower="-1e300" upper="1e300", or use a continuous joint'),
     Rule("URDF", "joint/limit", "upper", REFUSED, "see lower", 'write lower="-1e300" upper="1e300"'),
     Rule("URDF", "joint/limit", "*", NO_EFFECT, "effort and velocity: Pinocchio's dynamics do not clamp"),
-    Rule("URDF", "joint/dynamics", "damping", REFUSED, PINOCCHIO_IGNORES),
+    Rule("URDF", "joint/dynamics", "damping", COMPARED,
+         "a viscous joint damper: Pinocchio's algorithms ignore it, so this adapter applies -d q' as a generalised force"),
     Rule("URDF", "joint/dynamics", "friction", REFUSED, PINOCCHIO_IGNORES),
     Rule("URDF", "joint/mimic", "*", REFUSED, "Pinocchio builds its models here without mimic joints"),
     Rule("URDF", "joint/calibration", "*", NO_EFFECT, "for controllers"),

@@ -126,10 +126,12 @@ def test_joint_stiffness_follows_mjcfs_default_classes(tmp_path):
     ('<compiler eulerseq="XYZ"/>', BODY.format("a", 'euler="30 40 50"', "", ""), 'eulerseq="XYZ"'),
     ("", BODY.format("a", 'axisangle="1 1 0 60"', "", ""), 'axisangle="1 1 0 60"'),
     ("", BODY.format("a", "", 'stiffness="1 0 2"', ""), 'stiffness="1 0 2"'),
-    ('<include file="more.xml"/>', BODY.format("a", "", "", ""), '<include file="more.xml">')])
+    ('<include file="more.xml"/>', BODY.format("a", "", "", ""), '<include file="more.xml">'),
+    ("", BODY.format("a", "", "", "") + BODY.format("b", "", "", ""), "<worldbody> holds 2 bodies")])
 def test_what_pinocchios_parser_misreads_is_refused(tmp_path, head, body, refused):
     """MuJoCo compiles these; Pinocchio's parser reads them otherwise (a rotation about moving axes, a rotation
-    matrix that is none, a linear spring, nothing): refused with the file and the attribute named."""
+    matrix that is none, a linear spring, nothing, the first of two bodies on the world only): refused with the
+    file and the attribute named."""
     (tmp_path / "more.xml").write_text('<mujoco><option timestep="0.001"/></mujoco>')
     path = scratch(tmp_path, body, head)
     mujoco.MjModel.from_xml_path(str(path))

@@ -68,12 +68,10 @@ REFUSALS = {
     ("MJCF", "body-joint", "name"): (PSI_MJCF, PSI_MJCF + '<joint name="extra" type="hinge" axis="0 1 0"/>',
                                      "joint 'extra' <joint name=\"extra\">"),
     ("MJCF", "body-joint", "pos"): (PSI_MJCF, PSI_MJCF[:-2] + ' pos="0 0 0.01"/>', '<joint pos="0 0 0.01">'),
-    ("MJCF", "body-joint", "springref"): (PSI_MJCF, PSI_MJCF[:-2] + ' springref="0.3"/>',
-                                          "joint 'psi' <joint springref=\""),
     ("MJCF", "body-joint", "springyield"): (PSI_MJCF, PSI_MJCF[:-2] + ' springyield="0.1"/>',
                                             '<joint springyield="'),
     ("MJCF", "body-joint", "ref"): (PSI_MJCF, PSI_MJCF[:-2] + ' ref="0.2"/>', '<joint ref="'),
-    ("MJCF", "body-joint", "damping"): (PSI_MJCF, PSI_MJCF[:-2] + ' damping="0.1"/>', '<joint damping="0.1 0 0">'),
+    ("MJCF", "body-joint", "damping"): (PSI_MJCF, PSI_MJCF[:-2] + ' damping="0.1 0.2"/>', '<joint damping="0.2 0">'),
     ("MJCF", "body-joint", "frictionloss"): (PSI_MJCF, PSI_MJCF[:-2] + ' frictionloss="0.1"/>',
                                              '<joint frictionloss="0.1">'),
     ("MJCF", "body-joint", "limited"): (PSI_MJCF, PSI_MJCF[:-2] + ' limited="true" range="-1 1"/>',
@@ -115,8 +113,6 @@ REFUSALS = {
                                        ' upper="1e300" effort="0" velocity="0"/>', "<limit lower=\"-0.1\">"),
     ("URDF", "joint/limit", "upper"): (PSI_URDF, '<joint name="psi" type="revolute"><limit lower="-1e300"'
                                        ' upper="0.1" effort="0" velocity="0"/>', "<limit upper=\"0.1\">"),
-    ("URDF", "joint/dynamics", "damping"): (PSI_URDF, PSI_URDF + '<dynamics damping="0.1"/>',
-                                            "joint 'psi' <dynamics damping=\"0.1\">"),
     ("URDF", "joint/dynamics", "friction"): (PSI_URDF, PSI_URDF + '<dynamics friction="0.1"/>',
                                              "joint 'psi' <dynamics friction=\"0.1\">"),
     ("URDF", "joint/mimic", "*"): (PSI_URDF, PSI_URDF + '<mimic joint="beta"/>', "joint 'psi' <mimic>"),
@@ -176,7 +172,13 @@ COMPARED = {
     ("MJCF", "body-joint", "stiffness"): ("scene.xml", PSI_MJCF, PSI_MJCF[:-2] + ' stiffness="0.1"/>',
                                           "body 'pendulum' stiffness"),
     ("MJCF", "body-joint", "springdamper"): ("scene.xml", PSI_MJCF, PSI_MJCF[:-2] + ' springdamper="1 0.5"/>',
-                                             "joint 'psi'"),
+                                             "body 'pendulum' stiffness"),
+    ("MJCF", "body-joint", "springref"): ("scene.xml", PSI_MJCF, PSI_MJCF[:-2] + ' springref="0.3"/>',
+                                          "body 'pendulum' springref"),
+    ("MJCF", "body-joint", "damping"): ("scene.xml", PSI_MJCF, PSI_MJCF[:-2] + ' damping="0.1"/>',
+                                        "body 'pendulum' damping"),
+    ("URDF", "joint/dynamics", "damping"): ("scene.urdf", PSI_URDF, PSI_URDF + '<dynamics damping="0.1"/>',
+                                            "body 'pendulum' damping"),
     ("MJCF", "sensor-force", "site"): ("scene.xml", '<force name="rod_on_particle"', '<torque name="rod_on_particle"',
                                        "is a <torque> sensor"),
     ("URDF", "link", "name"): ("scene.urdf", '"pendulum"', '"bob"', "'pendulum'"),
@@ -241,7 +243,7 @@ def test_the_same_rotations_written_in_both_files_are_accepted(tmp_path):
 
 # -- the reproductions of issue 10, one by one --------------------------------------------------------
 @pytest.mark.parametrize("case_name, file, old, new, shown", [
-    ("rotating_pendulum", "scene.urdf", PSI_URDF, PSI_URDF + '<dynamics damping="0.1"/>', "<dynamics damping"),
+    ("rotating_pendulum", "scene.urdf", PSI_URDF, PSI_URDF + '<dynamics damping="0.1"/>', "body 'pendulum' damping"),
     ("rotating_pendulum", "scene.urdf", PSI_URDF, PSI_URDF + '<dynamics friction="0.1"/>', "<dynamics friction"),
     ("spring_pendulum", "scene.urdf", 'lower="-1e300" upper="1e300"', 'lower="-0.01" upper="0.01"', "<limit lower"),
     ("rotating_pendulum", "scene.xml", 'gravity="0 0 -9.81"', 'gravity="0.5 0 -9.81"', "gravity"),
@@ -259,7 +261,7 @@ def test_the_same_rotations_written_in_both_files_are_accepted(tmp_path):
     ("rotating_pendulum", "scene.xml", '<force name="rod_on_particle"', '<torque name="rod_on_particle"',
      "is a <torque> sensor"),
     ("rotating_pendulum", "scene.xml", PSI_MJCF, PSI_MJCF[:-2] + ' stiffness="0.1" springref="0.3"/>',
-     "<joint springref=\""),
+     "body 'pendulum' stiffness"),
 ])
 def test_issue_10_scenes_that_passed_or_failed_as_engine_disagreements_are_bad_input(
         tmp_path, case_name, file, old, new, shown):

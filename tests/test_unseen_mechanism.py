@@ -6,6 +6,8 @@ files run green; each of four errors planted in its equations (a dropped term, a
 cos, a factor 2 lost) fails the run with the line naming the wrong equation and the missing term in the
 derivation's own symbols.
 """
+import json
+
 import pytest
 
 from dyncheck.cli import main
@@ -106,3 +108,23 @@ def test_a_planted_error_is_named(tmp_path, capsys, old, new, named):
     write_case(tmp_path, EQUATIONS.replace(old, new))
     assert main(["run", "--cases", str(tmp_path)]) == 1
     assert named in capsys.readouterr().out
+
+
+def test_without_energy_the_derivation_s_energy_rows_are_not_applicable(tmp_path, capsys):
+    """energy() is optional: the derivation's energy rows say there is nothing to check, the engines'
+    own energy rows stay, and a study that needs the derivation's energy is refused before any work."""
+    without = EQUATIONS[:EQUATIONS.index("def energy")]
+    write_case(tmp_path, without)
+    assert main(["run", "--cases", str(tmp_path), "--json", str(tmp_path / "out.json")]) == 0
+    assert "3 not applicable" in capsys.readouterr().out
+    rows = [r for c in json.loads((tmp_path / "out.json").read_text())["cases"] for r in c["checks"]]
+    energy = {(r["check"], r["quantity"], tuple(r["sources"])): r["status"] for r in rows if "energy" in r["quantity"]}
+    assert energy[("energy", "energy drift", ("derivation",))] == "not applicable"
+    assert energy[("pointwise", "energy", ("derivation", "mujoco"))] == "not applicable"
+    assert energy[("energy", "energy drift", ("mujoco",))] == "pass"
+    assert energy[("pointwise", "energy", ("mujoco", "pinocchio"))] == "pass"
+    (tmp_path / "elastic_pendulum" / "case.toml").write_text(
+        '[stability.energy_drift]\nwhy = "drift"\nmethods = ["RK4"]\nhorizon = 10.0\ndt = 0.01\nrtol = 1e-8\n'
+        'output_step = 0.1\n')
+    assert main(["report", "--cases", str(tmp_path), "--out", str(tmp_path / "pages")]) == 2
+    assert "defines no energy(t, q, v, p); add it or remove the study" in capsys.readouterr().err

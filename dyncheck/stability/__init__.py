@@ -94,6 +94,9 @@ def validate(case):
         settings = settings_of(case, key)  # a ValueError names the file and the field
         if key == "lyapunov":
             _agreement_settings(case.file, settings)
+        if key == "energy_drift" and not hasattr(case.model("reference"), "energy"):
+            raise ValueError(f"{case.file}: stability.energy_drift measures the drift of the derivation's energy, "
+                             f"and {case.spec['derivation']} defines no energy(t, q, v, p); add it or remove the study")
 
 
 def _agreement_settings(file, settings):

@@ -69,14 +69,8 @@ class Guarded:
                            f"|{self.coords[self.index]}| = {abs(x):.3g} beyond {self.bound:g}")
         return self.model.accelerations(t, q, v)
 
-    def reactions(self, t, q, v):
-        return self.model.reactions(t, q, v)
-
-    def energy(self, t, q, v):
-        return self.model.energy(t, q, v)
-
-    def drive_power(self, t, q, v):
-        return self.model.drive_power(t, q, v)
+    def __getattr__(self, name):  # reactions, energy, drive_power: the model's, where it has them
+        return getattr(self.model, name)
 
 
 def grid_step(dt_target, t_end, max_out=1000):
