@@ -54,6 +54,25 @@ class Parameter:
         return ", ".join(f"{relation} {bound:g}" for relation, bound in self.bounds) or "any"
 
 
+class AppliedForce:
+    """A joint's generalised force (case.toml [scene.applied]) at a state: force(t, q, v) in the case's
+    coordinates, one number per degree of freedom of the joint, each a number or an expression of t, the
+    coordinates, their rates (<coordinate>_rate) and the parameters.  `constant` when none names t, a
+    coordinate or a rate: the engines then evaluate it once."""
+
+    def __init__(self, components, coords, params):
+        self.components = tuple(components)
+        self._coords, self._rates = tuple(coords), tuple(f"{c}_rate" for c in coords)
+        self._names = expressions.of_parameters(params)
+        state = {"t", *self._coords, *self._rates}
+        self.constant = not any(expressions.names(x) & state for x in self.components if isinstance(x, str))
+
+    def __call__(self, t, q, v):
+        names = {**self._names, "t": t, **dict(zip(self._coords, q)), **dict(zip(self._rates, v))}
+        return np.array([float(expressions.evaluate(x, names)) if isinstance(x, str) else float(x)
+                         for x in self.components])
+
+
 PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
 
 
@@ -164,6 +183,21 @@ class Case:
         schema.check_values(self.spec, self.file, self.value)
         for field, text in prose_fields(self.spec):  # a formula in the prose that does not evaluate: at load
             self.prose(text, field)
+        q0, v0, _ = self.initial
+        euler = self.spec["scene"].get("euler", {}).get("joint")
+        for joint, force in self.scene["applied"].items():  # a law of the state that does not evaluate: at load
+            dofs = 3 if joint == euler else 1  # a ball joint's three moments, a hinge's or slide's one force
+            if len(force.components) != dofs:
+                raise ValueError(f"{self.file}: scene.applied.{joint} = {list(force.components)} has "
+                                 f"{len(force.components)} components; joint '{joint}' has {dofs} degree"
+                                 f"{'s' * (dofs > 1)} of freedom")
+            try:
+                with np.errstate(all="ignore"):
+                    values = force(0.0, q0, v0)
+                if not np.all(np.isfinite(values)):
+                    raise ValueError(f"it is {values.tolist()} at the initial state")
+            except ValueError as error:
+                raise ValueError(f"{self.file}: scene.applied.{joint} = {list(force.components)}: {error}") from None
         self.findings = self.spec.get("findings", [])
         self._models = {}
         if derivation is not None:
@@ -289,7 +323,7 @@ class Case:
             layout.append(("euler", s["euler"]["joint"], [index[c] for c in s["euler"]["coords"]]))
         driven = {joint: tuple(self.value(m.get(key, 0.0)) for key in ("angle", "rate", "acc"))
                   for joint, m in s["driven"].items()}
-        applied = {joint: np.array([self.value(x) for x in force]) for joint, force in s.get("applied", {}).items()}
+        applied = {joint: AppliedForce(force, self.coords, self.params) for joint, force in s.get("applied", {}).items()}
         return {"coords": self.coords, "layout": layout, "driven": driven, "applied": applied,
                 "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", []),
                 "urdf_root_joint": s.get("urdf_root_joint")}

@@ -105,6 +105,21 @@ def coordinate_joints(coords, scene, file):
                      "its joint, or give as many coordinates as hinges and slides, in the file's order")
 
 
+def applied_parameters(params, given, file):
+    """The parameters that case.toml's [scene.applied] forces use: they reach the engines through those
+    forces, not the scene, so they bind to no scene number; each needs its unit in case.toml's [params]."""
+    try:
+        used = {name for force in given.get("scene", {}).get("applied", {}).values() for x in force
+                if isinstance(x, str) for name in expressions.names(x)}
+    except ValueError as error:
+        raise ValueError(f"{file}: case.toml's scene.applied: {error}") from None
+    for p in used & set(params):
+        if not isinstance(given.get("params", {}).get(p, {}).get("unit"), str):
+            raise ValueError(f"{file}: PARAMS['{p}'] is used by case.toml's [scene.applied] forces, not by the scene: "
+                             f"say its unit in case.toml, [params.{p}] unit = \"N\" (or what it is)")
+    return used & set(params)
+
+
 def bindings(params, scene, joints_kind, file, given):
     """{parameter: [location]} and {parameter: unit}: each parameter bound where `given` (a case.toml's
     [scene.bindings]) says, or else to the one scene number equal to it (or to minus it for a position
@@ -179,7 +194,12 @@ def case_file(folder, module, scene, given):
     joints = coordinate_joints(coords, scene, file)
     kinds = {j.name: j.kind for j in scene.joints}
     units = ["rad" if kinds[joints[c]] == "hinge" else "m" for c in coords]
-    bound, param_units = bindings(params, scene, kinds, file, given.get("scene", {}).get("bindings", {}))
+    given_bindings = given.get("scene", {}).get("bindings", {})
+    forcing = applied_parameters(params, given, file) - set(given_bindings)
+    bound, param_units = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds, file,
+                                  given_bindings)
+    for p in forcing:
+        param_units[p] = given["params"][p]["unit"]
     length = max(scene.length, 0.1)
     initial = {"q": [0.5 if unit == "rad" else 0.1 * length for unit in units], "v": [0.0] * len(coords),
                **given.get("initial", {})}
@@ -221,9 +241,10 @@ def case_file(folder, module, scene, given):
         "reactions": reactions,
         "coord_units": units,
         "params": {p: {"value": value, "unit": param_units[p],
-                       "about": ABOUT[bound[p][0].get("attribute")].format(
+                       "about": "in the applied forces ([scene.applied])" if p in forcing else
+                       ABOUT[bound[p][0].get("attribute")].format(
                            name=bound[p][0]["name"], index=AXES[bound[p][0].get("index", 0)])}
-                   for p, value in params.items()},  # every parameter is bound (bindings refuses the others)
+                   for p, value in params.items()},  # every other parameter is bound (bindings refuses the rest)
         "initial": {"q": q0.tolist(), "v": v0.tolist(), "t_end": t_end},
         "sample": {"count": 50, "seed": 1, "t": [0.0, t_end],
                    "q": [span(c, u) for c, u in zip(coords, units)], "v": [[-rate(u), rate(u)] for u in units],

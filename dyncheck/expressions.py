@@ -73,6 +73,14 @@ def evaluate(expression, names):
         raise ValueError(str(error)) from None
 
 
+def names(expression):
+    """The names `expression` uses (not its functions); ValueError if it is not allowed."""
+    _parse(expression)
+    tree = ast.parse(expression.strip(), mode="eval")
+    called = {node.func.id for node in ast.walk(tree) if isinstance(node, ast.Call)}
+    return {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)} - called
+
+
 @functools.cache  # some expressions are evaluated once per run
 def _parse(expression):
     """`expression` as a function of the namespace, or ValueError if it is not allowed."""

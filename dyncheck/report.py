@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck import stability, work_precision
+from dyncheck import expressions, stability, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.messages import plural
@@ -446,8 +446,10 @@ def scene_table(case):
     rows += [{"joint": joint, "role": "free: " + whose + ", ".join(case.coords[i] for i in idx)
               + (" (ball joint, in Euler angles)" if kind == "euler" else "")}
              for kind, joint, idx in scene["layout"]]
-    rows += [{"joint": joint, "role": f"applied generalized force {list(force)} (joint frame)"}
-             for joint, force in scene["applied"].items()]
+    written = lambda x: f"{case.value(x):g}" if not isinstance(x, str) or not {"t", *case.coords} & \
+        {n.removesuffix("_rate") for n in expressions.names(x)} else x  # a number, or the law of t and the state
+    rows += [{"joint": joint, "role": "applied generalized force (" + ", ".join(map(written, force.components))
+              + ") (joint frame)"} for joint, force in scene["applied"].items()]
     return markdown_table(pd.DataFrame(rows))
 
 

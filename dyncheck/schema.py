@@ -26,7 +26,8 @@ from dyncheck.messages import suggest
 
 # -- the schema -----------------------------------------------------------------------------------
 # A type is a string: "str", "int", "bool", "number" (a TOML integer or float), "expr" (a number,
-# or an expression of the parameters and pi in quotes), optionally with a condition: "int > 0",
+# or an expression of the parameters and pi in quotes), "force" (a number, or an expression of t, the
+# coordinates, their rates and the parameters: dyncheck.case.AppliedForce), optionally with a condition: "int > 0",
 # "number >= 0", "expr != 0"; or a tuple: ("list", item), ("pair", item) a list of two,
 # ("one of", *values), ("map", item) a table whose keys are names (of parameters, joints, ...),
 # ("table", {key: type}) a table of these keys, "key?" optional, or FREE.  What each key means is in
@@ -76,7 +77,7 @@ SCHEMA = ("table", {
         "coords": ("map", "str"),  # book coordinate -> hinge or slide joint
         "euler?": ("table", {"joint": "str", "coords": ("list", "str")}),  # ball joint in Euler angles
         "driven": ("map", ("table", {"angle?": "expr", "rate?": "expr", "acc?": "expr"})),
-        "applied?": ("map", ("list", "expr")),
+        "applied?": ("map", ("list", "force")),
         "paths?": ("list", "str"),
         "reactions": ("map", ("table", {"body": "str", "sensor": "str", "axis": ("one of", 0, 1, 2),
                                         "frame": FRAME})),
@@ -102,7 +103,9 @@ SCHEMA = ("table", {
 })
 
 SCALARS = {"str": ((str,), "a string"), "int": ((int,), "an integer"), "bool": ((bool,), "true or false"),
-           "number": ((int, float), "a number"), "expr": ((int, float, str), "a number or an expression in quotes")}
+           "number": ((int, float), "a number"), "expr": ((int, float, str), "a number or an expression in quotes"),
+           "force": ((int, float, str), "a number or an expression of t, the coordinates, their rates and the "
+                                        "parameters, in quotes")}
 CONDITIONS = {"> 0": (lambda x: x > 0, "must be > 0"), ">= 0": (lambda x: x >= 0, "must be >= 0"),
               "!= 0": (lambda x: x != 0, "must not be 0")}
 
@@ -609,7 +612,10 @@ MEANINGS = {
     "scene.driven.<name>.rate": "Its rate at t = 0.  Absent: 0.",
     "scene.driven.<name>.acc": "Its acceleration, constant.  Absent: 0.",
     "scene.applied": "Generalized forces on joints, by name in the scene files: one per degree of freedom of the "
-                     "joint (a ball joint's: moments about its local axes).",
+                     "joint (a ball joint's: moments about its local axes), each a number or a law of t, the "
+                     "coordinates, their rates (`<coordinate>_rate`) and the parameters, e.g. "
+                     "`x = [\"F0 * cos(Omega * t)\"]`.  The engines apply it at every evaluation (MuJoCo at each "
+                     "stage of its RK4 step); its work is in the work-energy balance.",
     "scene.paths": "Bodies whose centre of mass the runs trace: the columns <body>_x, <body>_y, <body>_z of the "
                    "run (see Expressions).",
     "scene.reactions": "Where the engines read each reaction of `reactions`, by its name.",

@@ -14,6 +14,9 @@ class MujocoLoops:
     armature back, `integrator` at step dt, the same constant generalized forces at every step."""
 
     def __init__(self, model, q0, v0, dt, integrator):
+        if model.varying:  # a bare loop has no law of the state to evaluate: nothing alike to time against
+            raise ValueError(f"{model.path}: dyncheck bench times scenes whose applied forces are constant; this "
+                             "one's depend on the state")
         self.model, self.dt, self.integrator = model, dt, integrator
         self.m, self.d, self.start, self.forces = model.stepping(q0, v0, dt, integrator)
         # the data a rollout steps, on one thread or on two (made here, outside the timed calls)
@@ -40,7 +43,7 @@ class MujocoLoops:
 def pinocchio_steps(model, engine_states):
     """Pinocchio's engine step (`PinocchioModel.engine_dynamics`) at each of `engine_states`, (configuration,
     velocity) pairs already in its own coordinates (`PinocchioModel.engine_state`)."""
-    return [model.engine_dynamics(config, velocity) for config, velocity in engine_states]
+    return [model.engine_dynamics(config, velocity, model.applied) for config, velocity in engine_states]
 
 
 def pinocchio_rhs(model, q0, v0, work):
@@ -57,7 +60,8 @@ def pinocchio_rhs(model, q0, v0, work):
             (qx, qy, qz, qw), (wx, wy, wz) = config, w
             turning = 0.5 * np.array([qw * wx + qy * wz - qz * wy, qw * wy + qz * wx - qx * wz,
                                       qw * wz + qx * wy - qy * wx, -(qx * wx + qy * wy + qz * wz)])
-            return np.concatenate([turning, model.engine_dynamics(config, w)[0], [model.applied @ w if work else 0.0]])
+            return np.concatenate([turning, model.engine_dynamics(config, w, model.applied)[0],
+                                   [model.applied @ w if work else 0.0]])
 
         return rhs, np.concatenate([*model.engine_state(0.0, q0, v0), [0.0]])
 
@@ -71,7 +75,7 @@ def pinocchio_rhs(model, q0, v0, work):
         position, velocity = np.empty(m.nv), np.empty(m.nv)
         position[coord_v], velocity[coord_v] = y[coord], y[n + coord]
         position[driven_v], velocity[driven_v] = start + rate * t + 0.5 * acc * t**2, rate + acc * t
-        accelerations, tau = model.engine_dynamics(pin.integrate(m, model.neutral, position), velocity)
+        accelerations, tau = model.engine_dynamics(pin.integrate(m, model.neutral, position), velocity, model.applied)
         power = tau[driven_v] @ velocity[driven_v] + model.applied @ velocity if work else 0.0
         out = np.empty(2 * n + 1)
         out[:n], out[n + coord], out[-1] = y[n:2 * n], accelerations[coord_v], power

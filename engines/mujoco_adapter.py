@@ -34,7 +34,8 @@ INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
 class MujocoModel:
     """scene (from the case): `layout` (book coordinates -> joints: ("scalar", joint, [i]) for a hinge
     or slide, ("euler", joint, [i, j, k]) for a ball joint in the book's Euler angles), `driven`
-    (joint -> (q0, rate, acc)), `applied` (joint -> generalized force in the joint's frame),
+    (joint -> (q0, rate, acc)), `applied` (joint -> its generalized force in the joint's frame, a function
+    force(t, q, v) of the case's state with an attribute `constant`),
     `reactions` (name -> {sensor, axis, frame}), `points` (name -> {body, frame}), `paths` (bodies)."""
 
     @staticmethod
@@ -66,11 +67,11 @@ class MujocoModel:
             raise scene_rules.refusal(self.path, "MJCF", *unmodelled)
         for (_, dof), _ in self.driven:  # the evaluation model imposes these exactly: no armature
             self.m.dof_armature[dof] = 0.0
-        self.applied = np.zeros(self.m.nv)
-        for joint, force in scene["applied"].items():
-            dof = self._joint(joint)[1]
-            self.applied[dof:dof + len(force)] = force
-        self.d.qfrc_applied[:] = self.applied
+        self.forces = [(self._joint(joint)[1], force) for joint, force in scene["applied"].items()]
+        # Constant applied forces are evaluated once (`applied`); laws of the state at every evaluation.
+        self.varying = not all(force.constant for _, force in self.forces)
+        self.applied = None if self.varying else self._applied_at(0.0, np.zeros(len(self.coords)),
+                                                                   np.zeros(len(self.coords)))
         self._driven_dofs = np.array([dof for (_, dof), _ in self.driven], dtype=int)
         self._driven_motion = np.array([motion for _, motion in self.driven]).reshape(-1, 3).T  # q0, rate, acc
         self._driven_qacc = np.zeros(self.m.nv)
@@ -139,7 +140,6 @@ class MujocoModel:
             twin.m.body_inertia[self.body_id(name)] *= inertia
         twin.d = mujoco.MjData(twin.m)
         mujoco.mj_setConst(twin.m, twin.d)
-        twin.d.qfrc_applied[:] = self.applied
         return twin
 
     def tree(self):
@@ -210,17 +210,38 @@ class MujocoModel:
         d = self.d if d is None else d
         d.time = t
         d.qpos[:], d.qvel[:] = self._engine_states(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
-        d.qfrc_applied[:] = self.applied
+        d.qfrc_applied[:] = self._applied_many(t, q, v)
+
+    def _applied_at(self, t, q, v):
+        """The applied generalized forces at the case's state (t, q, v): every dof's, (nv,)."""
+        out = np.zeros(self.m.nv)
+        for dof, force in self.forces:
+            value = force(t, q, v)
+            out[dof:dof + len(value)] = value
+        return out
+
+    def _applied_many(self, t, q, v):
+        """`_applied_at` at one state or many (as in `_engine_states`): (..., nv)."""
+        q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
+        states = q.shape[:-1]
+        if not self.varying:
+            return np.broadcast_to(self.applied, states + (self.m.nv,))
+        t = np.broadcast_to(t, states)
+        out = np.empty(states + (self.m.nv,))
+        for i in np.ndindex(states):
+            out[i] = self._applied_at(t[i], q[i], v[i])
+        return out
 
     def _solve(self, t, q, v):
         """Accelerations of every dof at the book's state, or at many (as in `_engine_states`): driven
         ones imposed, free ones solved from M_ff; with qvel, the mass matrix and the smooth forces.
         Leaves self.d at the (last) state."""
         qpos, qvel = self._engine_states(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
+        applied = self._applied_many(t, q, v)
         nv, states = self.m.nv, qvel.shape[:-1]
         mass, smooth = np.zeros(states + (nv, nv)), np.empty(states + (nv,))
         for i in np.ndindex(states):
-            self.d.qpos[:], self.d.qvel[:] = qpos[i], qvel[i]
+            self.d.qpos[:], self.d.qvel[:], self.d.qfrc_applied[:] = qpos[i], qvel[i], applied[i]
             mujoco.mj_forward(self.m, self.d)
             mujoco.mj_fullM(self.m, self.d, mass[i])
             smooth[i] = self.d.qfrc_smooth
@@ -235,6 +256,12 @@ class MujocoModel:
     def _inverse(self, t, q, v):
         self.d.qacc[:] = self._solve(t, q, v)[3]
         mujoco.mj_inverse(self.m, self.d)
+
+    def _constant_applied(self, method):
+        """The applied forces of a scene where they are constant; ValueError where they are laws of the state."""
+        if self.varying:
+            raise ValueError(f"{self.path}: {method} needs constant applied forces; this scene's depend on the state")
+        return self.applied
 
     def _ball_joint(self, method):
         """(qpos address, dof address) of the ball joint of a scene that has no other joint."""
@@ -305,11 +332,12 @@ class MujocoModel:
     def drive_powers(self, t, q, v):
         """`drive_power` at many states at once: t of shape (N,), q and v (N, n) -> (N,)."""
         qvel, mass, smooth, qacc = self._solve(t, q, v)
+        applied = self._applied_many(t, q, v)
         # mj_inverse's force, M qacc + bias - passive = M qacc - smooth + applied, from what _solve has
-        inverse = (mass @ qacc[..., None])[..., 0] - smooth + self.applied
+        inverse = (mass @ qacc[..., None])[..., 0] - smooth + applied
         dofs = self._driven_dofs
         dampers = -np.sum(self.m.dof_damping * qvel**2, axis=-1)
-        return np.sum(inverse[..., dofs] * qvel[..., dofs], axis=-1) + qvel @ self.applied + dampers
+        return np.sum(inverse[..., dofs] * qvel[..., dofs], axis=-1) + np.sum(qvel * applied, axis=-1) + dampers
 
     def ball_joint_acceleration(self, quaternion, omega):
         """The body's angular acceleration, in its own frame, of the scene's ball joint from MuJoCo's own
@@ -317,7 +345,7 @@ class MujocoModel:
         forces.  No Euler angles, so no singularity at zero nutation."""
         qadr, dof = self._ball_joint("ball_joint_acceleration")
         self.d.qpos[qadr:qadr + 4], self.d.qvel[dof:dof + 3] = quaternion, omega
-        self.d.qfrc_applied[:] = self.applied
+        self.d.qfrc_applied[:] = self._constant_applied("ball_joint_acceleration")
         mujoco.mj_forward(self.m, self.d)
         return self.d.qacc[dof:dof + 3].copy()
 
@@ -331,8 +359,9 @@ class MujocoModel:
     def stepping(self, q0, v0, dt, integrator):
         """The scene as MuJoCo steps it from (q0, v0): the model with its armature back and `integrator`
         at step dt, its data, the full physics state, and the constant generalized forces of every
-        step: the applied ones, and armature x acceleration on each driven joint, which gives the
-        armature the prescribed (constant) acceleration."""
+        step: the applied ones (where they are constant; laws of the state are added at each evaluation,
+        `_rollout`), and armature x acceleration on each driven joint, which gives the armature the
+        prescribed (constant) acceleration."""
         m = copy.copy(self.m)
         m.dof_armature[:] = self.armature
         m.opt.timestep = dt
@@ -342,7 +371,7 @@ class MujocoModel:
         spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
         state0 = np.empty(mujoco.mj_stateSize(m, spec))
         mujoco.mj_getState(m, d, state0, spec)
-        forces = self.applied.copy()
+        forces = np.zeros(m.nv) if self.varying else self.applied.copy()
         forces[self._driven_dofs] += self.armature[self._driven_dofs] * self._driven_motion[2]
         return m, d, state0, forces
 
@@ -374,12 +403,39 @@ class MujocoModel:
         m, d, state0, forces = self.stepping(q0, v0, dt, integrator)
         nstep = int(round(t_end / dt))
         start = time.perf_counter()
-        states, _ = mujoco.rollout.rollout(m, d, state0[None], forces[None, None], nstep=nstep,
-                                           control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
+        if self.varying:
+            states = self._stepped(m, d, state0, forces, nstep, q0)
+        else:
+            states, _ = mujoco.rollout.rollout(m, d, state0[None], forces[None, None], nstep=nstep,
+                                               control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
+            states = states[0]
         wall = time.perf_counter() - start
-        states = np.concatenate([state0[None], states[0]])
+        states = np.concatenate([state0[None], states])
         warnings = {mujoco.mjtWarning(i).name: (w.number, w.lastinfo) for i, w in enumerate(d.warning) if w.number}
         return states[:, 0], states[:, 1:1 + m.nq], states[:, 1 + m.nq:1 + m.nq + m.nv], wall, warnings
+
+    def _stepped(self, m, d, state0, forces, nstep, q0):
+        """mj_step `nstep` times from state0 with applied forces that are laws of the state: MuJoCo's control
+        callback sets them at every evaluation, each stage of RK4 included (at the stage's time and state),
+        on top of the constant `forces`.  The full physics state after each step, as `rollout` gives it."""
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        states = np.empty((nstep, len(state0)))
+
+        def control(m, d):
+            q, v = self._book_states(d.qpos[None], d.qvel[None], q0)
+            try:
+                d.qfrc_applied[:] = forces + self._applied_at(d.time, q[0], v[0])
+            except (ArithmeticError, ValueError):  # a law that fails here: MuJoCo's divergence check stops the run
+                d.qfrc_applied[:] = np.nan
+
+        mujoco.set_mjcb_control(control)  # MuJoCo's one global callback: set for this run only
+        try:
+            for i in range(nstep):
+                mujoco.mj_step(m, d)
+                mujoco.mj_getState(m, d, states[i], spec)
+        finally:
+            mujoco.set_mjcb_control(None)
+        return states
 
     def _book_states(self, qpos, qvel, q0):
         q = np.zeros((len(qpos), len(self.coords)))

@@ -73,10 +73,11 @@ class PinocchioModel:
         unmodelled = None if _is_mjcf(self.path) else next(_unmodelled(document, scene), None)
         if unmodelled:
             raise scene_rules.refusal(self.path, "URDF", *unmodelled)
-        self.applied = np.zeros(self.m.nv)
-        for joint, force in scene["applied"].items():
-            iv = self._joint(joint).idx_v
-            self.applied[iv:iv + len(force)] = force
+        self.forces = [(self._joint(joint).idx_v, force) for joint, force in scene["applied"].items()]
+        # Constant applied forces are evaluated once (`applied`); laws of the state at every evaluation.
+        self.varying = not all(force.constant for _, force in self.forces)
+        self.applied = None if self.varying else self._applied_at(0.0, np.zeros(len(self.coords)),
+                                                                   np.zeros(len(self.coords)))
         self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
         # (idx_q, idx_v, stiffness, rest position, damping) of each joint with a spring or a damper
@@ -241,10 +242,19 @@ class PinocchioModel:
         """The Pinocchio algorithms that `engine_dynamics` runs on this scene."""
         return "aba" if len(self.free) == self.m.nv else "rnea+crba" if len(self.free) else "rnea"
 
-    def engine_dynamics(self, config, velocity):
-        """Pinocchio alone, on its own configuration and velocity: every dof's acceleration, and the
-        inverse-dynamics forces M acc + nle that give it (`algorithm` names the branch it takes)."""
-        force = self.applied.copy()
+    def _applied_at(self, t, q, v):
+        """The applied generalized forces at the case's state (t, q, v): every dof's, (nv,)."""
+        out = np.zeros(self.m.nv)
+        for iv, force in self.forces:
+            value = force(t, q, v)
+            out[iv:iv + len(value)] = value
+        return out
+
+    def engine_dynamics(self, config, velocity, applied):
+        """Pinocchio alone, on its own configuration and velocity under the applied generalized forces
+        `applied` (nv,): every dof's acceleration, and the inverse-dynamics forces M acc + nle that give it
+        (`algorithm` names the branch it takes)."""
+        force = applied.copy()
         for iq, iv, k, rest, damping in self.passive:
             force[iv] -= k * (config[iq] - rest) + damping * velocity[iv]
         if len(self.free) == self.m.nv:  # nothing prescribed: Pinocchio's ABA solves it directly
@@ -263,8 +273,10 @@ class PinocchioModel:
 
     @functools.lru_cache(maxsize=1)  # an integrator asks for the accelerations, then the drive power, of one state
     def _dynamics_at(self, t, q, v):
-        config, velocity = self.engine_state(t, np.array(q), np.array(v))
-        return (config, velocity, *self.engine_dynamics(config, velocity))
+        q, v = np.array(q), np.array(v)
+        config, velocity = self.engine_state(t, q, v)
+        applied = self._applied_at(t, q, v) if self.varying else self.applied
+        return (config, velocity, *self.engine_dynamics(config, velocity, applied))
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
@@ -316,7 +328,10 @@ class PinocchioModel:
         config, velocity = self.neutral.copy(), np.zeros(self.m.nv)
         config[joint.idx_q:joint.idx_q + 4] = np.roll(quaternion, -1)  # Pinocchio's order: (x, y, z, w)
         velocity[joint.idx_v:joint.idx_v + 3] = omega
-        return self.engine_dynamics(config, velocity)[0][joint.idx_v:joint.idx_v + 3]
+        if self.varying:
+            raise ValueError(f"{self.path}: ball_joint_acceleration needs constant applied forces; this scene's "
+                             "depend on the state")
+        return self.engine_dynamics(config, velocity, self.applied)[0][joint.idx_v:joint.idx_v + 3]
 
     def _ball_joint(self, method):
         """The ball (spherical) joint of a scene that has no other joint."""
@@ -344,7 +359,8 @@ class PinocchioModel:
         _, velocity, _, tau = self._dynamics(t, q, v)
         driven = sum(tau[iv] * velocity[iv] for (_, _, iv), _ in self._driven_joints)
         dampers = -sum(damping * velocity[iv] ** 2 for _, iv, _, _, damping in self.passive)
-        return float(driven + self.applied @ velocity + dampers)
+        applied = self._applied_at(t, q, v) if self.varying else self.applied
+        return float(driven + applied @ velocity + dampers)
 
 
 def _is_mjcf(path):

@@ -69,7 +69,7 @@ def test_the_bare_pinocchio_loops_do_the_harness_work(name):
     assert_equal_to_rounding(dy[-1], power)
     config, velocity = model.engine_state(0.0, q0, v0)
     (acc, _), = pinocchio_steps(model, [(config, velocity)])
-    np.testing.assert_array_equal(acc, model.engine_dynamics(config, velocity)[0])
+    np.testing.assert_array_equal(acc, model.engine_dynamics(config, velocity, model.applied)[0])
 
 
 def test_the_bench_table_names_each_rows_bare_loop():
