@@ -328,6 +328,12 @@ class Case:
                 "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", []),
                 "urdf_root_joint": s.get("urdf_root_joint")}
 
+    def least_reaction_scale(self, name):
+        """The least scale reaction `name` is judged against: the case's force scale, or for a moment its moment
+        scale (tolerance.pointwise), so that a reaction that vanishes is not judged by rounding noise."""
+        moment = self.scene["reactions"][name].get("quantity", "force") == "moment"
+        return self.value(self.tolerance["pointwise"]["moment_scale" if moment else "force_scale"])
+
     @property
     def driven(self):
         """Whether anything does work on the scene: prescribed motions, applied forces or dampers."""

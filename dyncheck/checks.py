@@ -83,12 +83,16 @@ def quantity_scales(case, a, b):
     relative to the vector's largest magnitude (for an acceleration at least g); the drive power
     (zero when nothing moves the base) relative to at least the energy per second."""
     scales = {}
-    # The reactions are components of one force: each is judged against the largest of them and at
-    # least the case's force scale (the weight), so that a component that vanishes identically (the
-    # force along an axis nothing loads, at constant rates) is not judged by rounding noise relative to zero.
-    forces = max([case.value(case.tolerance["pointwise"]["force_scale"])]
-                 + [np.max(np.abs(s[name])) for s in (a, b) for name in case.reaction_names if name in s])
-    scales.update(dict.fromkeys([name for name in case.reaction_names if name in a], forces))
+    # The reactions are components of forces (and moments): each is judged against the largest of its kind and
+    # at least the case's force (moment) scale, so that a component that vanishes identically (the force along
+    # an axis nothing loads, at constant rates) is not judged by rounding noise relative to zero.
+    for quantity in ("force", "moment"):
+        names = [name for name in case.reaction_names if name in a and name in b
+                 and case.scene["reactions"][name].get("quantity", "force") == quantity]
+        if names:
+            scale = max([case.least_reaction_scale(names[0])]
+                        + [np.max(np.abs(s[name])) for s in (a, b) for name in names])
+            scales.update(dict.fromkeys(names, scale))
     if "drive_power" in a and "drive_power" in b:
         energy = max([np.max(np.abs(s["energy"])) for s in (a, b) if "energy" in s], default=0.0)
         scales["drive_power"] = max(np.max(np.abs(a["drive_power"])), np.max(np.abs(b["drive_power"])),

@@ -174,15 +174,19 @@ def frequency(module, coords, params, q0, v0):
 
 
 def reaction_sensors(names, scene, file):
-    """[scene.reactions] for reactions named <force sensor>_<x|y|z>: that sensor's component, in its body's frame."""
+    """[scene.reactions] for reactions named <sensor>_<x|y|z> after a force sensor (a force) or a torque sensor (a
+    moment about the body's origin): that sensor's component, in its body's frame."""
     out = {}
+    sensors = {**{s: (body, "force") for s, body in scene.force_sensors.items()},
+               **{s: (body, "moment") for s, body in scene.torque_sensors.items()}}
     for name in names:
         sensor, _, axis = name.rpartition("_")
-        if sensor not in scene.force_sensors or axis not in AXES:
-            raise ValueError(f"{file}: reaction '{name}' is not named <force sensor>_<x|y|z> after a <force> sensor "
-                             f"of {scene.path} ({', '.join(scene.force_sensors) or 'none'}); name it so, or say which "
+        if sensor not in sensors or axis not in AXES:
+            raise ValueError(f"{file}: reaction '{name}' is not named <sensor>_<x|y|z> after a <force> or <torque> "
+                             f"sensor of {scene.path} ({', '.join(sensors) or 'none'}); name it so, or say which "
                              "sensor it reads in a case.toml [scene.reactions] (docs/case-file.md)")
-        out[name] = {"body": scene.force_sensors[sensor], "sensor": sensor, "axis": AXES.index(axis), "frame": "body"}
+        body, quantity = sensors[sensor]
+        out[name] = {"body": body, "sensor": sensor, "axis": AXES.index(axis), "frame": "body", "quantity": quantity}
     return out
 
 
@@ -253,7 +257,7 @@ def case_file(folder, module, scene, given):
         "integration": {"output_step": output_step, "rtol": 1e-10, "tight_rtol": 1e-12,
                         "mujoco_step": output_step / substeps},
         "tolerance": {
-            "pointwise": {"value": 1e-9, "force_scale": weight,
+            "pointwise": {"value": 1e-9, "force_scale": weight, "moment_scale": f"{weight} * {length:.6g}",
                           "why": "The derivation's and the engines' rounding (1e-13 or so of each quantity's size), "
                                  "and MuJoCo's placeholder inertias (1e-14 kg m^2): far below 1e-9."},
             "trajectory": {"safety": 10.0, "why": "Ten times each run's own error estimate."},

@@ -259,6 +259,10 @@ def figure_energy(result, path, *, words):
     plt.close(fig)
 
 
+def reaction_unit(case, name):
+    return "N m" if case.scene["reactions"][name].get("quantity") == "moment" else "N"
+
+
 def figure_pointwise(result, path):
     """Per random state, each source's deviation from `reference`, relative to the quantity's scale."""
     values = result.sample["values"]
@@ -467,7 +471,8 @@ def write_case_page(result, case, tmp):
                                              "error against the tight solution" if words else
                                              "error against the tight reference solution", path, words=words, log_error=True),
         "energy": lambda path: figure_energy(result, path, words=words),
-        "reactions": lambda path: figure_series(result, list(case.reaction_names), lambda c: f"{c} [N]",
+        "reactions": lambda path: figure_series(result, list(case.reaction_names),
+                                                lambda c: f"{c} [{reaction_unit(case, c)}]",
                                                 "reactions over time, every source", path, words=words),
         "pointwise": lambda path: figure_pointwise(result, path),
     }

@@ -311,8 +311,7 @@ def localise_reactions(case, rows, sample, drawn, wrong_equations):
                 samples.append((dict(other.params), with_driven(other, t, q), v, mine - theirs))
                 if other is case:  # judged as the pointwise rows judge a reaction: against its largest
                     # size at the case's parameters, at least the force scale
-                    scale = max(np.max(np.abs(mine)), np.max(np.abs(theirs)),
-                                case.value(case.tolerance["pointwise"]["force_scale"]))
+                    scale = max(np.max(np.abs(mine)), np.max(np.abs(theirs)), case.least_reaction_scale(name))
         if scale is None:  # no numbers at the case's own parameters: the pointwise rows say why
             continue
         fit = terms.fit(case.coords, case.spec["coord_units"], list(case.params), samples,

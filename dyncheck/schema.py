@@ -64,7 +64,8 @@ SCHEMA = ("table", {
     "work_precision?": FREE,  # validated by dyncheck/work_precision.py
     "integration": ("table", {"output_step": "expr > 0", "rtol": "expr > 0", "tight_rtol": "expr > 0",
                               "mujoco_step": "expr > 0"}),
-    "tolerance": ("table", {"pointwise": ("table", {"value": "number > 0", "force_scale": "expr >= 0", "why": "str"}),
+    "tolerance": ("table", {"pointwise": ("table", {"value": "number > 0", "force_scale": "expr >= 0",
+                                                    "moment_scale?": "expr >= 0", "why": "str"}),
                             "trajectory": TOLERANCE, "energy": TOLERANCE}),
     "report": ("table", {
         "modelling": "str",
@@ -80,7 +81,7 @@ SCHEMA = ("table", {
         "applied?": ("map", ("list", "force")),
         "paths?": ("list", "str"),
         "reactions": ("map", ("table", {"body": "str", "sensor": "str", "axis": ("one of", 0, 1, 2),
-                                        "frame": FRAME})),
+                                        "frame": FRAME, "quantity?": ("one of", "force", "moment")})),
         "points?": ("map", ("table", {"body": "str", "frame": FRAME, "kind?": (
             "one of", "acceleration", "com acceleration", "angular velocity", "angular acceleration")})),
         "urdf_root_joint?": ("table", {"name": "str", "type": ("one of", "spherical")}),
@@ -356,6 +357,10 @@ def _cross_references(spec, file):
         raise _error(file, "scene.coords", scene["coords"],
                      f"(with scene.euler) does not give each of the coordinates ({', '.join(coords) or 'none'}) "
                      "exactly one joint")
+    moments = [name for name, reaction in scene["reactions"].items() if reaction.get("quantity") == "moment"]
+    if moments and "moment_scale" not in spec["tolerance"]["pointwise"]:
+        raise _error(file, "tolerance.pointwise", spec["tolerance"]["pointwise"],
+                     f"has no moment_scale, which the moment reaction '{moments[0]}' is judged against at least")
     if sorted(scene["reactions"]) != sorted(spec["reactions"]):
         raise _error(file, "scene.reactions", list(scene["reactions"]),
                      f"does not name the case's reactions ({', '.join(spec['reactions'])})")
@@ -514,7 +519,8 @@ MEANINGS = {
                   "`reference.<case>`), or a path ending in .py relative to the case's folder.  It defines the "
                   "sources `Book`, `Reference` and, if the book prints a program, `Program`.",
     "coords": "The generalized coordinates, in the order of the book's equations; their rates are `<coord>_rate`.",
-    "reactions": "The reactions (force components) the book computes, by name; compared between the sources.",
+    "reactions": "The reactions (force or moment components) the derivation computes, by name; compared between "
+                 "the sources.",
     "coord_units": "The unit of each coordinate, in the order of `coords`: rad (an angle) or m (a length).",
     "params": "The case's parameters, by name: the one source of its numbers, for the equations and both scene "
               "files alike.  `--set NAME=VALUE` overrides one.",
@@ -575,6 +581,8 @@ MEANINGS = {
                                  "a comparison proves nothing).",
     "tolerance.pointwise.force_scale": "The least scale a reaction is judged against (e.g. the weight m * g), so "
                                        "that a reaction that vanishes is not judged by rounding noise.",
+    "tolerance.pointwise.moment_scale": "The least scale a moment reaction is judged against (e.g. the weight "
+                                        "times a length); required when a reaction is a moment.",
     "tolerance.pointwise.why": "The argument for the value: rounding, modelling differences, margin.",
     "tolerance.trajectory": "The trajectory check: each integrated run against the tight solution.",
     "tolerance.trajectory.safety": f"The allowed error is this times the run's own error estimate (at most "
@@ -620,9 +628,12 @@ MEANINGS = {
                    "run (see Expressions).",
     "scene.reactions": "Where the engines read each reaction of `reactions`, by its name.",
     "scene.reactions.<name>.body": "The body the force acts on.",
-    "scene.reactions.<name>.sensor": "The MJCF force sensor that measures it.",
+    "scene.reactions.<name>.sensor": "The MJCF force (or torque) sensor that measures it.",
     "scene.reactions.<name>.axis": "Its component: 0, 1 or 2 (x, y, z).",
     "scene.reactions.<name>.frame": "The frame of the component: the body's or the world's.",
+    "scene.reactions.<name>.quantity": "A force (the default: read by a <force> sensor) or a moment about the "
+                                       "body's origin (a <torque> sensor on a site there), of the parent on the "
+                                       "body and what hangs from it.",
     "scene.points": "Kinematic vectors of a body compared between the sources, by name: the quantities "
                     "<name>_x, <name>_y, <name>_z.",
     "scene.points.<name>.body": "The body.",
@@ -691,6 +702,7 @@ KEY_UNITS = {
     **dict.fromkeys(["initial.v", "sample.v"], "coord_units per s"),
     **dict.fromkeys(["initial.t_end", "sample.t", "integration.output_step", "integration.mujoco_step"], "s"),
     "tolerance.pointwise.force_scale": "N",
+    "tolerance.pointwise.moment_scale": "N m",
     "scene.driven.<name>.angle": "rad or m (the joint's)",
     "scene.driven.<name>.rate": "rad/s or m/s",
     "scene.driven.<name>.acc": "rad/s^2 or m/s^2",

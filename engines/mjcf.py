@@ -1,4 +1,4 @@
-"""What an MJCF scene holds, read once by MuJoCo's compiler: its joints, its force sensors and the
+"""What an MJCF scene holds, read once by MuJoCo's compiler: its joints, its force and torque sensors and the
 numbers a case's parameter may be bound to.  A case without a case file (a researcher's scene.xml and
 equations.py) gets its coordinates, bindings and time scales from this (dyncheck.derived), and
 `dyncheck new` its scaffold."""
@@ -36,6 +36,7 @@ class SceneFile:
     path: str
     joints: tuple  # of Joint, in the file's order
     force_sensors: dict  # sensor name -> the body its site is on
+    torque_sensors: dict  # sensor name -> the body its site is on
     values: tuple  # of Value
     masses: dict  # body name -> mass, kg
     length: float  # the largest distance between two bodies' origins or a body and its centre of mass, m
@@ -54,8 +55,9 @@ def describe(path):
     joints = tuple(Joint(name(mujoco.mjtObj.mjOBJ_JOINT, j), mujoco.mjtJoint(m.jnt_type[j]).name[6:].lower(),
                          body_name(m.jnt_bodyid[j]), tuple(map(float, m.jnt_range[j])) if m.jnt_limited[j] else None)
                    for j in range(m.njnt))
-    sensors = {name(mujoco.mjtObj.mjOBJ_SENSOR, s): body_name(m.site_bodyid[m.sensor_objid[s]])
-               for s in range(m.nsensor) if m.sensor_type[s] == mujoco.mjtSensor.mjSENS_FORCE}
+    sensors = {kind: {name(mujoco.mjtObj.mjOBJ_SENSOR, s): body_name(m.site_bodyid[m.sensor_objid[s]])
+                      for s in range(m.nsensor) if m.sensor_type[s] == kind}
+               for kind in (mujoco.mjtSensor.mjSENS_FORCE, mujoco.mjtSensor.mjSENS_TORQUE)}
     values = [Value({"element": "option", "name": "gravity", "index": i}, float(m.opt.gravity[i]))
               for i in range(3) if m.opt.gravity[i]]
     for b in range(1, m.nbody):
@@ -73,5 +75,6 @@ def describe(path):
                 values.append(Value({"element": "joint", "name": joint.name, "attribute": attribute}, float(value)))
     lengths = [np.linalg.norm(m.body_pos[b]) for b in range(1, m.nbody)] + \
               [np.linalg.norm(m.body_ipos[b]) for b in range(1, m.nbody)]
-    return SceneFile(str(path), joints, sensors, tuple(values),
+    return SceneFile(str(path), joints, sensors[mujoco.mjtSensor.mjSENS_FORCE], sensors[mujoco.mjtSensor.mjSENS_TORQUE],
+                     tuple(values),
                      {body_name(b): float(m.body_mass[b]) for b in range(1, m.nbody)}, float(max(lengths, default=0.0)))

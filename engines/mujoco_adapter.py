@@ -102,15 +102,21 @@ class MujocoModel:
         return int(self.m.sensor_adr[i]), int(self.m.sensor_objid[i])
 
     def _reaction_sensor(self, reaction, spec):
-        """The sensor of a reaction: a force sensor on a site of the case's body, with the body's axes (the
-        Pinocchio side reads the force on that body's joint, in its frame), its reading neither clamped nor
-        delayed.  Its sensordata address and site."""
+        """The sensor of a reaction: a force sensor (a torque sensor for a moment, on a site at the body's origin)
+        on a site of the case's body, with the body's axes (the Pinocchio side reads the force or moment on that
+        body's joint, in its frame, about its origin), its reading neither clamped nor delayed.  Its sensordata
+        address and site."""
         i = self._id(mujoco.mjtObj.mjOBJ_SENSOR, spec["sensor"])
         site = int(self.m.sensor_objid[i])
         kind = mujoco.mjtSensor(self.m.sensor_type[i]).name[7:].lower()
         where = f"{self.path}: sensor '{spec['sensor']}' of reaction '{reaction}'"
-        if kind != "force":
-            raise ValueError(f"{where} is a <{kind}> sensor: a reaction reads a <force> sensor (forces, not moments)")
+        quantity = spec.get("quantity", "force")
+        expected = {"force": "force", "moment": "torque"}[quantity]
+        if kind != expected:
+            raise ValueError(f"{where} is a <{kind}> sensor: a {quantity} reaction reads a <{expected}> sensor")
+        if quantity == "moment" and not np.max(np.abs(self.m.site_pos[site])) <= 0.0:  # NaN too
+            raise scene_rules.refusal(self.path, "MJCF", "body-site", "pos", f"site of sensor '{spec['sensor']}'",
+                                      _text(self.m.site_pos[site]))
         body = mujoco.mj_id2name(self.m, mujoco.mjtObj.mjOBJ_BODY, self.m.site_bodyid[site])
         if body != spec["body"]:
             raise ValueError(f"{where} is on body '{body}', but case.toml's reaction is on body '{spec['body']}'")
@@ -119,10 +125,10 @@ class MujocoModel:
             raise scene_rules.refusal(self.path, "MJCF", "body-site", "quat", f"site of sensor '{spec['sensor']}'",
                                       _text(self.m.site_quat[site]))
         if self.m.sensor_cutoff[i] > 0:
-            raise scene_rules.refusal(self.path, "MJCF", "sensor-force", "cutoff", f"sensor '{spec['sensor']}'",
+            raise scene_rules.refusal(self.path, "MJCF", f"sensor-{kind}", "cutoff", f"sensor '{spec['sensor']}'",
                                       _text(self.m.sensor_cutoff[i]))
         if self.m.sensor_history[i][0] > 0:
-            raise scene_rules.refusal(self.path, "MJCF", "sensor-force", "nsample", f"sensor '{spec['sensor']}'",
+            raise scene_rules.refusal(self.path, "MJCF", f"sensor-{kind}", "nsample", f"sensor '{spec['sensor']}'",
                                       int(self.m.sensor_history[i][0]))
         return int(self.m.sensor_adr[i]), site
 

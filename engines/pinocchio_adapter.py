@@ -78,7 +78,8 @@ class PinocchioModel:
         self.varying = not all(force.constant for _, force in self.forces)
         self.applied = None if self.varying else self._applied_at(0.0, np.zeros(len(self.coords)),
                                                                    np.zeros(len(self.coords)))
-        self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"])
+        self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"],
+                                      spec.get("quantity", "force"))
                                for name, spec in scene["reactions"].items()}
         # (idx_q, idx_v, stiffness, rest position, damping) of each joint with a spring or a damper
         passive = set(self.joint_values["stiffness"]) | set(self.joint_values["damping"])
@@ -294,8 +295,9 @@ class PinocchioModel:
         pin.rnea(self.m, self.d, config, velocity, acc)  # fills data.f: force of each joint's parent on its subtree
         pin.forwardKinematics(self.m, self.d, config)  # rnea leaves data.oMi stale (Pinocchio 4.1)
         out = {}
-        for name, (joint, axis, frame) in self.reaction_specs.items():
-            force = self.d.f[joint].linear
+        for name, (joint, axis, frame, quantity) in self.reaction_specs.items():
+            # the force, or the moment about the joint's origin (the body's), of the parent on the subtree
+            force = self.d.f[joint].linear if quantity == "force" else self.d.f[joint].angular
             if frame == "world":
                 force = self.d.oMi[joint].rotation @ force
             out[name] = float(force[axis])

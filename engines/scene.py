@@ -150,6 +150,9 @@ RULES = [
          " settings only with density or viscosity (refused); the rest acts on contacts or rendering"),
     Rule("MJCF", "body-site", "quat", REFUSED, "on a reaction's site, any orientation (quat, euler, ...): turns"
          " the sensor's axes away from the body's, in which the Pinocchio side reads the force"),
+    Rule("MJCF", "body-site", "pos", REFUSED, "on a moment reaction's site, off the body's origin: the torque"
+         " sensor's moment is about the site, the Pinocchio side's about the joint at the body's origin",
+         "put the site at the body's origin"),
     Rule("MJCF", "body-site", "*", NO_EFFECT, "a frame for sensors; a reaction's site is checked with its sensor"),
     Rule("MJCF", "body-camera", "*", NO_EFFECT, "rendering"),
     Rule("MJCF", "body-light", "*", NO_EFFECT, "rendering"),
@@ -179,6 +182,10 @@ RULES = [
     Rule("MJCF", "sensor-force", "site", COMPARED,
          "a reaction's sensor must be a force sensor on a site of the case's body, with the body's axes: the"
          " Pinocchio side reads the force on that body's joint, in its frame"),
+    Rule("MJCF", "sensor-torque", "site", COMPARED,
+         "a moment reaction's sensor must be a torque sensor on a site at the case's body's origin, with the"
+         " body's axes: the Pinocchio side reads the moment on that body's joint about the joint's origin (the"
+         " body's: an MJCF joint pos is refused), in its frame"),
     Rule("MJCF", "sensor", "cutoff", REFUSED, "on a reaction's sensor: clamps the reading"),
     Rule("MJCF", "sensor", "nsample", REFUSED, "on a reaction's sensor: delays or holds the reading"),
     # -- URDF: what urdfdom parses and Pinocchio reads, or drops ---------------------------------
