@@ -206,7 +206,7 @@ def localise(case, rows, found, drawn):
 def fit_at(case, samples, place, units, driven):
     """The terms that explain the residual at `place` over the sets `samples` ((params, case, Residuals));
     None where no set gives finite residuals."""
-    fitted = [(params, with_driven(other, r.t, r.q), r.v, *r.of(place)) for params, other, r in samples]
+    fitted = [(params, with_driven(other, r.t, r.q, r.v), r.v, *r.of(place)) for params, other, r in samples]
     usable = [(params, q, v, residual) for params, q, v, residual, _ in fitted if np.all(np.isfinite(residual))]
     if not usable:
         return None
@@ -221,16 +221,23 @@ def parameter_cases(case, drawn):
 
 
 def driven_units(case):
-    """(joint, unit) of each prescribed motion: candidates of the fit as functions of time (dyncheck.terms)."""
+    """(joint, unit) of each prescribed motion, and (law, terms.FORCE) of each component of an applied force
+    that is a law of time and state: candidates of the fit as functions of time (dyncheck.terms), the law
+    in the case file's words, "(F0 * cos(Omega * t))"."""
     kinds = {body.joint: body.joint_type for body in case.model("mujoco").tree()}
-    return tuple((joint, "rad" if kinds[joint] == "hinge" else "m") for joint in case.scene["driven"])
+    return tuple((joint, "rad" if kinds[joint] == "hinge" else "m") for joint in case.scene["driven"]) + tuple(
+        (f"({law})", terms.FORCE) for force in case.scene["applied"].values() if not force.constant
+        for law in force.components)
 
 
-def with_driven(case, t, q):
-    """The states' coordinates q and, after them, the prescribed motions' positions at the states' times t:
-    the terms of a scene on a driven base depend on its angle, alpha0 + alpha_rate t."""
+def with_driven(case, t, q, v):
+    """The states' coordinates q and, after them, the prescribed motions' positions at the states' times t
+    and the varying applied forces' components there (driven_units): the terms of a scene on a driven base
+    depend on its angle, alpha0 + alpha_rate t; a derivation may lack a push F0 cos(Omega t)."""
     motions = [angle + rate * t + 0.5 * acc * t**2 for angle, rate, acc in case.scene["driven"].values()]
-    return np.column_stack([q, *motions]) if motions else q
+    forces = [np.array([force(ti, qi, vi) for ti, qi, vi in zip(np.broadcast_to(t, len(q)), q, v)]).T
+              for force in case.scene["applied"].values() if not force.constant]
+    return np.column_stack([q, *motions, *[row for force in forces for row in force]]) if motions or forces else q
 
 
 PRINTED_ROWS = "printed row"
@@ -308,7 +315,7 @@ def localise_reactions(case, rows, sample, drawn, wrong_equations):
             t = np.array([t for t, _, _ in states])
             q, v = (np.array([state[k] for state in states]).reshape(len(states), -1) for k in (1, 2))
             if np.all(np.isfinite(mine - theirs)):
-                samples.append((dict(other.params), with_driven(other, t, q), v, mine - theirs))
+                samples.append((dict(other.params), with_driven(other, t, q, v), v, mine - theirs))
                 if other is case:  # judged as the pointwise rows judge a reaction: against its largest
                     # size at the case's parameters, at least the force scale
                     scale = max(np.max(np.abs(mine)), np.max(np.abs(theirs)), case.least_reaction_scale(name))

@@ -20,6 +20,7 @@ from itertools import combinations, combinations_with_replacement, product
 import numpy as np
 
 MAX_TERMS = 3
+FORCE = "force"  # the unit of a `driven` entry that is an applied force's value at each state (library)
 MAX_EXPONENT = 2  # a parameter's power in a coefficient, either sign: m l^2, g / l, m / M^2
 VERIFIED = 40  # supports verified by least squares at each size: the exact ones rank first, a few at most tie
 EXTENDED = 5  # the best pairs extended to three terms
@@ -173,10 +174,12 @@ def _simple(number):
 def library(coords, units, driven=()):
     """The candidate terms' state parts, fewest factors first, each a tuple of Factors: products of up
     to two position factors times velocities to degree 0 to 2.  `driven`: (name, unit) of prescribed
-    motions, whose positions (functions of time) enter as position factors; their rates are parameters."""
+    motions, whose positions (functions of time) enter as position factors (their rates are parameters),
+    and (name, FORCE) of applied forces that are laws of time and state, each a candidate on its own."""
     if len(units) != len(coords):
         raise ValueError(f"units: {len(units)} given for {len(coords)} coordinates {', '.join(coords)}")
-    every = list(zip(coords, units)) + list(driven)
+    forces = [(Factor("coordinate", (name,)),) for name, unit in driven if unit == FORCE]
+    every = list(zip(coords, units)) + [(name, unit) for name, unit in driven if unit != FORCE]
     for name, unit in every:
         if unit not in ("rad", "m"):
             raise ValueError(f"coordinate {name}: unit {unit!r}; the candidate terms know 'rad' and 'm'")
@@ -191,7 +194,7 @@ def library(coords, units, driven=()):
     velocities = [Factor("velocity", (name,)) for name in coords]
     velocity_parts = [()] + [(factor,) for factor in velocities] + [
         _product(a, b) for a, b in combinations_with_replacement(velocities, 2)]
-    parts = [position + velocity for position in position_parts for velocity in velocity_parts]
+    parts = [position + velocity for position in position_parts for velocity in velocity_parts] + forces
     return sorted(parts, key=lambda part: sum(factor.power for factor in part))
 
 
