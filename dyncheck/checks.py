@@ -500,8 +500,8 @@ def run_case(case, localise=True):
     rows = runaway_rows(limit, runs, rows)  # a bounded run's failure is no finding of the book
     parameter_draws = parameter_sets(case)[0]
     localisations = residuals.localise(case, rows, residuals_found, parameter_draws)
-    localisations += residuals.localise_reactions(case, rows, sample, parameter_draws,
-                                                  {loc.source for loc in localisations})
+    localisations += residuals.localise_values(case, rows, sample, parameter_draws,
+                                               {loc.source for loc in localisations})
     # What the pages draw along runs: each source's run, and the reference's tight twin (report.trajectories).
     drawn = lambda source, outcome: replace(outcome, **({"twin": with_paths(case, outcome.twin)} if source == "reference"
                                                         else {"run": with_paths(case, outcome.run)}))

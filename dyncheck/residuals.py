@@ -285,13 +285,15 @@ def printed_rows(case, sample):
     return rows
 
 
-def localise_reactions(case, rows, sample, drawn, wrong_equations):
-    """For each reaction of a derivation that fails against MuJoCo at the random states while its equations
-    of motion hold (`wrong_equations`: the sources whose equations are wrong, whose reactions follow from
-    them), the terms that explain it, as for an equation: R_derivation - R_engine over the random states
-    and parameter sets."""
+def localise_values(case, rows, sample, drawn, wrong_equations):
+    """For each reaction, and the energy, of a derivation that fails against MuJoCo at the random states while
+    its equations of motion hold (`wrong_equations`: the sources whose equations are wrong, whose reactions
+    and energy along runs follow from them), the terms that explain it, as for an equation: the derivation's
+    value less the engine's over the random states and parameter sets (the energy's library has the
+    constant and the velocities to degree 2 that T + V has)."""
     failing = [(r.sources[0], r.quantity) for r in rows
-               if r.check == "pointwise" and r.sources[1:] == ("mujoco",) and r.quantity in case.reaction_names
+               if r.check == "pointwise" and r.sources[1:] == ("mujoco",)
+               and (r.quantity in case.reaction_names or r.quantity == "energy")
                and r.status == Status.FAIL and r.sources[0] in derivation_sources(case)
                and r.sources[0] not in wrong_equations and r.sources[0] not in sample["failures"]]
     if not failing or "mujoco" in sample["failures"]:
@@ -300,6 +302,8 @@ def localise_reactions(case, rows, sample, drawn, wrong_equations):
     others = parameter_cases(case, drawn)
     out = []
     for source, name in failing:
+        value = (lambda model, t, q, v: model.energy(t, q, v)) if name == "energy" else \
+            (lambda model, t, q, v: model.reactions(t, q, v)[name])
         samples, scale = [], None
         for other in others:
             if other is case:  # the pointwise check has them
@@ -308,7 +312,7 @@ def localise_reactions(case, rows, sample, drawn, wrong_equations):
                 states = other.sample_states()
                 try:
                     with np.errstate(all="ignore"):
-                        mine, theirs = (np.array([other.model(s).reactions(t, q, v)[name] for t, q, v in states])
+                        mine, theirs = (np.array([value(other.model(s), t, q, v) for t, q, v in states])
                                         for s in (source, "mujoco"))
                 except Exception:  # a set where a source fails: the random-parameters rows say so
                     continue
@@ -316,14 +320,16 @@ def localise_reactions(case, rows, sample, drawn, wrong_equations):
             q, v = (np.array([state[k] for state in states]).reshape(len(states), -1) for k in (1, 2))
             if np.all(np.isfinite(mine - theirs)):
                 samples.append((dict(other.params), with_driven(other, t, q, v), v, mine - theirs))
-                if other is case:  # judged as the pointwise rows judge a reaction: against its largest
-                    # size at the case's parameters, at least the force scale
-                    scale = max(np.max(np.abs(mine)), np.max(np.abs(theirs)), case.least_reaction_scale(name))
+                if other is case:  # judged as the pointwise rows judge it: against its largest size at the
+                    # case's parameters, for a reaction at least the force (moment) scale
+                    scale = max(np.max(np.abs(mine)), np.max(np.abs(theirs)),
+                                0.0 if name == "energy" else case.least_reaction_scale(name))
         if scale is None:  # no numbers at the case's own parameters: the pointwise rows say why
             continue
         fit = terms.fit(case.coords, case.spec["coord_units"], list(case.params), samples,
                         case.tolerance["pointwise"]["value"] * scale, driven)
-        out.append(Localisation(source=source, equation="", place=f"reaction {name}", text=fit.says("it"),
+        out.append(Localisation(source=source, equation="", place="energy" if name == "energy" else f"reaction {name}",
+                                text=fit.says("it"),
                                 exact=fit.exact, identified=fit.identified, residual=fit.before, left=fit.left,
                                 sets=fit.sets))
     return tuple(out)

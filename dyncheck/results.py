@@ -154,7 +154,8 @@ class Localisation:
     """A failing equation of a derivation (dyncheck.residuals) and the terms its residual is fitted by."""
     source: str  # the derivation: "reference", "book" or "derivation"
     equation: str  # the coordinate whose equation is wrong; "" for a reaction
-    place: str  # where: "equation x" (its force side, or its residual), a mass matrix entry "M[x,theta]", "reaction R"
+    place: str  # where: "equation x" (its force side, or its residual), a mass matrix entry "M[x,theta]", "reaction R",
+    #             "energy"
     text: str  # what the fit found, in the derivation's own symbols
     exact: bool  # whether the terms explain the residual down to the engines' rounding
     identified: bool  # exact, and every coefficient a simple number times a product of the parameters
@@ -215,7 +216,10 @@ def consequences(result):
     further errors."""
     sources = {loc.source for loc in result.localisations if loc.equation}  # a wrong reaction feeds nothing
     sources |= {TIGHT[s] for s in sources if s in TIGHT}
-    return [r for r in result.rows if not r.status.ok and r.check != "equation" and sources & set(r.sources)]
+    # a wrong energy feeds its own source's energy balance along the runs
+    energies = {loc.source for loc in result.localisations if loc.place == "energy"}
+    return [r for r in result.rows if not r.status.ok and r.check != "equation" and (
+        sources & set(r.sources) or r.check == "energy" and energies & set(r.sources))]
 
 
 def heading(spec):

@@ -187,3 +187,12 @@ def test_a_moment_read_by_a_force_sensor_is_refused(tmp_path, capsys):
     status, _, err = run(example(tmp_path, edits), capsys)
     assert status == 2
     assert "sensor 'pin' of reaction 'hinge_y' is a <force> sensor: a moment reaction reads a <torque> sensor" in err
+
+
+def test_a_wrong_energy_is_named_while_the_equations_hold(tmp_path, capsys):
+    """energy() is fitted as an equation is: its difference from the engines' over the random states and sets."""
+    status, out, _ = run(example(tmp_path, [("equations.py", "return kinetic + 0.5 * k * x**2", "return kinetic + k * x**2")]),
+                         capsys)
+    assert status == 1
+    assert "the derivation's energy: add - k / 2 x^2 to it to agree with the engines" in out
+    assert "the derivation's equation" not in out
