@@ -100,6 +100,11 @@ def coordinate_joints(coords, scene, file):
     if not set(coords) & set(names) and len(coords) == len(names):
         return dict(zip(coords, names))
     missing = [c for c in coords if c not in names]
+    if not missing:  # fewer coordinates than joints: the others would sit locked, or a loop closes them
+        others = [n for n in names if n not in coords]
+        raise ValueError(f"{file}: COORDS {list(coords)} leave joints of {scene.path} without a coordinate "
+                         f"({', '.join(others)}); every hinge and slide is a coordinate (a closed loop's dependent "
+                         "joints are not supported yet)")
     raise ValueError(f"{file}: COORDS {list(coords)} do not match the joints of {scene.path} ({', '.join(names)}): "
                      f"coordinate '{missing[0]}' is no joint{suggest(missing[0], names)}; name each coordinate after "
                      "its joint, or give as many coordinates as hinges and slides, in the file's order")

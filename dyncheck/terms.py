@@ -70,23 +70,21 @@ class Term:
     number: float  # the simple number when identified, else the coefficient at the first parameter set
     powers: tuple[tuple[str, int], ...]  # (parameter, nonzero power), in the derivation's order
     state: tuple[Factor, ...]
-    identified: bool  # number * prod(parameter^power) is the coefficient in every set, to SAME
+    identified: bool  # number * prod(parameter^power) (or the sum) is the coefficient in every set, to SAME
+    # A coefficient that is a sum of such products, ((number, powers), ...), its first number positive; `number`
+    # is then the sum's sign, +-1: `(Ixx - m h^2) sin(theta)`.
+    sum: tuple = ()
 
     @property
     def magnitude_text(self):
-        """The term without its sign: `m l sin(theta) theta'^2`, `g m / M cos(theta)`, `0.15 sin(theta)`."""
-        number = _simple(abs(self.number)) if self.identified else None
-        if number is None:
-            numerator, denominator = [f"{abs(self.number):.6g}"], []
+        """The term without its sign: `m l sin(theta) theta'^2`, `g m / M cos(theta)`, `0.15 sin(theta)`,
+        `(Ixx - m h^2) sin(theta)`."""
+        if self.sum:
+            parts = [("- " if number < 0 else "+ ") * (i > 0) + _monomial(abs(number), powers)
+                     for i, (number, powers) in enumerate(self.sum)]
+            coefficient = "(" + " ".join(parts) + ")"
         else:
-            numerator = [str(number.numerator)] if number.numerator != 1 else []
-            denominator = [str(number.denominator)] if number.denominator != 1 else []
-        numerator += [_power(name, power) for name, power in self.powers if power > 0]
-        denominator += [_power(name, -power) for name, power in self.powers if power < 0]
-        coefficient = " ".join(numerator) or "1"
-        if denominator:
-            below = " ".join(denominator)
-            coefficient += " / " + (f"({below})" if len(denominator) > 1 else below)
+            coefficient = _monomial(abs(self.number), self.powers) if self.identified else f"{abs(self.number):.6g}"
         state = [factor.text for factor in self.state]
         return " ".join(state if coefficient == "1" and state else [coefficient] + state)
 
@@ -152,6 +150,20 @@ class TermFit:
 
 def _power(name, power):
     return name if power == 1 else f"{name}^{power}"
+
+
+def _monomial(number, powers):
+    """A simple positive number times a product of parameters' powers: `m l^2`, `g m / M`, `4/3`."""
+    simple = _simple(number)
+    numerator = ([str(simple.numerator)] if simple.numerator != 1 else []) if simple is not None else [f"{number:.6g}"]
+    denominator = [str(simple.denominator)] if simple is not None and simple.denominator != 1 else []
+    numerator += [_power(name, power) for name, power in powers if power > 0]
+    denominator += [_power(name, -power) for name, power in powers if power < 0]
+    coefficient = " ".join(numerator) or "1"
+    if denominator:
+        below = " ".join(denominator)
+        coefficient += " / " + (f"({below})" if len(denominator) > 1 else below)
+    return coefficient
 
 
 def _state_text(term):
@@ -347,9 +359,81 @@ def _solve(support, normalised, targets):
 
 
 def _term(state, coefficients, params, param_names):
-    """The Term of `state` whose coefficient in set s is coefficients[s]."""
+    """The Term of `state` whose coefficient in set s is coefficients[s]: a product of parameters' powers, or
+    else a sum of a few."""
     number, powers, identified = _identify(coefficients, params, param_names)
+    if not identified:
+        monomials = _identify_sum(coefficients, params, param_names)
+        if monomials:
+            sign = 1.0 if monomials[0][0] > 0 else -1.0
+            return Term(sign, (), state, True, tuple((sign * n, p) for n, p in monomials))
     return Term(number, powers, state, identified)
+
+
+MAX_SUM = 3  # products in a coefficient that is a sum: (alpha' + beta')^2 has three
+SUM_DEGREE = 3  # their parameters' powers, in absolute value, add up to at most this (m h^2), two parameters at most
+TRIED = 50  # the closest pairs extended to three products (a triple of many parameters may be missed)
+
+
+def _sum_exponents(count):
+    """The powers of `count` parameters in a product of a sum: the constant, and one or two parameters, each
+    to -1, 1 or 2, their absolute powers adding up to at most SUM_DEGREE (some hundreds for ten parameters)."""
+    rows = [(0,) * count]
+    for size in (1, 2):
+        for chosen in combinations(range(count), size):
+            for powers in product((-1, 1, 2), repeat=size):
+                if sum(map(abs, powers)) <= SUM_DEGREE:
+                    row = [0] * count
+                    for k, power in zip(chosen, powers):
+                        row[k] = power
+                    rows.append(tuple(row))
+    return rows
+
+
+def _identify_sum(coefficients, params, param_names):
+    """((number, powers), ...): up to MAX_SUM products of the varying parameters' powers (_sum_exponents;
+    the constant 1 among them), each times a simple number, whose sum is
+    coefficients[s] in every set to SAME; () when none is, or when the sets are too few to tell (more
+    sets than products).  Pairs are tried all at once (their 2 x 2 normal equations), the closest pairs
+    extended by a third."""
+    varying = [name for name in param_names
+               if len({values[name] for values in params}) > 1 and all(values[name] != 0 for values in params)]
+    target = np.asarray(coefficients, dtype=float)
+    if len(target) < MAX_SUM + 2 or not varying:
+        return ()
+    values = np.array([[each[name] for name in varying] for each in params])
+    exponents = np.array(_sum_exponents(len(varying)), dtype=float)
+    columns = np.prod(values[:, None, :] ** exponents[None, :, :], axis=2)  # (sets, products)
+    scale = np.linalg.norm(columns, axis=0)
+    unit = columns / scale
+    gram, projection, norm = unit.T @ unit, unit.T @ target, float(target @ target)
+    i, j = np.triu_indices(len(exponents), 1)
+    det = gram[i, i] * gram[j, j] - gram[i, j] ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = (gram[j, j] * projection[i] - gram[i, j] * projection[j]) / det
+        b = (gram[i, i] * projection[j] - gram[i, j] * projection[i]) / det
+        left = norm - a * projection[i] - b * projection[j]  # |target - fit|^2
+    left = np.where(det > DEPENDENT, left, np.inf)
+    pairs = [(int(i[k]), int(j[k])) for k in np.argsort(left)[:TRIED]]
+    triples = []
+    for pair in pairs:  # each other product's least squares with the pair at once: its part off the pair's span
+        basis = np.linalg.qr(unit[:, list(pair)])[0]
+        rest = target - basis @ (basis.T @ target)
+        off = unit - basis @ (basis.T @ unit)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            left3 = rest @ rest - (rest @ off) ** 2 / np.sum(off * off, axis=0)
+        left3[list(pair)] = np.inf
+        triples += [pair + (int(m),) for m in np.argsort(left3)[:3]]
+    for support in pairs + triples:
+        chosen = columns[:, list(support)]
+        numbers = np.linalg.lstsq(chosen, target, rcond=None)[0]
+        if np.max(np.abs(target - chosen @ numbers)) > SAME * np.max(np.abs(target)):
+            continue
+        simple = [_simple(abs(n)) for n in numbers]
+        if all(x is not None for x in simple):
+            return tuple((float(np.sign(n) * x), tuple((name, int(p)) for name, p in zip(varying, exponents[k]) if p))
+                         for n, x, k in zip(numbers, simple, support))
+    return ()
 
 
 def _identify(coefficients, params, param_names):

@@ -85,10 +85,18 @@ def test_fewer_sets_than_parameters_still_identify_the_product():
     assert result.exact and [term.text for term in result.terms] == ["m l sin(theta) theta'^2"]
 
 
-def test_a_coefficient_that_is_no_product_of_parameters_stays_a_number():
+def test_a_coefficient_that_is_a_sum_of_products_is_named_as_one():
+    """(M + m) g, the top's Ixx - m h^2: a sum of a few products of parameters, found over the sets."""
     result = run(CART, lambda p, q, v: (p["M"] + p["m"]) * p["g"] * np.sin(q[:, 1]))
     (term,) = result.terms
-    assert result.exact and not term.identified and term.powers == ()
+    assert result.exact and term.identified and result.identified
+    assert result.text.startswith("add + (M g + m g) sin(theta) to its force side"), result.text
+
+
+def test_a_coefficient_that_is_no_sum_of_products_stays_a_number():
+    result = run(CART, lambda p, q, v: np.exp(p["m"]) * np.sin(q[:, 1]))
+    (term,) = result.terms
+    assert result.exact and not term.identified and term.powers == () and not term.sum
     assert "no product of parameters' powers" in result.text
 
 
