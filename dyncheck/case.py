@@ -326,7 +326,7 @@ class Case:
         applied = {joint: AppliedForce(force, self.coords, self.params) for joint, force in s.get("applied", {}).items()}
         return {"coords": self.coords, "layout": layout, "driven": driven, "applied": applied,
                 "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", []),
-                "urdf_root_joint": s.get("urdf_root_joint")}
+                "urdf_root_joint": s.get("urdf_root_joint"), "dependent": s.get("dependent", [])}
 
     def least_reaction_scale(self, name):
         """The least scale reaction `name` is judged against: the case's force scale, or for a moment its moment
@@ -422,6 +422,10 @@ class Case:
         if other in self._models:  # both engines loaded: their files must model the same scene
             engines = {source: model, other: self._models[other]}
             compare_scenes(engines["mujoco"], engines["pinocchio"], self.name)
+            from engines.loops import refuse_unmatched  # the harness reads a scene only through engines/
+            # a loop closed in one file only would be locked or free in the other engine
+            refuse_unmatched(engines["mujoco"].loops.loops, engines["pinocchio"].loops.loops,
+                             engines["mujoco"].path, engines["pinocchio"].path)
         return model
 
     @property

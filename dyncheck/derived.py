@@ -87,7 +87,8 @@ def module_values(module, file):
 
 def coordinate_joints(coords, scene, file):
     """{coordinate: joint}: by name, or, where no coordinate is named after a joint, the scene's hinges and
-    slides in the file's order when there are as many as coordinates."""
+    slides in the file's order when there are as many as coordinates.  In a scene with closed loops the
+    coordinates name some of the joints, the independent ones: the loops close the others (`dependent_joints`)."""
     scalar = [j for j in scene.joints if j.kind in ("hinge", "slide")]
     other = [j for j in scene.joints if j.kind not in ("hinge", "slide")]
     if other:
@@ -100,11 +101,13 @@ def coordinate_joints(coords, scene, file):
     if not set(coords) & set(names) and len(coords) == len(names):
         return dict(zip(coords, names))
     missing = [c for c in coords if c not in names]
-    if not missing:  # fewer coordinates than joints: the others would sit locked, or a loop closes them
+    if not missing and scene.loops:  # the engines check that the loops leave as many degrees of freedom
+        return {c: c for c in coords}
+    if not missing:  # fewer coordinates than joints, no loop: the others would sit locked
         others = [n for n in names if n not in coords]
         raise ValueError(f"{file}: COORDS {list(coords)} leave joints of {scene.path} without a coordinate "
-                         f"({', '.join(others)}); every hinge and slide is a coordinate (a closed loop's dependent "
-                         "joints are not supported yet)")
+                         f"({', '.join(others)}); every hinge and slide is a coordinate, unless a closed loop "
+                         "(an <equality> <connect>) moves it")
     raise ValueError(f"{file}: COORDS {list(coords)} do not match the joints of {scene.path} ({', '.join(names)}): "
                      f"coordinate '{missing[0]}' is no joint{suggest(missing[0], names)}; name each coordinate after "
                      "its joint, or give as many coordinates as hinges and slides, in the file's order")
@@ -180,18 +183,22 @@ def frequency(module, coords, params, q0, v0):
 
 def reaction_sensors(names, scene, file):
     """[scene.reactions] for reactions named <sensor>_<x|y|z> after a force sensor (a force) or a torque sensor (a
-    moment about the body's origin): that sensor's component, in its body's frame."""
+    moment about the body's origin): that sensor's component, in its body's frame; or named <loop>_<x|y|z> after
+    a <connect>: its force on its body1 at the anchor, in world axes (engines.loops)."""
     out = {}
     sensors = {**{s: (body, "force") for s, body in scene.force_sensors.items()},
-               **{s: (body, "moment") for s, body in scene.torque_sensors.items()}}
+               **{s: (body, "moment") for s, body in scene.torque_sensors.items()},
+               **{loop: (body, "loop") for loop, body in scene.loops.items()}}
     for name in names:
         sensor, _, axis = name.rpartition("_")
         if sensor not in sensors or axis not in AXES:
             raise ValueError(f"{file}: reaction '{name}' is not named <sensor>_<x|y|z> after a <force> or <torque> "
-                             f"sensor of {scene.path} ({', '.join(sensors) or 'none'}); name it so, or say which "
-                             "sensor it reads in a case.toml [scene.reactions] (docs/case-file.md)")
+                             f"sensor or a <connect> of {scene.path} ({', '.join(sensors) or 'none'}); name it so, or "
+                             "say which sensor it reads in a case.toml [scene.reactions] (docs/case-file.md)")
         body, quantity = sensors[sensor]
-        out[name] = {"body": body, "sensor": sensor, "axis": AXES.index(axis), "frame": "body", "quantity": quantity}
+        out[name] = {"body": body, "sensor": sensor, "axis": AXES.index(axis),
+                     **({"frame": "world", "quantity": "force"} if quantity == "loop" else
+                        {"frame": "body", "quantity": quantity})}
     return out
 
 
@@ -201,6 +208,7 @@ def case_file(folder, module, scene, given):
     file = folder / EQUATIONS
     coords, params = module_values(module, file)
     joints = coordinate_joints(coords, scene, file)
+    dependent = [j.name for j in scene.joints if j.name not in joints.values()]  # closed by the loops
     kinds = {j.name: j.kind for j in scene.joints}
     units = ["rad" if kinds[joints[c]] == "hinge" else "m" for c in coords]
     given_bindings = given.get("scene", {}).get("bindings", {})
@@ -270,7 +278,7 @@ def case_file(folder, module, scene, given):
         "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; {EQUATIONS} the derivation"
                                 + ("" if given else "; no case.toml")},
         "scene": {"coords": joints, "driven": {}, "reactions": reaction_sensors(reactions, scene, file),
-                  "bindings": bound},
+                  "bindings": bound, **({"dependent": dependent} if dependent else {})},
         "work_precision": work_precision(omega),
     }
     return merged(derived, given)

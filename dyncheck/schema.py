@@ -78,6 +78,7 @@ SCHEMA = ("table", {
         "coords": ("map", "str"),  # book coordinate -> hinge or slide joint
         "euler?": ("table", {"joint": "str", "coords": ("list", "str")}),  # ball joint in Euler angles
         "driven": ("map", ("table", {"angle?": "expr", "rate?": "expr", "acc?": "expr"})),
+        "dependent?": ("list", "str"),  # joints that closed loops move (engines.loops), no coordinate's
         "applied?": ("map", ("list", "force")),
         "paths?": ("list", "str"),
         "reactions": ("map", ("table", {"body": "str", "sensor": "str", "axis": ("one of", 0, 1, 2),

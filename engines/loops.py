@@ -178,17 +178,41 @@ class MujocoLoops:
         ~1e-11).  Its error is rounding times the condition of A on its rows with a force direction (a planar
         loop's normal row is identically 0, and so is its force); measured against the derivation: 2e-15 of phi'', 8e-15
         of the loop force."""
-        m = self.m
-        jacobian = _jacobian(m, d)
+        qacc, force = self._rigid(d)
+        return qacc, _per_loop(force, d.efc_id[:d.nefc], self.m.neq)
+
+    def _rigid(self, d):
+        """`constrained`'s accelerations and its force of every constraint row."""
+        jacobian = _jacobian(self.m, d)
         inverse_mass_jt = np.empty(jacobian.shape)
-        mujoco.mj_solveM(m, d, inverse_mass_jt, jacobian)  # rows: (M^-1 J^T)^T
+        mujoco.mj_solveM(self.m, d, inverse_mass_jt, jacobian)  # rows: (M^-1 J^T)^T
         inverse_mass_jt = inverse_mass_jt.T
         live = np.any(jacobian != 0, axis=1)
         force = np.zeros(d.nefc)
         A = (jacobian @ inverse_mass_jt)[np.ix_(live, live)]
         force[live] = np.linalg.solve(A, (d.efc_aref[:d.nefc] - jacobian @ d.qacc_smooth)[live])
-        qacc = d.qacc_smooth + inverse_mass_jt @ force
-        return qacc, _per_loop(force, d.efc_id[:d.nefc], m.neq)
+        return d.qacc_smooth + inverse_mass_jt @ force, force
+
+    def impose(self, d):
+        """Put `constrained`'s rigid answer into the data `d` of mj_forward (qacc, efc_force, qfrc_constraint), so
+        that what MuJoCo computes from them next (mj_rnePostConstraint, its acceleration-stage sensors) reads the
+        rigid loop; each loop's force on body1 at its anchor, world, (nloops, 3)."""
+        qacc, force = self._rigid(d)
+        d.qacc[:], d.efc_force[:d.nefc] = qacc, force
+        d.qfrc_constraint[:] = _jacobian(self.m, d).T @ force
+        return _per_loop(force, d.efc_id[:d.nefc], self.m.neq)
+
+    def rates(self, d, independent):
+        """Every dof's rate per unit rate of each independent dof (nv x len(independent)) at the state of `d`
+        (after mj_fwdPosition): the velocity solve's linear map, J v = 0."""
+        jacobian = _jacobian(self.m, d)
+        return np.column_stack([_dependent_rates(jacobian, np.asarray(independent), unit)
+                                for unit in np.eye(len(independent))])
+
+    def freedom(self):
+        """The scene's degrees of freedom at its assembly (qpos0): nv less the rank of the loops' Jacobian."""
+        jacobian = self._constraint(self.m.qpos0)[1]
+        return self.m.nv - np.linalg.matrix_rank(jacobian)
 
     def softness_doubled(self):
         """A copy of the model with every loop's softness 1 - solimp doubled (the impedance 0.9999 becomes 0.9998):

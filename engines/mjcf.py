@@ -40,6 +40,7 @@ class SceneFile:
     values: tuple  # of Value
     masses: dict  # body name -> mass, kg
     length: float  # the largest distance between two bodies' origins or a body and its centre of mass, m
+    loops: dict  # <equality> name -> its body1 (engines.loops: each a <connect> closing a loop)
 
 
 def describe(path):
@@ -77,4 +78,11 @@ def describe(path):
               [np.linalg.norm(m.body_ipos[b]) for b in range(1, m.nbody)]
     return SceneFile(str(path), joints, sensors[mujoco.mjtSensor.mjSENS_FORCE], sensors[mujoco.mjtSensor.mjSENS_TORQUE],
                      tuple(values),
-                     {body_name(b): float(m.body_mass[b]) for b in range(1, m.nbody)}, float(max(lengths, default=0.0)))
+                     {body_name(b): float(m.body_mass[b]) for b in range(1, m.nbody)}, float(max(lengths, default=0.0)),
+                     {name(mujoco.mjtObj.mjOBJ_EQUALITY, e) or str(e): body_name(_body1(m, e)) for e in range(m.neq)})
+
+
+def _body1(m, e):
+    """The body that carries equality e's first point (its body1, or its site1's body)."""
+    first = m.eq_obj1id[e]
+    return m.site_bodyid[first] if m.eq_objtype[e] == mujoco.mjtObj.mjOBJ_SITE else first

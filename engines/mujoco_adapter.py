@@ -20,6 +20,7 @@ import mujoco.rollout
 import numpy as np
 
 from engines import euler, scene as scene_rules
+from engines.loops import MujocoLoops
 from engines.scene import Body
 
 # MuJoCo prints a line for each run that blows up, and the studies blow runs up on purpose: each
@@ -35,8 +36,15 @@ class MujocoModel:
     """scene (from the case): `layout` (book coordinates -> joints: ("scalar", joint, [i]) for a hinge
     or slide, ("euler", joint, [i, j, k]) for a ball joint in the book's Euler angles), `driven`
     (joint -> (q0, rate, acc)), `applied` (joint -> its generalized force in the joint's frame, a function
-    force(t, q, v) of the case's state with an attribute `constant`),
-    `reactions` (name -> {sensor, axis, frame}), `points` (name -> {body, frame}), `paths` (bodies)."""
+    force(t, q, v) of the case's state with an attribute `constant`), `dependent` (the joints that close the
+    scene's loops, engines.loops: no coordinate of their own),
+    `reactions` (name -> {sensor, axis, frame}: a loop's force where `sensor` names a <connect>),
+    `points` (name -> {body, frame}), `paths` (bodies).
+
+    A scene with loops is evaluated on its closed states: the independent joints at the case's coordinates, the
+    dependent ones solved (MujocoLoops.close), the accelerations and loop forces MuJoCo's rigid ones
+    (MujocoLoops.constrained); MuJoCo steps it with its own soft constraint, whose effect on a run
+    `approximations_doubled` measures (the softness doubled)."""
 
     @staticmethod
     def elements_in(path):
@@ -54,6 +62,7 @@ class MujocoModel:
         except (ValueError, KeyError) as error:
             raise ValueError(f"{self.path}: {error}") from error
         _refuse_nan(self.path)
+        self.loops = MujocoLoops(self.m, self.path)  # refuses an equality that is not a loop's <connect>
         self.armature = self.m.dof_armature.copy()
         self.d = mujoco.MjData(self.m)
         self.coords = tuple(scene["coords"])
@@ -65,6 +74,8 @@ class MujocoModel:
         unmodelled = next(_unmodelled(self.m, scene), None)
         if unmodelled:
             raise scene_rules.refusal(self.path, "MJCF", *unmodelled)
+        if self.loops.loops:
+            self._refuse_unclosable(scene)
         for (_, dof), _ in self.driven:  # the evaluation model imposes these exactly: no armature
             self.m.dof_armature[dof] = 0.0
         self.forces = [(self._joint(joint)[1], force) for joint, force in scene["applied"].items()]
@@ -76,11 +87,30 @@ class MujocoModel:
         self._driven_motion = np.array([motion for _, motion in self.driven]).reshape(-1, 3).T  # q0, rate, acc
         self._driven_qacc = np.zeros(self.m.nv)
         self._driven_qacc[self._driven_dofs] = self._driven_motion[2]
-        self.reaction_specs = {name: (self._reaction_sensor(name, spec), spec["axis"], spec["frame"])
+        self.loop_names = [loop.name for loop in self.loops.loops]
+        self.reaction_specs = {name: (self._reaction_sensor(name, spec) if spec["sensor"] not in self.loop_names
+                                      else ("loop", self.loop_names.index(spec["sensor"])), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
+        self.independent = [(joint, self._joint(joint)) for kind, joint, _ in scene["layout"] if kind == "scalar"]
         self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
         self.paths = [self.body_id(b) for b in scene["paths"]]
+
+    def _refuse_unclosable(self, scene):
+        """ValueError for a loop scene that dyncheck cannot evaluate: prescribed motions or a ball joint (not yet
+        modelled with loops), or coordinates that are not the scene's degrees of freedom at its assembly (qpos0):
+        nv less the loops' rank."""
+        if self.driven or any(kind != "scalar" for kind, _, _ in self.layout):
+            raise ValueError(f"{self.path}: a scene with closed loops ({', '.join(l.name for l in self.loops.loops)}) "
+                             "is evaluated with hinges and slides that the case's coordinates move or the loops "
+                             "close; prescribed motions and ball joints in it are not supported yet")
+        self.d.qpos[:] = self.m.qpos0
+        mujoco.mj_fwdPosition(self.m, self.d)
+        freedom = self.loops.freedom()
+        if freedom != len(self.coords):
+            raise ValueError(f"{self.path}: the loops ({', '.join(l.name for l in self.loops.loops)}) leave "
+                             f"{freedom} of the {self.m.nv} joints' degrees of freedom at the assembly (qpos0), but "
+                             f"the case has {len(self.coords)} coordinates ({', '.join(self.coords)})")
 
     # -- names -------------------------------------------------------------
     def _id(self, kind, name):
@@ -135,10 +165,12 @@ class MujocoModel:
     def approximations_doubled(self, scales):
         """This scene with its approximations of the case's physics doubled: some bodies' mass and inertia
         scaled, {body: (mass factor, inertia factor)} (set in the compiled model, which MuJoCo checks only
-        when it compiles; mj_setConst redoes what follows), and the armature that holds the prescribed
-        motions halved (they drift by torque x time / armature)."""
+        when it compiles; mj_setConst redoes what follows), the armature that holds the prescribed
+        motions halved (they drift by torque x time / armature), and the softness of the loops' constraints
+        doubled (MujocoLoops.softness_doubled: the only thing by which MuJoCo's own stepping of a loop departs
+        from the rigid loop; the evaluations, rigid, keep this scene's MujocoLoops)."""
         twin = copy.copy(self)
-        twin.m = copy.copy(self.m)
+        twin.m = self.loops.softness_doubled() if self.loops.loops else copy.copy(self.m)
         twin.armature = self.armature.copy()
         twin.armature[self._driven_dofs] /= 2
         for name, (mass, inertia) in scales.items():
@@ -154,16 +186,19 @@ class MujocoModel:
         of mass), and is counted in the body's inertia."""
         m, bodies = self.m, []
         for b in range(1, m.nbody):
+            if _ground(m, b):  # folded into the world, as Pinocchio's MJCF reader does
+                continue
             j = m.body_jntadr[b]
             kind = mujoco.mjtJoint(m.jnt_type[j]).name[6:].lower()
             inertia = _matrix(m.body_iquat[b]) @ np.diag(m.body_inertia[b]) @ _matrix(m.body_iquat[b]).T
             if kind == "ball":
                 inertia += self.armature[m.jnt_dofadr[j]] * np.eye(3)
+            parent, position, rotation = _placement(m, b)
             bodies.append(Body(name=_name(m, mujoco.mjtObj.mjOBJ_BODY, b),
-                               parent=_name(m, mujoco.mjtObj.mjOBJ_BODY, m.body_parentid[b]),
+                               parent=_name(m, mujoco.mjtObj.mjOBJ_BODY, parent) if parent else "world",
                                joint=_name(m, mujoco.mjtObj.mjOBJ_JOINT, j), joint_type=kind,
                                axis=m.jnt_axis[j].copy() if kind != "ball" else np.zeros(3),
-                               position=m.body_pos[b].copy(), rotation=_matrix(m.body_quat[b]),
+                               position=position, rotation=rotation,
                                mass=float(m.body_mass[b]), com=m.body_ipos[b].copy(), inertia=inertia,
                                stiffness=np.r_[m.jnt_stiffness[j], m.jnt_stiffnesspoly[j]],
                                springref=float(m.qpos_spring[m.jnt_qposadr[j]]) if kind != "ball" else 0.0,
@@ -210,7 +245,19 @@ class MujocoModel:
         for (qadr, dof), (q0, rate, acc) in self.driven:
             qpos[..., qadr] = q0 + rate * t + 0.5 * acc * t**2
             qvel[..., dof] = rate + acc * t
+        if self.loops.loops:
+            self._close(qpos, qvel)
         return qpos, qvel
+
+    def _close(self, qpos, qvel):
+        """`qpos` and `qvel` (as in `_engine_states`) with the dependent joints closing every loop, in place: each
+        state solved from the one before (the first from the assembly), so that a run's states stay on one branch."""
+        start = None
+        for i in np.ndindex(qpos.shape[:-1]):
+            positions = {joint: qpos[i][qadr] for joint, (qadr, _) in self.independent}
+            rates = {joint: qvel[i][dof] for joint, (_, dof) in self.independent}
+            qpos[i], qvel[i] = self.loops.close(positions, rates, start)
+            start = qpos[i]
 
     def _set_state(self, t, q, v, d=None):
         d = self.d if d is None else d
@@ -246,22 +293,33 @@ class MujocoModel:
         applied = self._applied_many(t, q, v)
         nv, states = self.m.nv, qvel.shape[:-1]
         mass, smooth = np.zeros(states + (nv, nv)), np.empty(states + (nv,))
+        qacc = np.empty(states + (nv,))
+        qacc[...] = self._driven_qacc
         for i in np.ndindex(states):
             self.d.qpos[:], self.d.qvel[:], self.d.qfrc_applied[:] = qpos[i], qvel[i], applied[i]
             mujoco.mj_forward(self.m, self.d)
             mujoco.mj_fullM(self.m, self.d, mass[i])
             smooth[i] = self.d.qfrc_smooth
-        qacc = np.empty(states + (nv,))
-        qacc[...] = self._driven_qacc
-        if len(self.free):
+            if self.loops.loops:  # MuJoCo's rigid loop, not its soft one (no prescribed joints: refused)
+                qacc[i] = self.loops.constrained(self.d)[0]
+        if len(self.free) and not self.loops.loops:
             force = smooth - (mass @ qacc[..., None])[..., 0]
             free_block = mass[..., self.free[:, None], self.free]
             qacc[..., self.free] = np.linalg.solve(free_block, force[..., self.free, None])[..., 0]
         return qvel, mass, smooth, qacc
 
     def _inverse(self, t, q, v):
-        self.d.qacc[:] = self._solve(t, q, v)[3]
-        mujoco.mj_inverse(self.m, self.d)
+        """self.d at the book's state with its accelerations and the sensors of its forces; with loops, MuJoCo's
+        rigid loop forces put in (MujocoLoops.impose: its inverse dynamics would give the soft ones), each loop's
+        force on its body1 in `self.loop_forces`."""
+        qacc = self._solve(t, q, v)[3]
+        if self.loops.loops:
+            self.loop_forces = self.loops.impose(self.d)
+            mujoco.mj_rnePostConstraint(self.m, self.d)
+            mujoco.mj_sensorAcc(self.m, self.d)
+        else:
+            self.d.qacc[:] = qacc
+            mujoco.mj_inverse(self.m, self.d)
 
     def _constant_applied(self, method):
         """The applied forces of a scene where they are constant; ValueError where they are laws of the state."""
@@ -291,6 +349,9 @@ class MujocoModel:
         self._inverse(t, q, v)
         out = {}
         for name, ((adr, site), axis, frame) in self.reaction_specs.items():
+            if adr == "loop":  # world axes: the force on the <connect>'s body1 at its anchor
+                out[name] = float(self.loop_forces[site][axis])
+                continue
             force = self.d.sensordata[adr:adr + 3].copy()
             if frame == "world":
                 force = self.d.site_xmat[site].reshape(3, 3) @ force
@@ -319,8 +380,12 @@ class MujocoModel:
 
     def mass_matrix(self, t, q, v):
         """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): mj_fullM's in
-        the evaluation model, with the armature of a ball joint on the world, as `accelerations` solves it."""
+        the evaluation model, with the armature of a ball joint on the world, as `accelerations` solves it; with
+        loops N^T M N, N the every dof's rate per independent rate on the closed state."""
         mass = self._solve(t, q, v)[1]
+        if self.loops.loops:
+            rates = self.loops.rates(self.d, [dof for _, (_, dof) in self.independent])
+            return rates.T @ mass @ rates
         return scene_rules.case_mass_matrix(mass, [(kind, dof, idx) for kind, (_, dof), idx in self.layout], q)
 
     def energy(self, t, q, v):
@@ -466,6 +531,22 @@ def _matrix(quat):
     return matrix.reshape(3, 3)
 
 
+def _ground(m, b):
+    """Whether body b is a jointless body welded to the world: the "ground" that Pinocchio's MJCF reader needs
+    as the one body on <worldbody>, folded into the world as that reader folds it."""
+    return not m.body_jntnum[b] and m.body_weldid[b] == 0
+
+
+def _placement(m, b):
+    """Body b's parent, its position and its rotation in it, a ground body's placement (`_ground`) folded in."""
+    parent, position, rotation = m.body_parentid[b], m.body_pos[b].copy(), _matrix(m.body_quat[b])
+    while parent and _ground(m, parent):
+        above = _matrix(m.body_quat[parent])
+        position, rotation = m.body_pos[parent] + above @ position, above @ rotation
+        parent = m.body_parentid[parent]
+    return parent, position, rotation
+
+
 def _text(values):
     return " ".join(f"{x:g}" for x in np.atleast_1d(values))
 
@@ -476,7 +557,7 @@ def _unmodelled(m, scene):
     obj = mujoco.mjtObj
     named = lambda kind, i: f"{kind.name[6:].lower()} '{_name(m, kind, i) or i}'"
     for count, element, kind in ((m.nplugin, "plugin", obj.mjOBJ_PLUGIN), (m.nu, "actuator", obj.mjOBJ_ACTUATOR),
-                                 (m.ntendon, "tendon", obj.mjOBJ_TENDON), (m.neq, "equality", obj.mjOBJ_EQUALITY),
+                                 (m.ntendon, "tendon", obj.mjOBJ_TENDON),
                                  (m.nflex, "deformable-flex", obj.mjOBJ_FLEX), (m.npair, "contact-pair", obj.mjOBJ_PAIR)):
         if count:
             yield element, "*", named(kind, 0), ""
@@ -523,7 +604,7 @@ def _unmodelled(m, scene):
             yield "body", "mocap", named(obj.mjOBJ_BODY, b), "true"
         if m.body_gravcomp[b]:
             yield "body", "gravcomp", named(obj.mjOBJ_BODY, b), _text(m.body_gravcomp[b])
-        if m.body_jntnum[b] != 1:
+        if m.body_jntnum[b] != 1 and not _ground(m, b):
             yield "body", "(joints)", named(obj.mjOBJ_BODY, b), m.body_jntnum[b]
 
 

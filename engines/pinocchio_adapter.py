@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from engines import euler, scene as scene_rules
+from engines.loops import PinocchioLoops
 from engines.scene import Body
 
 ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
@@ -35,8 +36,11 @@ class PinocchioModel:
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
         root = scene.get("urdf_root_joint")
+        constraints = []  # the loops' (a URDF closes none: refused against the MJCF's, dyncheck.case)
         try:
-            if _is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
+            if _is_mjcf(self.path) and _equalities(self.path):
+                self.m, constraints = pin.buildModelAndLegacyConstraintsFromMJCF(self.path)
+            elif _is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
                 self.m = pin.buildModelFromMJCF(self.path)
             elif root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
                 self.m = pin.buildModelFromUrdf(self.path, ROOT_JOINTS[root["type"]](), root["name"])
@@ -59,6 +63,10 @@ class PinocchioModel:
             self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
         for location, value in writes:
             self._write(location, value)
+        for constraint, element in zip(constraints, _equalities(self.path)):  # the reader keeps no names
+            constraint.name = element.get("name", "")
+        self.loops = PinocchioLoops(self.m, constraints, self.path)  # after the model is complete
+        self._closed = None  # the last closed configuration, where the next closing starts (`engine_state`)
         self.point_specs = {name: (self._point_frame(spec), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
         self.d = self.m.createData()  # after the frames the points add
@@ -78,8 +86,10 @@ class PinocchioModel:
         self.varying = not all(force.constant for _, force in self.forces)
         self.applied = None if self.varying else self._applied_at(0.0, np.zeros(len(self.coords)),
                                                                    np.zeros(len(self.coords)))
+        loop_names = [loop.name for loop in self.loops.loops]
         self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"],
-                                      spec.get("quantity", "force"))
+                                      spec.get("quantity", "force")) if spec["sensor"] not in loop_names
+                               else ("loop", (loop_names.index(spec["sensor"]), spec["axis"]), "world", "force")
                                for name, spec in scene["reactions"].items()}
         # (idx_q, idx_v, stiffness, rest position, damping) of each joint with a spring or a damper
         passive = set(self.joint_values["stiffness"]) | set(self.joint_values["damping"])
@@ -94,6 +104,7 @@ class PinocchioModel:
         # (nq, idx_q, idx_v) of the joints, read once: each of Pinocchio's attributes is a call.
         self._coord_joints = [(kind, (joint.nq, joint.idx_q, joint.idx_v), idx) for kind, joint, idx in self.layout]
         self._driven_joints = [((joint.nq, joint.idx_q, joint.idx_v), motion) for joint, motion in self.driven]
+        self._independent = [(kind, self.m.getJointId(j), idx) for kind, j, idx in scene["layout"] if kind == "scalar"]
         self._driven_acc = np.zeros(self.m.nv)
         for (_, _, iv), (_, _, acc) in self._driven_joints:
             self._driven_acc[iv] = acc
@@ -236,6 +247,11 @@ class PinocchioModel:
             if kind == "euler":  # spherical: quaternion (x, y, z, w), the body's angular velocity
                 config[iq:iq + 4] = euler.quaternion(q[idx])[[1, 2, 3, 0]]
                 velocity[iv:iv + 3] = euler.angular_velocity(q[idx], v[idx])
+        if self.loops.loops:  # the dependent joints closing the loops, from the last closing (its branch)
+            positions = {self.m.names[j]: q[idx[0]] for kind, j, idx in self._independent}
+            rates = {self.m.names[j]: v[idx[0]] for kind, j, idx in self._independent}
+            config, velocity = self.loops.close(positions, rates, self._closed)
+            self._closed = config
         return config, velocity
 
     @property
@@ -258,6 +274,8 @@ class PinocchioModel:
         force = applied.copy()
         for iq, iv, k, rest, damping in self.passive:
             force[iv] -= k * (config[iq] - rest) + damping * velocity[iv]
+        if self.loops.loops:  # constraintDynamics (no prescribed joints: refused by MuJoCo's adapter)
+            return self.loops.constrained(config, velocity, force)[0], force
         if len(self.free) == self.m.nv:  # nothing prescribed: Pinocchio's ABA solves it directly
             return pin.aba(self.m, self.d, config, velocity, force).copy(), force
         acc = self._driven_acc.copy()
@@ -291,17 +309,36 @@ class PinocchioModel:
         return out
 
     def reactions(self, t, q, v):
-        config, velocity, acc, _ = self._dynamics(t, q, v)
-        pin.rnea(self.m, self.d, config, velocity, acc)  # fills data.f: force of each joint's parent on its subtree
+        config, velocity, acc, tau = self._dynamics(t, q, v)
+        pin.forwardKinematics(self.m, self.d, config)
+        loop_forces = self.loops.constrained(config, velocity, tau)[1] if self.loops.loops else []
+        # fills data.f: force of each joint's parent on its subtree, the loops' forces on the bodies external to it
+        pin.rnea(self.m, self.d, config, velocity, acc, self._loop_wrenches(loop_forces))
         pin.forwardKinematics(self.m, self.d, config)  # rnea leaves data.oMi stale (Pinocchio 4.1)
         out = {}
         for name, (joint, axis, frame, quantity) in self.reaction_specs.items():
+            if joint == "loop":  # world axes: the force on the <connect>'s body1 at its anchor
+                out[name] = float(loop_forces[axis[0]][axis[1]])
+                continue
             # the force, or the moment about the joint's origin (the body's), of the parent on the subtree
             force = self.d.f[joint].linear if quantity == "force" else self.d.f[joint].angular
             if frame == "world":
                 force = self.d.oMi[joint].rotation @ force
             out[name] = float(force[axis])
         return out
+
+    def _loop_wrenches(self, forces):
+        """Pinocchio's external forces (each joint's, in its frame) of the loops' `forces` (world, on body1 at its
+        anchor, and the opposite on body2 at its anchor), from data.oMi."""
+        wrenches = pin.StdVec_Force()
+        for _ in range(self.m.njoints):
+            wrenches.append(pin.Force.Zero())
+        for c, force in zip(self.loops.constraints, forces):
+            for joint, anchor, sign in ((c.joint1_id, c.joint1_placement.translation, 1.0),
+                                        (c.joint2_id, c.joint2_placement.translation, -1.0)):
+                linear = self.d.oMi[joint].rotation.T @ (sign * force)
+                wrenches[joint] = wrenches[joint] + pin.Force(linear, np.cross(anchor, linear))
+        return wrenches
 
     def point_accelerations(self, t, q, v):
         """The named links' kinematics, in their own or the world frame: the absolute (classical)
@@ -367,6 +404,15 @@ class PinocchioModel:
 
 def _is_mjcf(path):
     return str(path).endswith(".xml")
+
+
+def _equalities(path):
+    """The <equality> constraints of an MJCF, in the file's order (Pinocchio's reader keeps it, not their names)."""
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError:  # reported where the adapter reads the file
+        return []
+    return [element for equality in root.iter("equality") for element in equality]
 
 
 DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>

@@ -64,9 +64,9 @@ def case_mass_matrix(mass, layout, q):
     return rates_to_dofs.T @ mass @ rates_to_dofs
 
 
-# Joint names the case's [scene] moves; any other joint would sit locked at its reference position.
+# Joint names the case's [scene] moves or its loops close; any other joint would sit locked at its reference position.
 def named_joints(scene):
-    return ({joint for _, joint, _ in scene["layout"]} | set(scene["driven"])
+    return ({joint for _, joint, _ in scene["layout"]} | set(scene["driven"]) | set(scene.get("dependent", ()))
             | ({scene["urdf_root_joint"]["name"]} if scene.get("urdf_root_joint") else set()))
 
 
