@@ -59,6 +59,12 @@ def evaluate(case, source, states):
         for name in case.scene["points"]:
             for axis, label in enumerate("xyz"):
                 values[f"{name}_{label}"] = np.array([p[name][axis] for p in points])
+    if case.scene.get("dependent") and hasattr(model, "dependent"):  # a closed loop's position and velocity solve
+        solved = each("dependent joints", lambda t, q, v: [(f"{joint}{rate} (dependent)", by_joint[joint])
+                                                            for rate, by_joint in zip(("", "_rate"), model.dependent(t, q, v))
+                                                            for joint in case.scene["dependent"]])
+        for k, (quantity, _) in enumerate(solved[0]):
+            values[quantity] = np.array([float(pairs[k][1]) for pairs in solved])
     if hasattr(model, "energy"):  # optional of a derivation: its rows are then not applicable (`pointwise`)
         values["energy"] = np.array(each("energy", model.energy))
     if case.driven and hasattr(model, "drive_power"):  # optional of a derivation, as energy

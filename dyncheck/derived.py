@@ -12,7 +12,7 @@ from dyncheck.messages import suggest
 
 EQUATIONS = "equations.py"
 SCENE = "scene.xml"
-OPTIONAL = ("drive_power", "mass_matrix", "forces", "energy")  # methods of Equations only where the module has them
+OPTIONAL = ("drive_power", "mass_matrix", "forces", "energy", "dependent")  # Equations' only where the module has them
 # A parameter binds to a scene number equal to it, or to minus it where a sign is a direction (a position,
 # gravity), to within the decimal text's rounding: the MJCF's text and the module's float of one number.
 MATCH_RTOL = 4 * np.finfo(float).eps
@@ -39,7 +39,7 @@ def is_plain(module):
 class Equations:
     """A plain equations module at one parameter set, behind the model interface (docs/model-interface.md):
     each function f(t, q, v, p) becomes a method f(t, q, v); those of OPTIONAL only where the module has them
-    (mass_matrix(q, p) becomes mass_matrix(t, q, v))."""
+    (mass_matrix(q, p) and a closed loop's dependent(q, v, p) become mass_matrix(t, q, v), dependent(t, q, v))."""
 
     def __init__(self, module, params, reaction_names):
         self.coords, self.reaction_names = tuple(module.COORDS), tuple(reaction_names)
@@ -62,6 +62,10 @@ class Equations:
 
     def _mass_matrix(self, t, q, v):
         return np.asarray(self._module.mass_matrix(q, self._p), dtype=float).reshape(len(self.coords), -1)
+
+    def _dependent(self, t, q, v):
+        positions, rates = self._module.dependent(q, v, self._p)
+        return dict(positions), dict(rates)
 
     def _forces(self, t, q, v):
         return np.asarray(self._module.forces(t, q, v, self._p), dtype=float)

@@ -92,6 +92,7 @@ class MujocoModel:
                                       else ("loop", self.loop_names.index(spec["sensor"])), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
         self.independent = [(joint, self._joint(joint)) for kind, joint, _ in scene["layout"] if kind == "scalar"]
+        self.dependent_joints = [(joint, self._joint(joint)) for joint in scene.get("dependent", [])]
         self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
         self.paths = [self.body_id(b) for b in scene["paths"]]
@@ -377,6 +378,12 @@ class MujocoModel:
                 vector = res[:3] if kind == "angular acceleration" else res[3:] + self.m.opt.gravity
             out[name] = self.d.xmat[body].reshape(3, 3).T @ vector if frame == "body" else vector
         return out
+
+    def dependent(self, t, q, v):
+        """The dependent joints' positions and rates, {joint: value} each, on the closed state (`_close`)."""
+        qpos, qvel = self._engine_states(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
+        return ({joint: float(qpos[qadr]) for joint, (qadr, _) in self.dependent_joints},
+                {joint: float(qvel[dof]) for joint, (_, dof) in self.dependent_joints})
 
     def mass_matrix(self, t, q, v):
         """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): mj_fullM's in

@@ -105,6 +105,7 @@ class PinocchioModel:
         self._coord_joints = [(kind, (joint.nq, joint.idx_q, joint.idx_v), idx) for kind, joint, idx in self.layout]
         self._driven_joints = [((joint.nq, joint.idx_q, joint.idx_v), motion) for joint, motion in self.driven]
         self._independent = [(kind, self.m.getJointId(j), idx) for kind, j, idx in scene["layout"] if kind == "scalar"]
+        self.dependent_joints = [(j, self._joint(j)) for j in scene.get("dependent", [])]
         self._driven_acc = np.zeros(self.m.nv)
         for (_, _, iv), (_, _, acc) in self._driven_joints:
             self._driven_acc[iv] = acc
@@ -378,6 +379,14 @@ class PinocchioModel:
             raise ValueError(f"{self.path}: {method} needs a scene whose only joint is a ball joint; this one "
                              f"has {len(self.layout)} free joints and {len(self.driven)} driven")
         return self.layout[0][1]
+
+    def dependent(self, t, q, v):
+        """The dependent joints' positions and rates, {joint: value} each, on the closed state (`engine_state`)."""
+        config, velocity = self.engine_state(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
+        position = lambda joint: (np.arctan2(config[joint.idx_q + 1], config[joint.idx_q]) if joint.nq == 2
+                                  else config[joint.idx_q])  # a continuous joint holds (cos, sin)
+        return ({name: float(position(joint)) for name, joint in self.dependent_joints},
+                {name: float(velocity[joint.idx_v]) for name, joint in self.dependent_joints})
 
     def mass_matrix(self, t, q, v):
         """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): CRBA's, whose
