@@ -620,6 +620,8 @@ MEANINGS = {
     "scene.driven.<name>.angle": "Its position at t = 0.  Absent: 0.",
     "scene.driven.<name>.rate": "Its rate at t = 0.  Absent: 0.",
     "scene.driven.<name>.acc": "Its acceleration, constant.  Absent: 0.",
+    "scene.dependent": "Joints that closed kinematic loops move (MJCF <connect> equalities, docs/own-case.md section "
+                       "7): no coordinate's; each engine solves them from the coordinates at every state.  Absent: none.",
     "scene.applied": "Generalized forces on joints, by name in the scene files: one per degree of freedom of the "
                      "joint (a ball joint's: moments about its local axes), each a number or a law of t, the "
                      "coordinates, their rates (`<coordinate>_rate`) and the parameters, e.g. "
@@ -629,7 +631,8 @@ MEANINGS = {
                    "run (see Expressions).",
     "scene.reactions": "Where the engines read each reaction of `reactions`, by its name.",
     "scene.reactions.<name>.body": "The body the force acts on.",
-    "scene.reactions.<name>.sensor": "The MJCF force (or torque) sensor that measures it.",
+    "scene.reactions.<name>.sensor": "The MJCF force (or torque) sensor that measures it, or the name of a <connect> "
+                                     "for the force of its loop on its body1 at the anchor (frame \"world\").",
     "scene.reactions.<name>.axis": "Its component: 0, 1 or 2 (x, y, z).",
     "scene.reactions.<name>.frame": "The frame of the component: the body's or the world's.",
     "scene.reactions.<name>.quantity": "A force (the default: read by a <force> sensor) or a moment about the "

@@ -106,7 +106,8 @@ RULES = [
     Rule("MJCF", "keyframe", "*", NO_EFFECT, "the harness never loads a keyframe: every state comes from case.toml"),
     Rule("MJCF", "body", "name", COMPARED, "the body's name: both files hold the same bodies"),
     Rule("MJCF", "body", "(joints)", REFUSED,
-         "a body without a joint (welded) or with several: each URDF link hangs on one joint",
+         "a body without a joint (welded) or with several: each URDF link hangs on one joint; a jointless body"
+         " welded to the world (a ground) is folded into it, as Pinocchio's MJCF reader does",
          "give every body one joint"),
     Rule("MJCF", "body", "pos", COMPARED, "the placement in the parent body, with the orientation below"),
     *[Rule("MJCF", "body", orientation, COMPARED, "the body's orientation in its parent (a rotation matrix)")
@@ -172,7 +173,12 @@ RULES = [
     Rule("MJCF", "material", "*", NO_EFFECT, "rendering"),
     Rule("MJCF", "contact-pair", "*", REFUSED, "an explicit contact; " + NO_COUNTERPART),
     Rule("MJCF", "contact-exclude", "*", NO_EFFECT, "removes contacts, and none can happen"),
-    Rule("MJCF", "equality", "*", REFUSED, "a constraint; " + NO_COUNTERPART),
+    Rule("MJCF", "equality-connect", "*", COMPARED,
+         "closes a kinematic loop (engines.loops): its bodies and anchors against the Pinocchio side's constraint"
+         " (an MJCF read by Pinocchio's MJCF reader; a URDF closes none and is refused); solimp below MuJoCo's"
+         " stiffest (0.9999) or active=\"false\" is refused", "give the Pinocchio side the same loop"),
+    Rule("MJCF", "equality", "*", REFUSED, "weld, joint, tendon and flex constraints: Pinocchio's MJCF reader drops"
+         " joint and tendon equalities, and a weld's orientation is not compared", "close the loop with a <connect>"),
     Rule("MJCF", "tendon", "*", REFUSED, "tendons; " + NO_COUNTERPART),
     Rule("MJCF", "spatial", "*", REFUSED, "tendons; " + NO_COUNTERPART),
     Rule("MJCF", "fixed", "*", REFUSED, "tendons; " + NO_COUNTERPART),

@@ -1,4 +1,4 @@
-"""engines/loops.py on the slider-crank (tests/loops/slider_crank; an example once the harness runs closed loops):
+"""engines/loops.py on the slider-crank (examples/slider_crank):
 each engine's position and velocity solve and its constrained dynamics against the derivation, MuJoCo's softness
 measured and bounded, a loop one side lacks and an equality that is not a <connect> refused."""
 
@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 
 from engines.loops import STIFFEST, MujocoLoops, PinocchioLoops, refuse_unmatched
 
-FOLDER = Path(__file__).resolve().parent / "loops" / "slider_crank"
+FOLDER = Path(__file__).resolve().parent.parent / "examples" / "slider_crank"
 SCENE = FOLDER / "scene.xml"
 CONNECT = '<connect name="loop" body1="rod" body2="slider" anchor="0.3 0 0" solimp="0.9999 0.9999 0.001 0.5 2"/>'
 AGREE = 1e-12
