@@ -81,5 +81,6 @@ def test_a_derivation_without_the_rod_s_inertia_fails_its_equation(tmp_path, cap
 def test_a_wrong_sign_in_the_position_solve_fails_its_row(tmp_path, capsys):
     status, out, _ = run(example(tmp_path, [("equations.py", '{"psi": theta - phi,', '{"psi": phi - theta,')]), capsys)
     assert status == 1
-    failing = {(words[1], words[3], words[5]) for words in rows(out, "(dependent)") if words[-1] == "fail"}
+    failing = {(words[1], words[3], words[5]) for words in rows(out, "(dependent)")
+               if words[0] == "pointwise" and words[-1] == "fail"}
     assert failing == {("psi", "derivation", "mujoco"), ("psi", "derivation", "pinocchio")}, out
