@@ -76,6 +76,9 @@ def test_a_derivation_without_the_rod_s_inertia_fails_its_equation(tmp_path, cap
     assert status == 1
     equation = [words for words in rows(out, "residual") if words[-1] == "fail"]
     assert [words[1:3] for words in equation] == [["phi", "residual"]] * 2, out  # against both engines
+    # located in the equation (the missing I2 k(phi)^2 is no candidate term); the other rows its consequences
+    assert "the derivation's equation phi: no sum of up to 3 candidate terms" in out
+    assert "other failing rows compare quantities computed from these equations: consequences" in out
 
 
 def test_a_wrong_sign_in_the_position_solve_fails_its_row(tmp_path, capsys):
