@@ -205,9 +205,7 @@ class MujocoLoops:
     def rates(self, d, independent):
         """Every dof's rate per unit rate of each independent dof (nv x len(independent)) at the state of `d`
         (after mj_fwdPosition): the velocity solve's linear map, J v = 0."""
-        jacobian = _jacobian(self.m, d)
-        return np.column_stack([_dependent_rates(jacobian, np.asarray(independent), unit)
-                                for unit in np.eye(len(independent))])
+        return _rates_map(_jacobian(self.m, d), independent)
 
     def freedom(self):
         """The scene's degrees of freedom at its assembly (qpos0): nv less the rank of the loops' Jacobian."""
@@ -305,6 +303,10 @@ class PinocchioLoops:
         v = _dependent_rates(jacobian, independent, np.array([rates[name] for name in joints]))
         return q, v
 
+    def rates(self, q, independent):
+        """Every dof's rate per unit rate of each independent dof (nv x len(independent)) at q, on the loops."""
+        return _rates_map(self._constraint(q)[1], independent)
+
     def constrained(self, q, v, tau):
         """Pinocchio's constrained accelerations (nv,) under the generalised forces tau, and each loop's force on
         body1 at its anchor, world, (nloops, 3): constraintDynamics, Baumgarte gains 0 (the state is on the loops)."""
@@ -351,6 +353,12 @@ def _newton(q, dependent, nv, constraint, integrate):
         step[dependent] = -np.linalg.lstsq(jacobian[:, dependent], residual, rcond=None)[0]
         q = integrate(q, step)
     return q
+
+
+def _rates_map(jacobian, independent):
+    """The velocity solve as a matrix: every dof's rate per unit rate of each independent dof."""
+    return np.column_stack([_dependent_rates(jacobian, np.asarray(independent), unit)
+                            for unit in np.eye(len(independent))])
 
 
 def _dependent_rates(jacobian, independent, rates):

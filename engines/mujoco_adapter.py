@@ -105,8 +105,6 @@ class MujocoModel:
             raise ValueError(f"{self.path}: a scene with closed loops ({', '.join(l.name for l in self.loops.loops)}) "
                              "is evaluated with hinges and slides that the case's coordinates move or the loops "
                              "close; prescribed motions and ball joints in it are not supported yet")
-        self.d.qpos[:] = self.m.qpos0
-        mujoco.mj_fwdPosition(self.m, self.d)
         freedom = self.loops.freedom()
         if freedom != len(self.coords):
             raise ValueError(f"{self.path}: the loops ({', '.join(l.name for l in self.loops.loops)}) leave "

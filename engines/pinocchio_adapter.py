@@ -391,7 +391,11 @@ class PinocchioModel:
     def mass_matrix(self, t, q, v):
         """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): CRBA's, whose
         upper triangle is read for the whole."""
-        mass = pin.crba(self.m, self.d, self.engine_state(t, q, v)[0])[self._whole]
+        config = self.engine_state(t, q, v)[0]
+        mass = pin.crba(self.m, self.d, config)[self._whole]
+        if self.loops.loops:  # N^T M N, N every dof's rate per independent rate (as MujocoModel.mass_matrix)
+            rates = self.loops.rates(config, [self.m.joints[j].idx_v for _, j, _ in self._independent])
+            return rates.T @ mass @ rates
         return scene_rules.case_mass_matrix(mass, [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints], q)
 
     def energy(self, t, q, v):
