@@ -92,7 +92,7 @@ def module_values(module, file):
 def coordinate_joints(coords, scene, file):
     """{coordinate: joint}: by name, or, where no coordinate is named after a joint, the scene's hinges and
     slides in the file's order when there are as many as coordinates.  In a scene with closed loops the
-    coordinates name some of the joints, the independent ones: the loops close the others (`dependent_joints`)."""
+    coordinates name some of the joints, the independent ones: the loops close the others (case.toml's [scene] dependent)."""
     scalar = [j for j in scene.joints if j.kind in ("hinge", "slide")]
     other = [j for j in scene.joints if j.kind not in ("hinge", "slide")]
     if other:
