@@ -450,6 +450,8 @@ def scene_table(case):
     rows += [{"joint": joint, "role": "free: " + whose + ", ".join(case.coords[i] for i in idx)
               + (" (ball joint, in Euler angles)" if kind == "euler" else "")}
              for kind, joint, idx in scene["layout"]]
+    rows += [{"joint": joint, "role": "dependent: each engine solves it from the coordinates, closing the loop"}
+             for joint in scene["dependent"]]
     written = lambda x: f"{case.value(x):g}" if not isinstance(x, str) or not {"t", *case.coords} & \
         {n.removesuffix("_rate") for n in expressions.names(x)} else x  # a number, or the law of t and the state
     rows += [{"joint": joint, "role": "applied generalized force (" + ", ".join(map(written, force.components))
@@ -514,7 +516,8 @@ def write_case_page(result, case, tmp):
         f"**{result.status}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
         + f"; worst pointwise error among {'MuJoCo and Pinocchio' if case.one_derivation else 'reference, MuJoCo and Pinocchio'}"
         f": {worst_engine_error(rows):.1e}"
-        + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md), [errata](errata.md)"
+        + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md)"
+        + ("" if case.one_derivation else ", [errata](errata.md)")
         + (f"  \nParameters overridden (`--set`): {case.overrides_text()}; the book's figures and printed data"
            " do not apply to them" if case.overrides else ""),
         "",
