@@ -266,11 +266,7 @@ class MujocoModel:
 
     def _applied_at(self, t, q, v):
         """The applied generalized forces at the case's state (t, q, v): every dof's, (nv,)."""
-        out = np.zeros(self.m.nv)
-        for dof, force in self.forces:
-            value = force(t, q, v)
-            out[dof:dof + len(value)] = value
-        return out
+        return scene_rules.applied_forces(self.forces, self.m.nv, t, q, v)
 
     def _applied_many(self, t, q, v):
         """`_applied_at` at one state or many (as in `_engine_states`): (..., nv)."""

@@ -262,11 +262,7 @@ class PinocchioModel:
 
     def _applied_at(self, t, q, v):
         """The applied generalized forces at the case's state (t, q, v): every dof's, (nv,)."""
-        out = np.zeros(self.m.nv)
-        for iv, force in self.forces:
-            value = force(t, q, v)
-            out[iv:iv + len(value)] = value
-        return out
+        return scene_rules.applied_forces(self.forces, self.m.nv, t, q, v)
 
     def engine_dynamics(self, config, velocity, applied):
         """Pinocchio alone, on its own configuration and velocity under the applied generalized forces

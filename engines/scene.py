@@ -64,6 +64,16 @@ def case_mass_matrix(mass, layout, q):
     return rates_to_dofs.T @ mass @ rates_to_dofs
 
 
+def applied_forces(forces, nv, t, q, v):
+    """The applied generalized forces at the case's state (t, q, v), every dof's (nv,): `forces` are (first dof,
+    force(t, q, v)) pairs, a joint's components from its first dof on."""
+    out = np.zeros(nv)
+    for dof, force in forces:
+        value = force(t, q, v)
+        out[dof:dof + len(value)] = value
+    return out
+
+
 # Joint names the case's [scene] moves or its loops close; any other joint would sit locked at its reference position.
 def named_joints(scene):
     return ({joint for _, joint, _ in scene["layout"]} | set(scene["driven"]) | set(scene.get("dependent", ()))

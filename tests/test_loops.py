@@ -3,12 +3,14 @@ against both engines (its crank's phi'', the loop's forces and the guide's norma
 a loop left open in a URDF twin is refused on load naming the loop; a derivation without the rod's inertia fails
 its equation, and one whose position solve has a wrong sign fails that row."""
 
-import shutil
+from functools import partial
 from pathlib import Path
 
-from dyncheck.cli import main
+import test_mechanisms
+from test_mechanisms import run
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "slider_crank"
+example = partial(test_mechanisms.example, source=EXAMPLE)
 
 # The example's open tree for Pinocchio's URDF reader: the same bodies and joints, and no loop, which a URDF
 # cannot write.
@@ -27,25 +29,6 @@ URDF = """<robot name="slider_crank">
     <axis xyz="1 0 0"/><limit lower="-1e300" upper="1e300" effort="0" velocity="0"/></joint>
 </robot>
 """
-
-
-def example(tmp_path, edits=(), urdf=None):
-    """The example in tmp_path/cases, with `edits` (file, old, new) applied, and a scene.urdf if given."""
-    folder = tmp_path / "cases" / EXAMPLE.name
-    shutil.copytree(EXAMPLE, folder, ignore=shutil.ignore_patterns("__pycache__"))
-    for file, old, new in edits:
-        text = (folder / file).read_text()
-        assert text.count(old) == 1, (file, old)
-        (folder / file).write_text(text.replace(old, new))
-    if urdf is not None:
-        (folder / "scene.urdf").write_text(urdf)
-    return folder.parent
-
-
-def run(cases, capsys):
-    status = main(["run", "--cases", str(cases)])
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def rows(out, quantity):

@@ -29,10 +29,11 @@ URDF = """<robot name="forced_cart_pendulum">
 """
 
 
-def example(tmp_path, edits=(), urdf=None):
-    """The example in tmp_path/cases, with `edits` (file, old, new) applied, and a scene.urdf if given."""
-    folder = tmp_path / "cases" / EXAMPLE.name
-    shutil.copytree(EXAMPLE, folder, ignore=shutil.ignore_patterns("studies.py", "__pycache__"))
+def example(tmp_path, edits=(), urdf=None, source=EXAMPLE):
+    """The example `source` in tmp_path/cases without its studies, with `edits` (file, old, new) applied, and a
+    scene.urdf if given."""
+    folder = tmp_path / "cases" / source.name
+    shutil.copytree(source, folder, ignore=shutil.ignore_patterns("studies.py", "__pycache__"))
     toml = folder / "case.toml"
     toml.write_text(toml.read_text().split("[stability")[0])  # the checks only: the studies are the report's
     for file, old, new in edits:
