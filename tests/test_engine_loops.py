@@ -13,6 +13,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from engines.loops import STIFFEST, MujocoLoops, PinocchioLoops, refuse_unmatched
+from test_loops import URDF  # the example's open tree, the same the harness's test refuses
 
 FOLDER = Path(__file__).resolve().parent.parent / "examples" / "slider_crank"
 SCENE = FOLDER / "scene.xml"
@@ -168,23 +169,6 @@ def test_doubling_the_softness_measures_what_mujocos_stepping_departs_from_the_r
 
 
 # -- loops that one side lacks, and equalities that are not loops ----------------------------------------------
-
-URDF = """<robot name="slider_crank">
-  <link name="ground"/>
-  <link name="crank"><inertial><origin xyz="0.05 0 0"/><mass value="1"/>
-    <inertia ixx="1e-14" ixy="0" ixz="0" iyy="0.000833333333333333" iyz="0" izz="0.000833333333333333"/></inertial></link>
-  <link name="rod"><inertial><origin xyz="0.15 0 0"/><mass value="0.5"/>
-    <inertia ixx="1e-14" ixy="0" ixz="0" iyy="0.00375" iyz="0" izz="0.00375"/></inertial></link>
-  <link name="slider"><inertial><mass value="0.8"/>
-    <inertia ixx="1e-14" ixy="0" ixz="0" iyy="1e-14" iyz="0" izz="1e-14"/></inertial></link>
-  <joint name="phi" type="continuous"><parent link="ground"/><child link="crank"/><axis xyz="0 -1 0"/></joint>
-  <joint name="psi" type="continuous"><parent link="crank"/><child link="rod"/><origin xyz="0.1 0 0"/>
-    <axis xyz="0 -1 0"/></joint>
-  <joint name="x" type="prismatic"><parent link="ground"/><child link="slider"/><origin xyz="0.4 0 0"/>
-    <axis xyz="1 0 0"/><limit lower="-1e300" upper="1e300" effort="0" velocity="0"/></joint>
-</robot>
-"""
-
 
 def _variant(tmp_path, old, new):
     path = tmp_path / "scene.xml"
