@@ -9,14 +9,15 @@ in its own (spinning) frame, w = J(angles) angles' with
 the book's B2 vector turned into the spinning frame.  J is singular where sin(nutation) = 0.
 
 Every function takes one state, angles of shape (3,), or many, shape (N, 3), and answers in kind:
-the conversions of a whole trajectory are one call each.
+the conversions of a whole trajectory are one call each.  The states may be complex: the complex steps
+of engines.scene.case_linearisation differentiate angular_velocity and bias exactly.
 """
 
 import numpy as np
 
 
 def _components(x):
-    """The three components of one state, as Python floats (the arithmetic on one state then costs
+    """The three components of one state, as Python numbers (the arithmetic on one state then costs
     a tenth of numpy's on its scalars), or of many, as columns."""
     x = np.asarray(x)
     return x.tolist() if x.ndim == 1 else x.T

@@ -415,11 +415,79 @@ class MujocoModel:
         """The body's angular acceleration, in its own frame, of the scene's ball joint from MuJoCo's own
         state: the joint's (w, x, y, z) quaternion and the body's angular velocity, under the scene's applied
         forces.  No Euler angles, so no singularity at zero nutation."""
-        qadr, dof = self._ball_joint("ball_joint_acceleration")
+        dofs = self._ball_joint_state("ball_joint_acceleration", quaternion, omega)
+        return self.d.qacc[dofs].copy()
+
+    def ball_joint_linearisation(self, quaternion, omega):
+        """The state matrix A of (dtheta, dw) about the scene's ball joint's state (as `ball_joint_acceleration`),
+        engines.scene.ball_joint_state_matrix, and the estimated error of its entries.  dw' = -Ma^-1 (Dq dtheta +
+        Dv dw) from the derivatives of the inverse dynamics F(x, w, w') = applied (`_inverse_derivatives`:
+        continuous time, where mjd_transitionFD would give one step's), Ma the mass matrix; their error goes
+        through Ma^-1: |Ma^-1|_inf times it."""
+        dofs = self._ball_joint_state("ball_joint_linearisation", quaternion, omega)
+        mass = np.zeros((self.m.nv, self.m.nv))
+        mujoco.mj_fullM(self.m, self.d, mass)
+        inverse_mass = np.linalg.inv(mass[dofs, dofs])
+        force_q, force_v, error = self._inverse_derivatives()
+        matrix = scene_rules.ball_joint_state_matrix(omega, -inverse_mass @ force_q[dofs, dofs],
+                                                     -inverse_mass @ force_v[dofs, dofs])
+        return matrix, float(np.max(np.sum(np.abs(inverse_mass), axis=1)) * error)
+
+    def _ball_joint_state(self, method, quaternion, omega):
+        """The ball joint's dofs (a slice), with self.d at its quaternion (w, x, y, z) and angular velocity and
+        their acceleration under the scene's applied forces (qacc); ValueError where `method` cannot apply."""
+        qadr, dof = self._ball_joint(method)
         self.d.qpos[qadr:qadr + 4], self.d.qvel[dof:dof + 3] = quaternion, omega
-        self.d.qfrc_applied[:] = self._constant_applied("ball_joint_acceleration")
+        self.d.qfrc_applied[:] = self._constant_applied(method)
         mujoco.mj_forward(self.m, self.d)
-        return self.d.qacc[dof:dof + 3].copy()
+        return slice(dof, dof + 3)
+
+    def linearisation(self, t, q, v):
+        """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): MuJoCo's inverse
+        dynamics differenced (`_inverse_derivatives`) at the state's accelerations, the prescribed joints'
+        imposed, in the case's coordinates (engines.scene.case_linearisation, which differences applied laws of
+        the state).  f = applied - qfrc_inverse, qfrc_inverse = M qacc + bias - springs - dampers.  The
+        evaluation model holds no armature on the prescribed joints, which are no coordinates: only the free
+        rows and columns are used, and its M is `mass_matrix`'s.  ValueError for a scene with loops."""
+        if self.loops.loops:
+            raise ValueError(f"{self.path}: linearisation of a scene with closed loops "
+                             f"({', '.join(self.loop_names)}) is not supported: its coordinates' equations hold "
+                             "the loops' constraint forces, which mj_inverse does not give for a rigid loop")
+        _, mass, _, qacc = self._solve(t, q, v)  # leaves self.d at the state
+        self.d.qacc[:] = qacc
+        force_q, force_v, error = self._inverse_derivatives()
+        layout = [(kind, dof, idx) for kind, (_, dof), idx in self.layout]
+        method = f"MuJoCo mjd_inverseFD (centred differences at {scene_rules.DIFFERENCE_STEP:g}, extrapolated)"
+        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v), mass,
+                                              -force_q, -force_v, error, method)
+
+    def _inverse_derivatives(self):
+        """d(qfrc_inverse)/dqpos and /dqvel (nv, nv, a row per force) at self.d's state and qacc, the positions
+        perturbed by mj_integratePos (a ball joint's quaternion * exp(dtheta)), and the estimated error of their
+        entries.  mjd_inverseFD takes forward differences only, and a negative eps the backward ones: their mean
+        is the centred difference, extrapolated (engines.scene.extrapolated_differences) with its truncation
+        error, plus rounding (engines.scene.difference_rounding) of the largest term of qfrc_inverse (M qacc, the
+        bias, the passive forces)."""
+        nv, difference_step = self.m.nv, scene_rules.DIFFERENCE_STEP
+
+        def centred(step):
+            ends = []
+            for eps in (step, -step):
+                force_q, force_v = np.zeros((nv, nv)), np.zeros((nv, nv))
+                mujoco.mjd_inverseFD(self.m, self.d, eps, False, force_q, force_v, None, None, None, None, None)
+                ends.append((force_q.T, force_v.T))  # mjd_inverseFD's are transposed: a row per perturbed dof
+            return [(forward + backward) / 2 for forward, backward in zip(*ends)]
+
+        # mjd_inverseFD refuses RK4; mj_inverse ignores the integrator (in continuous time: invdiscrete is refused)
+        integrator, self.m.opt.integrator = self.m.opt.integrator, mujoco.mjtIntegrator.mjINT_EULER
+        try:
+            mujoco.mj_inverse(self.m, self.d)
+            inertial = self.d.qfrc_inverse - self.d.qfrc_bias + self.d.qfrc_passive  # M qacc
+            size = max(np.max(np.abs(x)) for x in (inertial, self.d.qfrc_bias, self.d.qfrc_passive))
+            (force_q, force_v), truncation = scene_rules.extrapolated_differences(centred, difference_step)
+        finally:
+            self.m.opt.integrator = integrator
+        return force_q, force_v, truncation + scene_rules.difference_rounding(size, difference_step)
 
     def points(self, t, q):
         """World positions of the traced bodies' centres of mass, and the chain of body origins."""

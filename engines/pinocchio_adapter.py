@@ -360,14 +360,29 @@ class PinocchioModel:
         """The body's angular acceleration, in its own frame, of the scene's ball joint from Pinocchio's own
         state: the joint's quaternion, given (w, x, y, z) as MuJoCo orders it, and the body's angular
         velocity, under the scene's applied forces.  No Euler angles, so no singularity at zero nutation."""
-        joint = self._ball_joint("ball_joint_acceleration")
+        dofs, config, velocity = self._ball_joint_state("ball_joint_acceleration", quaternion, omega)
+        return self.engine_dynamics(config, velocity, self.applied)[0][dofs]
+
+    def ball_joint_linearisation(self, quaternion, omega):
+        """The state matrix A of (dtheta, dw) about the scene's ball joint's state (as `ball_joint_acceleration`),
+        engines.scene.ball_joint_state_matrix, with dw' from Pinocchio's analytic derivatives of ABA
+        (computeABADerivatives: tangent perturbations quaternion * exp(dtheta), as dtheta's); and the estimated
+        error of its entries, rounding (ROUNDING)."""
+        dofs, config, velocity = self._ball_joint_state("ball_joint_linearisation", quaternion, omega)
+        acc_q, acc_v, _ = pin.computeABADerivatives(self.m, self.d, config, velocity, self.applied)
+        matrix = scene_rules.ball_joint_state_matrix(omega, acc_q[dofs, dofs], acc_v[dofs, dofs])
+        return matrix, ROUNDING * np.max(np.abs(matrix))
+
+    def _ball_joint_state(self, method, quaternion, omega):
+        """The ball joint's dofs (a slice), and Pinocchio's configuration and velocity at its quaternion (w, x, y,
+        z) and angular velocity; ValueError where `method` cannot apply (`_ball_joint`, laws of the state)."""
+        joint = self._ball_joint(method)
         config, velocity = self.neutral.copy(), np.zeros(self.m.nv)
         config[joint.idx_q:joint.idx_q + 4] = np.roll(quaternion, -1)  # Pinocchio's order: (x, y, z, w)
         velocity[joint.idx_v:joint.idx_v + 3] = omega
         if self.varying:
-            raise ValueError(f"{self.path}: ball_joint_acceleration needs constant applied forces; this scene's "
-                             "depend on the state")
-        return self.engine_dynamics(config, velocity, self.applied)[0][joint.idx_v:joint.idx_v + 3]
+            raise ValueError(f"{self.path}: {method} needs constant applied forces; this scene's depend on the state")
+        return slice(joint.idx_v, joint.idx_v + 3), config, velocity
 
     def _ball_joint(self, method):
         """The ball (spherical) joint of a scene that has no other joint."""
@@ -375,6 +390,29 @@ class PinocchioModel:
             raise ValueError(f"{self.path}: {method} needs a scene whose only joint is a ball joint; this one "
                              f"has {len(self.layout)} free joints and {len(self.driven)} driven")
         return self.layout[0][1]
+
+    def linearisation(self, t, q, v):
+        """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): Pinocchio's analytic
+        derivatives of RNEA (computeRNEADerivatives) at the state's accelerations, the prescribed joints' imposed,
+        with the springs' -k and the dampers' -d on their dofs, in the case's coordinates
+        (engines.scene.case_linearisation, which differences applied laws of the state).  Its error: rounding
+        (ROUNDING).  ValueError for a scene with loops."""
+        if self.loops.loops:
+            raise ValueError(f"{self.path}: linearisation of a scene with closed loops "
+                             f"({', '.join(loop.name for loop in self.loops.loops)}) is not supported: its "
+                             "coordinates' equations hold the loops' constraint forces, which RNEA does not give")
+        config, velocity, acc, _ = self._dynamics(t, q, v)
+        dtau_dq, dtau_dv, _ = pin.computeRNEADerivatives(self.m, self.d, config, velocity, acc)
+        force_q, force_v = -dtau_dq, -dtau_dv
+        mass = pin.crba(self.m, self.d, config)[self._whole]  # `mass_matrix`'s to the bit (RNEA's rounds otherwise)
+        for _, iv, k, _, damping in self.passive:
+            force_q[iv, iv] -= k
+            force_v[iv, iv] -= damping
+        error = ROUNDING * max(np.max(np.abs(force_q)), np.max(np.abs(force_v)))
+        layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
+        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
+                                              mass, force_q, force_v, error,
+                                              "Pinocchio computeRNEADerivatives (analytic)")
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state (`engine_state`)."""
@@ -423,6 +461,14 @@ def _equalities(path):
         return []
     return [element for equality in root.iter("equality") for element in equality]
 
+
+# The rounding error of Pinocchio's analytic derivatives, relative to their largest entry: each entry sums, over
+# the chain's few bodies, products of placements, inertias, velocities and accelerations, a few dozen operations
+# that each round by eps of a term that cancellation (gyroscopic against gravity terms) may make a few times the
+# largest entry; 1e3 eps allows some ten times that.  Nothing measured contradicts it: Pinocchio's linearisation
+# agrees with MuJoCo's to 1e-14 to 1e-12 of the largest entry (the top, the cart-pendulum: no placeholders),
+# MuJoCo's own rounding (tests/test_engine_linearisation.py).
+ROUNDING = 1e3 * np.finfo(float).eps
 
 DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>
 
