@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dyncheck import ceilings, residuals, schema
+from dyncheck import ceilings, residuals, schema, vibration
 from dyncheck.case import SOURCES
 from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.expressions import evaluate as evaluate_expression
@@ -509,6 +509,8 @@ def run_case(case, localise=True):
     except ValueError as error:  # e.g. overrides that leave nothing to converge (no motion, omega = 0)
         rows.append(no_number("convergence", "every method", ("reference",), f"not measured: {error}", Status.FAIL))
     program_rows, program = program_checks(case, sample)
+    vibrations = vibration.analyse(case)
+    rows += vibrations.rows if vibrations else []
     rows = book_numbers_only(case, apply_findings(case, rows + program_rows + data_checks(case)))
     rows = runaway_rows(limit, runs, rows)  # a bounded run's failure is no finding of the book
     parameter_draws = parameter_sets(case)[0]
@@ -525,7 +527,7 @@ def run_case(case, localise=True):
                                                        for loc in localisations)
     return CaseResult(folder=str(case.folder), spec=case.spec, overrides=dict(case.overrides), rows=tuple(rows),
                       findings=findings, sample=sample, runs=runs, program=program, drawings=drawings(case, runs),
-                      wall=time.perf_counter() - start, localisations=localisations)
+                      wall=time.perf_counter() - start, localisations=localisations, vibration=vibrations)
 
 
 def in_own_words(rows):

@@ -177,14 +177,15 @@ def close(results, junit, start):
 
 
 def study_case(case):
-    """The case's work-precision sweep and stability studies, with a progress bar (they take minutes)."""
-    from dyncheck import stability, work_precision
+    """The case's work-precision sweep, stability studies and Campbell diagram, with a progress bar (they take
+    minutes)."""
+    from dyncheck import stability, vibration, work_precision
     with tqdm(desc=f"studies of {case.name}", unit="run", disable=None, leave=False) as bar:
         def progress(text):
             bar.set_postfix_str(text[-60:], refresh=False)
             bar.update()
         return {"work_precision": work_precision.sweep(case, progress),
-                "stability": stability.studies(case, progress)}
+                "stability": stability.studies(case, progress), "vibration": vibration.sweep(case, progress)}
 
 
 def list_cases(names, cases_dir):
@@ -259,7 +260,7 @@ def parse_overrides(pairs):
 
 
 def select_cases(names, set_pairs, cases_dir=CASES_DIR):
-    from dyncheck import stability, work_precision
+    from dyncheck import stability, vibration, work_precision
     names = list(dict.fromkeys(names)) or case_names(cases_dir)  # a case named twice runs once
     defaults = {name: load_case(name, cases_dir).defaults for name in names}  # an unknown case name is named here
     overrides = parse_overrides(set_pairs)
@@ -274,6 +275,7 @@ def select_cases(names, set_pairs, cases_dir=CASES_DIR):
         for source in SOURCES:  # or a setting that is vacuous or runs away, is bad input
             case.model(source)
         stability.validate(case)
+        vibration.validate(case)
         work_precision.settings(case)
     return cases
 

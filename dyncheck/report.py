@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck import expressions, stability, work_precision
+from dyncheck import expressions, stability, vibration_page, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.messages import plural
@@ -580,8 +580,10 @@ def write_case_page(result, case, tmp):
                       + (f"  {f.effect}" if f.effect else ""), "",
                       f"*Localised automatically* (edits of the printed expression searched until one agrees"
                       f" with the engines): {f.localised}.", "", f.explanation, ""]
+    vibration_lines, vibration_files = vibration_page.section(result, case, tmp)
     sections, study_files = study_sections(result, case, tmp)
-    lines += sections + [
+    study_files += vibration_files
+    lines += vibration_lines + sections + [
         "## Figures",
         "",
         *[f"![{kind}]({path})\n" for kind, path in figures.items() if kind != "scene"],

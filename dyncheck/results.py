@@ -13,9 +13,9 @@ import pandas as pd
 
 from dyncheck import store
 
-RESULTS_VERSION = 4  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
+RESULTS_VERSION = 5  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
 # 3: "status" and "counts" at the top and in each case, "reason" in each row, "tool" in run --json;
-# 4: "localisations" in each case, check "equation", sources "derivation" and "tight solution"
+# 4: "localisations" in each case, check "equation", sources "derivation" and "tight solution"; 5: check "vibration"
 
 
 @store.register
@@ -184,6 +184,7 @@ class CaseResult:
     wall: float
     studies: dict | None = None  # {"work_precision": frame, "stability": [StudyResult]}; None: not run
     localisations: tuple = ()  # of Localisation: the failing equations of the derivation, their wrong terms
+    vibration: object = None  # dyncheck.vibration.Vibration of a case with [vibration]
     version: int = RESULTS_VERSION
 
     @property

@@ -102,6 +102,13 @@ SCHEMA = ("table", {
     "data?": ("list", ("table", {"name": "str", "printed": "expr", "formula": "expr != 0", "where": "str",
                                  "tolerance": "number >= 0", "relation?": ("one of", "equal", "at most")})),
     "stability?": FREE,  # validated by dyncheck/stability.py
+    # cross-references validated by dyncheck/vibration.py
+    "vibration?": ("table", {"why": "str", "overrides?": ("map", "expr"), "q": ("list", "expr"),
+                             "v": ("list", "expr"), "solve": ("list", "str"), "amplitude": "number > 0",
+                             "periods": "int > 0",
+                             "campbell?": ("table", {"parameter": "str", "values": ("list", "expr"), "why": "str"}),
+                             "boundary?": ("list", ("table", {"parameter": "str", "bracket": ("pair", "expr"),
+                                                              "expected": "expr", "why": "str"}))}),
 })
 
 SCALARS = {"str": ((str,), "a string"), "int": ((int,), "an integer"), "bool": ((bool,), "true or false"),
@@ -696,6 +703,31 @@ MEANINGS = {
     "data[i].relation": "equal: printed = formula; at most: printed <= formula.  Absent: equal.",
     "stability": "The stability studies of `dyncheck report`, each in a sub-table named after it; `module` names "
                  "a .py file in the case's folder with the case's own studies.  Validated by dyncheck/stability.",
+    "vibration": "Vibration analysis (dyncheck/vibration.py): an equilibrium found by Newton-Raphson, the equations "
+                 "linearised about it by the derivation and by both engines, their frequencies, modes and stability, "
+                 "each frequency checked in a run.  Rows with check `vibration`; the page's section \"Vibration "
+                 "analysis\".",
+    "vibration.why": "What is linearised, and why about this state.",
+    "vibration.overrides": "Parameters changed for the linearised scene, e.g. the arm at rest so that the disk's spin "
+                           "makes a relative equilibrium, or no resisting moment.",
+    "vibration.q": "The coordinates where Newton-Raphson starts (one per coordinate).",
+    "vibration.v": "The rates where it starts (one per coordinate): a relative equilibrium's constant rates.",
+    "vibration.solve": "The state variables Newton-Raphson solves for, coordinates or `<coord>_rate`; the others "
+                       "stay as given.",
+    "vibration.amplitude": "The largest coordinate displacement of each mode's run from the equilibrium: small enough "
+                           f"that the frequency's nonlinear shift stays below {ceilings.MOTION:g} of it.",
+    "vibration.periods": "How long each mode's run lasts, in periods of that mode.",
+    "vibration.campbell": "The Campbell diagram of `dyncheck report`: the frequencies against a parameter (a spin rate).",
+    "vibration.campbell.parameter": "The parameter swept.",
+    "vibration.campbell.values": "Its values, in order: each equilibrium starts Newton-Raphson from the one before.",
+    "vibration.campbell.why": "What the diagram shows.",
+    "vibration.boundary": "Stability boundaries, each found from the eigenvalues (bisection on the parameter between the "
+                          "bracket's stable and unstable ends, or where the equilibrium ceases) and confirmed by runs "
+                          "either side.",
+    "vibration.boundary[i].parameter": "The parameter whose value crosses the boundary.",
+    "vibration.boundary[i].bracket": "Two values of it, one on each side.",
+    "vibration.boundary[i].expected": "The boundary as a formula says it is (compared with the eigenvalues').",
+    "vibration.boundary[i].why": "Where the formula comes from.",
 }
 # The unit of a key's numbers, where it has one.
 KEY_UNITS = {
@@ -711,6 +743,11 @@ KEY_UNITS = {
     "scene.driven.<name>.rate": "rad/s or m/s",
     "scene.driven.<name>.acc": "rad/s^2 or m/s^2",
     "scene.applied": "N m or N (the joint's)",
+    "vibration.q": "coord_units",
+    "vibration.v": "coord_units per s",
+    "vibration.amplitude": "coord_units",
+    **dict.fromkeys(["vibration.campbell.values", "vibration.boundary[i].bracket", "vibration.boundary[i].expected"],
+                    "the parameter's"),
 }
 
 

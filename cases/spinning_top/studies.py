@@ -10,6 +10,7 @@ from scipy.optimize import brentq
 
 from dyncheck.simulate import Unstable, fastest_frequency, simulate
 from dyncheck.stability.common import EPS, Study, attempt, describe, fmt, study_result
+from dyncheck.vibration import SAFETY
 from dyncheck.style import plt
 
 
@@ -300,6 +301,8 @@ def sleeping_top(case, settings, progress=None):
         f_lo, f_hi = (mid, f_hi) if falls(mid) else (f_lo, mid)
     finite = 0.5 * (f_lo + f_hi)
     turning = top_nutation(p, finite, n0, math.inf)
+    upright = upright_eigenvalues(variant, criterion)
+    either = {side: stays_up(upright["threshold"]["pinocchio"] * (1 + side * EITHER_SIDE)) for side in (+1, -1)}
     data = pd.DataFrame(trail).assign(criterion=criterion, finite_horizon=finite)
     summary = pd.DataFrame([{"quantity": "criterion s_c = 2 sqrt(Ixx m g h) / Izz", "spin [rad/s]": f"{criterion:.6g}"},
                             {"quantity": f"first integrals: largest nutation within {T:g} s reaches {bound:g} rad "
@@ -327,11 +330,53 @@ def sleeping_top(case, settings, progress=None):
          + ("contains it." if lo <= finite <= hi else
             f"misses it by {min(abs(finite - lo), abs(finite - hi)) / criterion * 100:.3f} % of s_c.")
          + " A smaller bound moves the measured threshold up to s_c (as s_c sqrt(1 - bound^2 / 4)).")
-        if bracket_ok else "No comparison (the bracket failed)."]
-    series = {"trail": data, "criterion": criterion, "finite": finite, "lo": lo, "hi": hi, "n0": n0, "bound": bound,
+        if bracket_ok else "No comparison (the bracket failed).",
+        "From the eigenvalues (the book's step 16): both engines linearise the upright top spinning at s in their own "
+        "coordinates (the ball joint's rotation vector and angular velocity; ball_joint_linearisation), and the "
+        "largest real part of the eigenvalues is the tilt's growth rate.  It becomes positive below "
+        + ", ".join(f"{s_:.9g} rad/s ({NAMES[source]}, {(s_ / criterion - 1):+.1e} of s_c)"
+                    for source, s_ in upright["threshold"].items())
+        + f"; across 0.5 to 1.5 s_c it equals the linear theory's Izz sqrt(s_c^2 - s^2) / (2 Ixx) to "
+        f"{upright['worst']:.1e} of its largest value.  MuJoCo's runs {EITHER_SIDE:.0%} either side of it: "
+        f"{'stays up' if either[+1] else 'falls'} above, {'stays up' if either[-1] else 'falls'} below"
+        + (", as the eigenvalues say." if either[+1] and not either[-1] else ": AGAINST the eigenvalues.")]
+    series = {"trail": data, "growth": upright["growth"], "criterion": criterion, "finite": finite, "lo": lo, "hi": hi, "n0": n0, "bound": bound,
               "horizon": T, "params": p, "method": method, "dt": dt}
     return study_result(case, "sleeping_top", "The sleeping top: least spin of a stable upright top", settings,
                    data, summary, findings, series, start)
+
+
+EITHER_SIDE = 0.02  # MuJoCo's runs either side of the eigenvalues' threshold, relative
+NAMES = {"mujoco": "MuJoCo", "pinocchio": "Pinocchio"}
+
+
+def upright_eigenvalues(variant, criterion):
+    """The upright top's linearisation by each engine (its own coordinates): the largest real part of the
+    eigenvalues at spins 0.5 to 1.5 s_c against the linear theory's growth rate, and each engine's threshold by
+    bisection.  A real part counts as positive beyond SAFETY sqrt(error ||A||): at the threshold the two tilt
+    eigenvalues meet as a double one, which an error E splits by up to sqrt(E ||A||)."""
+    p = variant.params
+    upright = np.array([1.0, 0.0, 0.0, 0.0])
+
+    def largest_real(source, spin):
+        a, error = variant.model(source).ball_joint_linearisation(upright, np.array([0.0, 0.0, spin]))
+        real = np.max(np.linalg.eigvals(a).real)
+        return real, SAFETY * math.sqrt(error * np.linalg.norm(a))
+
+    spins = np.linspace(0.5, 1.5, 41) * criterion
+    theory = p["Izz"] * np.sqrt(np.maximum(criterion**2 - spins**2, 0.0)) / (2 * p["Ixx"])
+    growth = pd.DataFrame({"spin": spins, "theory": theory,
+                           **{source: [largest_real(source, x)[0] for x in spins] for source in NAMES}})
+    worst = max(np.max(np.abs(growth[source] - theory)) for source in NAMES) / np.max(theory)
+    threshold = {}
+    for source in NAMES:
+        lo, hi = 0.8 * criterion, 1.25 * criterion  # unstable, stable
+        while hi - lo > 1e-12 * criterion:
+            mid = 0.5 * (lo + hi)
+            real, allowed = largest_real(source, mid)
+            lo, hi = (mid, hi) if real > allowed else (lo, mid)
+        threshold[source] = 0.5 * (lo + hi)
+    return {"growth": growth, "worst": worst, "threshold": threshold}
 
 
 def top_nutation(p, s, n0, T):
@@ -424,7 +469,7 @@ def figure_euler_singularity(result, path):
 def figure_sleeping_top(result, path):
     s = result.series
     trail = s["trail"]
-    fig, ax = plt.subplots(figsize=(8.5, 5.2))
+    fig, (ax, eig) = plt.subplots(2, 1, figsize=(8.5, 8.2), height_ratios=[5.2, 3])
     spins = np.linspace(0.985 * s["criterion"], 1.01 * s["criterion"], 160)
     reached = np.array([top_nutation(s["params"], x, s["n0"], s["horizon"])[0] for x in spins])
     ax.plot(spins, reached, color="0.35", lw=1.8,
@@ -447,6 +492,17 @@ def figure_sleeping_top(result, path):
                  fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="upper right")
+    growth = s["growth"]
+    eig.plot(growth["spin"], growth["theory"], color="0.35", lw=1.8, label="linear theory: Izz sqrt(s_c^2 - s^2) / (2 Ixx)")
+    for source, marker, color in (("mujoco", "^", "tab:green"), ("pinocchio", "s", "tab:blue")):
+        eig.plot(growth["spin"], growth[source], ls="none", marker=marker, mfc="none", color=color,
+                 label=f"{NAMES[source]}: largest real part of its linearisation's eigenvalues")
+    eig.axvline(s["criterion"], color="black", ls="--")
+    eig.set_xlabel("spin s [rad/s]")
+    eig.set_ylabel("tilt growth rate [1/s]")
+    eig.set_title("The upright top linearised by each engine in its own coordinates (step 16)", fontsize=10)
+    eig.grid(True, alpha=0.3)
+    eig.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)

@@ -1,0 +1,236 @@
+"""The page's "Vibration analysis" section: the equilibrium, the linearised equations typeset, the table of
+frequencies from every source and every run, the modes and the Campbell diagram drawn.  Drawn from saved
+results only (dyncheck.vibration computes them)."""
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from dyncheck.results import OWN_WORDS
+from dyncheck.vibration import SAFETY
+from dyncheck.style import SOURCE_STYLE, plt
+
+NAMES = {"reference": "reference", "mujoco": "MuJoCo", "pinocchio": "Pinocchio"}
+HATCH = {"reference": "", "mujoco": "//", "pinocchio": ".."}  # grey-safe: a source is a hatch as well as a colour
+
+
+def source_name(source, case):
+    """A source as the page names it: the derivation of a researcher's case is "derivation"."""
+    return OWN_WORDS.get(source, source) if case.one_derivation and source == "reference" else NAMES[source]
+
+
+ROUNDING = 1e-12  # entries below this fraction of the largest shown are rounding noise of the derivatives: 0
+
+
+def latex_matrix(symbol, matrix, largest):
+    """$$ symbol = [ ... ] $$, six significant digits, for GitHub's Markdown maths; entries below ROUNDING times
+    `largest` written as 0."""
+    rows = r" \\ ".join(" & ".join(_number(x if abs(x) > ROUNDING * largest else 0.0) for x in line)
+                         for line in matrix)
+    return f"$$\\mathbf{{{symbol}}} = \\begin{{bmatrix}} {rows} \\end{{bmatrix}}$$"
+
+
+def _number(x):
+    if x == 0:
+        return "0"
+    mantissa, exponent = f"{x:.6e}".split("e")
+    exponent = int(exponent)
+    if -3 <= exponent <= 4:
+        return f"{x:.6g}"
+    return f"{float(mantissa):.6g} \\cdot 10^{{{exponent}}}"
+
+
+def section(result, case, tmp):
+    """The section's lines and the files it wrote; none for a case without [vibration]."""
+    vib = result.vibration
+    if vib is None:
+        return [], []
+    lines = ["## Vibration analysis", "", " ".join(case.prose(vib.why, "vibration.why").split()), ""]
+    if vib.overrides:
+        lines += ["Linearised with " + ", ".join(f"{name} = {value:.6g} {case.units[name]}"
+                                                for name, value in vib.overrides.items())
+                  + " (the case's other numbers as above).", ""]
+    if vib.equilibrium is None or not vib.modes:
+        return lines + [f"No analysis: {vib.failure}", ""], []
+    eq = vib.equilibrium
+    coords = case.coords
+    lines += [f"**Equilibrium** (Newton-Raphson, {eq.iterations} iterations, accelerations left "
+              f"{eq.residual:.1e} of the balancing terms): "
+              + ", ".join(f"{c} = {_value(x)}" for c, x in zip(coords, eq.q)) + "; "
+              + ", ".join(f"{c}' = {_value(x)}" for c, x in zip(coords, eq.v)) + ".", ""]
+    lines += linear_equations(vib, case)
+    lines += frequency_lines(vib, case)
+    files = []
+    chart = f"figures/{case.name}_modes.png"
+    figure_modes(vib, case, tmp / chart)
+    files.append(chart)
+    lines += [f"![mode shapes]({chart})", "",
+              f"*The mode shapes*: each mode's coordinate displacements, scaled so that the largest is 1, from each "
+              "source's linearisation (bars side by side: colour and hatch per source).  Coinciding bars are "
+              "the check: the rows `mode shape` above give the largest difference.", ""]
+    sweep = (result.studies or {}).get("vibration")
+    if sweep is not None:
+        chart = f"figures/{case.name}_campbell.png"
+        figure_campbell(sweep, case, tmp / chart)
+        files.append(chart)
+        lines += sweep_lines(sweep, case, chart)
+    return lines, files
+
+
+def linear_equations(vib, case):
+    """The linearised equations typeset: M, K, D, G, N (Pinocchio's, analytic; the zero ones named) and the
+    derivation's A."""
+    coords = ", ".join(case.coords)
+    lines = []
+    pin = vib.linear.get("pinocchio")
+    if pin is not None:
+        matrices = pin.matrices()
+        largest = max(np.max(np.abs(m)) for m in matrices.values())
+        zero = [name for name, m in matrices.items() if np.max(np.abs(m)) <= ROUNDING * largest]
+        shown = [name for name in matrices if name not in zero]
+        lines += [f"**Linearised equations** M q'' + (D + G) q' + (K + N) q = 0 in ({coords}), from Pinocchio's "
+                  "analytic derivatives (SI units; MuJoCo's and the derivation's agree to the rows `vibration` "
+                  "above):", "",
+                  *[latex_matrix(name, matrices[name], largest) + "\n" for name in shown],
+                  ("Zero here: " + ", ".join(f"{n} ({WORDS[n]})" for n in zero) + "." if zero else ""), ""]
+    ref = vib.linear["reference"]
+    lines += [f"The {source_name('reference', case)}'s first-order form x' = A x, x = ({coords}, and their rates), "
+              f"by central differences of its accelerations (error estimate {ref.error:.1e}):", "",
+              latex_matrix("A", ref.state_matrix, np.max(np.abs(ref.state_matrix))), ""]
+    return lines
+
+
+WORDS = {"K": "stiffness", "N": "circulatory", "D": "damping", "G": "gyroscopic"}
+
+
+def frequency_lines(vib, case):
+    """The table of frequencies, damping ratios and the runs' frequencies, and the verdicts."""
+    ref = vib.modes["reference"]
+    n = len(case.coords)
+    runs = {}
+    for motion in vib.motions:
+        runs.setdefault((motion.mode, motion.source), motion)  # the first: at the amplitude, MuJoCo at its step
+    table = []
+    for k, i in enumerate(ref.oscillating()):
+        lam = ref.eigenvalues[i]
+        entry = {"mode": k + 1}
+        nearest = {source: int(np.argmin(np.abs(modes.eigenvalues - lam))) for source, modes in vib.modes.items()}
+        for source, modes in vib.modes.items():
+            entry[f"{source_name(source, case)} [rad/s]"] = f"{modes.eigenvalues[nearest[source]].imag:.10g}"
+        entry["[Hz]"] = f"{lam.imag / (2 * math.pi):.6g}"
+        entry["damping ratio"] = (f"{-lam.real / abs(lam):.3g}" if abs(lam.real) > SAFETY * ref.bounds[i] else "0")
+        for source in vib.modes:
+            motion = runs.get((nearest[source], source))
+            entry[f"run: {source_name(source, case)}"] = ("-" if motion is None else
+                                                          f"{motion.frequency:.10g}" if motion.ok else "unstable")
+        shape = ref.shape(i, n)
+        entry["shape"] = ", ".join(f"{c} {_shape_entry(x)}" for c, x in zip(case.coords, shape))
+        table.append(entry)
+    verdicts = {source_name(s, case): m.verdict for s, m in vib.modes.items()}
+    same = len(set(verdicts.values())) == 1
+    amplitude = vib.motions[0].amplitude if vib.motions else None
+    lines = ["**Natural frequencies** (imaginary parts of the eigenvalues of A; the runs: the frequency of the modal "
+             f"coordinate in a run from the equilibrium displaced along the mode by {amplitude:g} in its largest "
+             "coordinate, MuJoCo by its RK4, the others by DOP853):", "",
+             pd.DataFrame(table).to_markdown(index=False, disable_numparse=True), "",
+             ("**Stability**: " + (f"{next(iter(verdicts.values()))} by every source" if same else
+                                   "; ".join(f"{s}: {v}" for s, v in verdicts.items()))
+              + ".  " + VERDICT_WORDS[next(iter(verdicts.values()))] if same else ""), ""]
+    return lines
+
+
+VERDICT_WORDS = {
+    "marginally stable": "Every eigenvalue lies on the imaginary axis within its error bound: small motions "
+                         "neither grow nor decay in the linear equations, and the nonlinear terms decide.",
+    "asymptotically stable": "Every eigenvalue has a negative real part beyond its error bound: small motions decay.",
+    "unstable": "An eigenvalue has a positive real part beyond its error bound: small motions grow.",
+}
+
+
+def _value(x):
+    """A state variable of the equilibrium: zero where Newton-Raphson left it within rounding of zero."""
+    return "0" if abs(x) < 1e-12 else f"{x:.10g}"
+
+
+def _shape_entry(x):
+    return f"{x.real:.4g}" if abs(x.imag) <= 1e-9 else f"{abs(x):.4g}∠{math.degrees(np.angle(x)):.0f}°"
+
+
+def figure_modes(vib, case, path):
+    """One panel per oscillating mode: each coordinate's displacement in each source's mode shape."""
+    ref = vib.modes["reference"]
+    n = len(case.coords)
+    modes = ref.oscillating()
+    fig, axes = plt.subplots(1, len(modes), figsize=(3.2 * len(modes) + 0.6, 3.0), squeeze=False)
+    width = 0.8 / len(vib.modes)
+    for ax, (k, i) in zip(axes[0], enumerate(modes)):
+        lam = ref.eigenvalues[i]
+        shapes = {}
+        for source, modes_s in vib.modes.items():
+            j = int(np.argmin(np.abs(modes_s.eigenvalues - lam)))
+            shapes[source] = modes_s.shape(j, n)
+        # A gyroscopic mode moves its coordinates out of phase: its bars are magnitudes, each phase written over it.
+        complex_ = any(np.max(np.abs(shape.imag)) > 1e-9 for shape in shapes.values())
+        for s, (source, shape) in enumerate(shapes.items()):
+            style = SOURCE_STYLE[source]
+            x = np.arange(n) + (s - (len(shapes) - 1) / 2) * width
+            ax.bar(x, np.abs(shape) if complex_ else shape.real, width, color=style["color"], alpha=0.8,
+                   hatch=HATCH[source], edgecolor="black", linewidth=0.5, label=source_name(source, case))
+        if complex_:
+            for c, value in enumerate(shapes["reference"]):
+                ax.text(c, abs(value) + 0.03, f"{math.degrees(np.angle(value)):.0f}°", ha="center", fontsize=7)
+        ax.axhline(0.0, color="black", lw=0.6)
+        ax.set_xticks(range(n), case.coords)
+        ax.set_ylim((0.0, 1.2) if complex_ else (-1.15, 1.15))
+        ax.set_title(f"mode {k + 1}: {lam.imag:.4g} rad/s", fontsize=9)
+        ax.set_ylabel("|displacement| (largest = 1), phase" if complex_ else "displacement (largest = 1)", fontsize=8)
+        ax.grid(axis="y", alpha=0.3)
+    axes[0][0].legend(fontsize=7, loc="lower left")
+    fig.suptitle(f"{case.title}: mode shapes about the equilibrium", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
+def sweep_lines(sweep, case, chart):
+    """The Campbell diagram and the stability boundary in words."""
+    lines = [f"### Campbell diagram: frequencies against {sweep.parameter}", "",
+             " ".join(case.prose(sweep.why, "vibration.campbell.why").split()), "",
+             f"![Campbell diagram]({chart})", "",
+             f"*The Campbell diagram*: each oscillating mode's frequency (top) and the largest real part of the "
+             f"eigenvalues (bottom) at each {sweep.parameter}, from the derivation (line) and both engines "
+             "(markers); a positive real part is an unstable equilibrium.", ""]
+    for sentence in sweep.findings:
+        lines += [f"- {sentence}"]
+    return lines + [""]
+
+
+def figure_campbell(sweep, case, path):
+    """Frequencies and the largest real part against the swept parameter, every source."""
+    data = sweep.data
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 5.0), sharex=True, height_ratios=[3, 1.4])
+    markers = {"reference": None, "mujoco": "^", "pinocchio": "s"}
+    for source, group in data.groupby("source", sort=False):
+        style = SOURCE_STYLE[source]
+        for mode, curve in group.groupby("mode"):
+            top.plot(curve["value"], curve["frequency"], color=style["color"], ls="-" if source == "reference" else "none",
+                     marker=markers[source], ms=4, mfc="none", label=source_name(source, case) if mode == 1 else None)
+        real = group.groupby("value")["largest_real"].first()
+        bottom.plot(real.index, real.to_numpy(), color=style["color"], ls="-" if source == "reference" else "none",
+                    marker=markers[source], ms=4, mfc="none")
+    if sweep.boundary is not None:
+        for ax in (top, bottom):
+            ax.axvline(sweep.boundary, color="black", ls="--", lw=0.8)
+        top.text(sweep.boundary, top.get_ylim()[1], f" boundary {sweep.boundary:.5g}", va="top", fontsize=8)
+    bottom.axhline(0.0, color="black", lw=0.6)
+    top.set_ylabel("frequency [rad/s]")
+    bottom.set_ylabel("largest Re λ [1/s]")
+    bottom.set_xlabel(f"{sweep.parameter} [{sweep.unit}]")
+    top.legend(fontsize=8)
+    top.grid(alpha=0.3)
+    bottom.grid(alpha=0.3)
+    fig.suptitle(f"{case.title}: Campbell diagram", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)

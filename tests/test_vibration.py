@@ -1,0 +1,153 @@
+"""Vibration analysis (dyncheck/vibration.py, the book's step 16): equilibria by Newton-Raphson, the
+linearisation of the derivation and of both engines, frequencies against closed forms and against runs,
+the stability boundaries against their formulas and runs either side; a wrong term fails, a bad table is
+refused naming its field."""
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+import dyncheck
+from dyncheck import vibration
+from dyncheck.results import Status
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+def double_pendulum_closed_form(p):
+    """The hanging double pendulum's frequencies, theta2 measured from arm 1: sqrt of the eigenvalues of (K, M)."""
+    m1, m2, l1, l2, g = (p[k] for k in ("m1", "m2", "l1", "l2", "g"))
+    mass = np.array([[m1 * l1**2 + m2 * (l1 + l2) ** 2, m2 * l2 * (l1 + l2)], [m2 * l2 * (l1 + l2), m2 * l2**2]])
+    stiffness = g * np.array([[(m1 + m2) * l1 + m2 * l2, m2 * l2], [m2 * l2, m2 * l2]])
+    return np.sqrt(scipy.linalg.eigh(stiffness, mass, eigvals_only=True))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_double_pendulums_frequencies_are_the_closed_forms_at_random_parameters(seed):
+    rng = np.random.default_rng(seed)
+    case = dyncheck.load_case("double_pendulum", m1=rng.uniform(0.01, 1), m2=rng.uniform(0.01, 1),
+                              l1=rng.uniform(0.05, 1), l2=rng.uniform(0.05, 1), g=rng.uniform(1, 20))
+    table = vibration.settings(case)
+    eq = vibration.equilibrium(case.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords)
+    assert np.max(np.abs(eq.q)) < 1e-12
+    expected = double_pendulum_closed_form(case.params)
+    for source in ("reference", "mujoco", "pinocchio"):
+        model = case.model(source)
+        linear = (vibration.derivation_linear(model, source, eq) if source == "reference"
+                  else vibration.engine_linear(model, source, eq))
+        modes = vibration.modal(linear)
+        found = [modes.eigenvalues[i].imag for i in modes.oscillating()]
+        # the eigenvalues' own bounds are ~1e-10 of them; the engines' placeholders ~1e-11
+        np.testing.assert_allclose(found, expected, rtol=1e-8)
+        assert modes.verdict == "marginally stable"
+
+
+@pytest.fixture(scope="module")
+def analysed():
+    """The analysis of the book's cases that have one, at their numbers."""
+    return {name: vibration.analyse(dyncheck.load_case(name))
+            for name in ("double_pendulum", "rotating_pendulum", "spring_pendulum", "spinning_top")}
+
+
+def test_every_comparison_passes_at_the_books_numbers(analysed):
+    for name, vib in analysed.items():
+        assert vib.rows and all(r.status == Status.PASS for r in vib.rows), (name, [r for r in vib.rows
+                                                                                  if r.status != Status.PASS])
+        sources = {s for r in vib.rows for s in r.sources}
+        assert sources == {"reference", "mujoco", "pinocchio"}, name
+        # every oscillating mode's eigenvalue is checked by a run in each source
+        modes = len(vib.modes["reference"].oscillating())
+        assert sum("by motion" in r.quantity for r in vib.rows) == 3 * modes, name
+
+
+def test_the_tops_steady_precession_is_the_slow_root_of_the_x2_row(analysed):
+    vib = analysed["spinning_top"]
+    p = dyncheck.load_case("spinning_top").params
+    n, s = vib.equilibrium.q[1], vib.equilibrium.v[2]
+    a, b, c = (p["Izz"] - p["Ixx"]) * math.cos(n), p["Izz"] * s, -p["m"] * p["g"] * p["h"]
+    roots = np.roots([a, b, c])
+    slow = roots[np.argmin(np.abs(roots))]
+    assert vib.equilibrium.v[0] == pytest.approx(slow, rel=1e-12)
+
+
+def test_the_spring_pendulums_runaway_boundary_comes_out_of_the_eigenvalues():
+    case = dyncheck.load_case("spring_pendulum")
+    sweep = vibration.sweep(case)
+    scene = vibration.linearised(case)
+    omega = scene.params["beta_rate"]
+    assert sweep.boundary == pytest.approx(math.sqrt(scene.params["k"] / scene.params["m"]), rel=2e-6)
+    k_crit = [f for f in sweep.findings if f.startswith("Boundary from the eigenvalues: k =")]
+    assert k_crit and f"{scene.params['m'] * omega**2:.7g}" in k_crit[0]
+    either = [f for f in sweep.findings if f.startswith("Run at")]
+    assert len(either) == 4 and all("as the eigenvalues say" in f for f in either)
+    assert sum("leaves the equilibrium" in f for f in either) == 2
+
+
+def test_a_soft_spring_finds_only_the_unstable_equilibrium_through_the_hinge():
+    case = dyncheck.load_case("spring_pendulum", k=100.0)  # below m Omega^2 = 160 N/m: the spin wins
+    vib = vibration.analyse(case)
+    assert vib.equilibrium.q[1] + case.params["l0"] < 0  # the particle beyond the hinge, held by the pull
+    assert {m.verdict for m in vib.modes.values()} == {"unstable"}
+    assert all(r.status == Status.PASS for r in vib.rows[:-1])
+    assert vib.rows[-1].status == Status.NOT_APPLICABLE and "unstable equilibrium" in vib.rows[-1].detail
+
+
+def test_no_equilibrium_in_either_is_not_applicable(monkeypatch):
+    monkeypatch.setattr(vibration, "NEWTON_ITERATIONS", 0)  # Newton-Raphson gives up at once, in every source
+    vib = vibration.analyse(dyncheck.load_case("double_pendulum"))
+    assert [r.status for r in vib.rows] == [Status.NOT_APPLICABLE] and "neither has one" in vib.rows[0].detail
+
+
+def planted(tmp_path, old, new):
+    """The forced cart-pendulum example in tmp_path with one edit of its equations (and without its studies)."""
+    folder = tmp_path / "forced_cart_pendulum"
+    shutil.copytree(EXAMPLES / "forced_cart_pendulum", folder, ignore=shutil.ignore_patterns("studies.py", "__pycache__"))
+    toml = folder / "case.toml"
+    text = toml.read_text()
+    start = text.index("[stability]")
+    toml.write_text(text[:start] + text[text.index("# Vibration analysis"):])
+    equations = folder / "equations.py"
+    source = equations.read_text()
+    assert source.count(old) == 1
+    equations.write_text(source.replace(old, new))
+    return dyncheck.load_case("forced_cart_pendulum", tmp_path)
+
+
+def test_the_damped_example_is_asymptotically_stable_and_checked(tmp_path):
+    vib = vibration.analyse(planted(tmp_path, "import numpy as np", "import numpy as np"))  # no edit
+    assert all(r.status == Status.PASS for r in vib.rows)
+    assert {m.verdict for m in vib.modes.values()} == {"asymptotically stable"}
+    assert any(r.quantity == "D (damping)" and r.sources == ("reference", "pinocchio") for r in vib.rows)
+
+
+def test_a_wrong_damper_in_the_derivation_fails_its_linearisation(tmp_path):
+    vib = vibration.analyse(planted(tmp_path, '- p["ct"] * theta_rate])', '- 1.01 * p["ct"] * theta_rate])'))
+    failed = {r.quantity for r in vib.rows if r.status == Status.FAIL and "reference" in r.sources}
+    assert {"A = d(q', q'')/d(q, q')", "D (damping)"} <= failed
+    assert any(q.startswith("frequency mode") for q in failed)
+    # the engines agree with each other and with their own runs
+    assert all(r.status == Status.PASS for r in vib.rows if "reference" not in r.sources)
+
+
+def test_a_derivation_without_the_engines_equilibrium_fails(tmp_path):
+    vib = vibration.analyse(planted(tmp_path, "-m * g * l * np.sin(theta)", "-m * g * l * (np.sin(theta) + 100)"))
+    assert [r.status for r in vib.rows] == [Status.FAIL] and "MuJoCo has one" in vib.rows[0].detail
+
+
+@pytest.mark.parametrize("edit, message", [
+    (("solve = [\"x\", \"theta\"]", "solve = [\"x\", \"phi\"]"), "vibration.solve names 'phi'"),
+    (("q = [0.01, 0.1]", "q = [0.01]"), "vibration.q has 1 entries"),
+    (("overrides = { F0 = 0.0 }", "overrides = { F1 = 0.0 }"), "vibration.overrides: no parameter 'F1'"),
+    (("periods = 10", "periods = 0"), "periods"),
+])
+def test_a_bad_vibration_table_is_refused_naming_its_field(tmp_path, edit, message):
+    folder = tmp_path / "forced_cart_pendulum"
+    shutil.copytree(EXAMPLES / "forced_cart_pendulum", folder, ignore=shutil.ignore_patterns("__pycache__"))
+    toml = folder / "case.toml"
+    toml.write_text(toml.read_text().replace(*edit))
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace("[", r"\[")):
+        vibration.validate(dyncheck.load_case("forced_cart_pendulum", tmp_path))
