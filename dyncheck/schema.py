@@ -108,7 +108,7 @@ SCHEMA = ("table", {
                              "periods": "int > 0",
                              "campbell?": ("table", {"parameter": "str", "values": ("list", "expr"), "why": "str"}),
                              "boundary?": ("list", ("table", {"parameter": "str", "bracket": ("pair", "expr"),
-                                                              "expected": "expr", "why": "str"}))}),
+                                                              "expected": "str", "why": "str"}))}),
 })
 
 SCALARS = {"str": ((str,), "a string"), "int": ((int,), "an integer"), "bool": ((bool,), "true or false"),
@@ -726,7 +726,9 @@ MEANINGS = {
                           "either side.",
     "vibration.boundary[i].parameter": "The parameter whose value crosses the boundary.",
     "vibration.boundary[i].bracket": "Two values of it, one on each side.",
-    "vibration.boundary[i].expected": "The boundary as a formula says it is (compared with the eigenvalues').",
+    "vibration.boundary[i].expected": "The boundary as a formula says it is (compared with the eigenvalues'): an "
+                                      "expression of the parameters, evaluated where the study runs (it may have no "
+                                      "value at other parameters, as a square root of a difference).",
     "vibration.boundary[i].why": "Where the formula comes from.",
 }
 # The unit of a key's numbers, where it has one.

@@ -89,7 +89,9 @@ def validate(case):
         if name not in case.params and (name not in names or name in table["solve"]):
             raise ValueError(f"{case.file}: vibration.{field}.parameter = '{name}' is neither a parameter nor a state "
                              f"variable held by Newton-Raphson (one of {', '.join(n for n in names if n not in table['solve'])})")
-    linearised(case)  # the linearised scene must be physical too
+    scene = linearised(case)  # the linearised scene must be physical too
+    for i, boundary in enumerate(table.get("boundary", [])):
+        scene.value(boundary["expected"], f"vibration.boundary[{i}].expected")
 
 
 def state_names(coords):
@@ -108,7 +110,7 @@ def jacobian(f, x, scales):
     fourth order), and an estimate of each column's error: |R(h) - R(2h)| / 15 (R(2h)'s error is 16 times
     R(h)'s), plus the rounding of the quotients, 10 eps |f| / h.  h is STEP times the variable's scale, or a
     tenth, a hundredth or a thousandth of that, whichever has the least estimated error: the equations may
-    vary on a shorter scale than the variable's (the double pendulum's mass ratio of 10 makes its
+    vary on a shorter scale than the variable's (a mass ratio of 10 between two pendulums makes their
     accelerations change on a third of a radian)."""
     x = np.asarray(x, dtype=float)
     columns, errors = [], []
@@ -314,6 +316,22 @@ def modal(linear):
     return Modes(values, bounds, left, right, verdict(values, bounds))
 
 
+def eigenvalue_sensitivity(linear, modes, i, errors):
+    """The first-order change of eigenvalue i under entry errors `errors` (n, 2n) of A's lower block:
+    |y|^T |dA| |x| / |y^H x|."""
+    full = np.vstack([np.zeros_like(errors), errors])
+    left, right = modes.left[:, i], modes.right[:, i]
+    return float(np.abs(left) @ full @ np.abs(right) / max(abs(left.conj() @ right), EPS))
+
+
+def term_errors(linear):
+    """Entry errors of a term of relative size ceilings.POINTWISE in every entry of A's lower block: what the
+    linearisation rows' ceilings are made of.  An eigenvalue or a mode shape moves under them by its own
+    condition (a shape beside a near eigenvalue by much more than 1e-6): a tolerance above that change could pass
+    such a term, and proves nothing."""
+    return ceilings.POINTWISE * np.abs(linear.state_matrix[linear.n:])
+
+
 def verdict(values, bounds):
     """"unstable" where an eigenvalue's real part is positive beyond its bound; "asymptotically stable" where
     every one is negative beyond it; else "marginally stable" (on the imaginary axis within the bounds:
@@ -475,10 +493,16 @@ def comparison_rows(linear, modes, pointwise):
         for b in sources[k + 1:]:
             la, lb = linear[a], linear[b]
             n = la.n
-            scale = np.max(np.abs(la.state_matrix[n:]))
-            rows.append(row("vibration", "A = d(q', q'')/d(q, q')", (a, b),
-                            np.max(np.abs(la.state_matrix[n:] - lb.state_matrix[n:])) / scale,
-                            SAFETY * (la.error + lb.error) / scale + pointwise, ceiling=ceilings.POINTWISE))
+            scale = max(np.max(np.abs(la.state_matrix[n:])), np.max(np.abs(lb.state_matrix[n:])))
+            difference = np.max(np.abs(la.state_matrix[n:] - lb.state_matrix[n:]))
+            if scale <= SAFETY * (la.error + lb.error):  # no force depends on the state (a pendulum without gravity)
+                rows.append(no_number("vibration", "A = d(q', q'')/d(q, q')", (a, b),
+                                      f"no force depends on the state: both lower blocks are zero within their "
+                                      f"estimates (largest entry {scale:.1e}, difference {difference:.1e})",
+                                      Status.NOT_APPLICABLE))
+            else:
+                rows.append(row("vibration", "A = d(q', q'')/d(q, q')", (a, b), difference / scale,
+                                SAFETY * (la.error + lb.error) / scale + pointwise, ceiling=ceilings.POINTWISE))
             ma, mb = la.matrices(), lb.matrices()
             for name in ma if mb else ():
                 size = max(np.max(np.abs(ma[name])), np.max(np.abs(mb[name])))
@@ -493,34 +517,39 @@ def comparison_rows(linear, modes, pointwise):
             for i in mo_a.oscillating():
                 j = pairs[i]
                 lam, other = mo_a.eigenvalues[i], mo_b.eigenvalues[j]
+                moved = eigenvalue_sensitivity(la, mo_a, i, term_errors(la)) / abs(lam)
                 rows.append(row("vibration", f"frequency {mode_label(mo_a, i)}", (a, b),
                                 abs(other - lam) / abs(lam),
                                 SAFETY * (mo_a.bounds[i] + mo_b.bounds[j]) / abs(lam) + pointwise,
                                 f"{lam.imag:.10g} vs {other.imag:.10g} rad/s (damping {-lam.real:.3g} vs "
-                                f"{-other.real:.3g} 1/s)", ceiling=ceilings.POINTWISE))
+                                f"{-other.real:.3g} 1/s); ceiling: the eigenvalue's change under a term of "
+                                f"{ceilings.POINTWISE:g} of every entry of A", ceiling=max(ceilings.POINTWISE, moved)))
                 shape_a, shape_b = mo_a.shape(i, n), mo_b.shape(j, n)
                 allowed = SAFETY * (shape_bound(la, mo_a, i) + shape_bound(lb, mo_b, j)) + pointwise
                 rows.append(row("vibration", f"mode shape {mode_label(mo_a, i)}", (a, b),
                                 np.max(np.abs(shape_a - shape_b)), allowed,
                                 "largest component 1; allowed: each matrix's error over the distance of the "
-                                "eigenvalue from the rest of the spectrum (its reduced resolvent)",
-                                ceiling=ceilings.POINTWISE))
+                                "eigenvalue from the rest of the spectrum (its reduced resolvent); ceiling: the "
+                                f"shape's change under a term of {ceilings.POINTWISE:g} of every entry of A",
+                                ceiling=max(ceilings.POINTWISE, shape_bound(la, mo_a, i, term_errors(la)))))
             same = mo_a.verdict == mo_b.verdict
             rows.append(row("vibration", "stability", (a, b), 0.0 if same else 1.0, 0.0,
                             f"{mo_a.verdict} vs {mo_b.verdict}", ceiling=0.0))
     return rows
 
 
-def shape_bound(linear, modes, i):
+def shape_bound(linear, modes, i, errors=None):
     """First-order bound of mode i's shape (largest component 1) under the matrix's errors, entry by entry:
     dx = -R dA x with R the reduced resolvent of A - lambda I (its pseudo-inverse without the eigenvector's own
     null direction), so |dx| <= |R| |dA| |x|, plus the eigensolver's rounding over R; twice that (rescaling to
-    the largest component moves the others by as much again) over the largest component's size."""
+    the largest component moves the others by as much again) over the largest component's size.  `errors`
+    (n, 2n): other entry errors than the matrix's own estimate."""
     a = linear.state_matrix
     u, sigma, vh = scipy.linalg.svd(a - modes.eigenvalues[i] * np.eye(len(a)))
     resolvent = (vh[:-1].conj().T / sigma[:-1]) @ u[:, :-1].conj().T
     x = np.abs(modes.right[:, i])
-    spread = np.abs(resolvent) @ (linear.full_errors() @ x) + 1e2 * EPS * np.linalg.norm(a) / sigma[-2]
+    full = linear.full_errors() if errors is None else np.vstack([np.zeros_like(errors), errors])
+    spread = np.abs(resolvent) @ (full @ x) + 1e2 * EPS * np.linalg.norm(a) / sigma[-2]
     n = linear.n
     return 2 * float(np.max(spread[:n])) / float(np.max(x[:n]))
 

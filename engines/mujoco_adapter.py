@@ -457,7 +457,7 @@ class MujocoModel:
         self.d.qacc[:] = qacc
         force_q, force_v, error = self._inverse_derivatives()
         layout = [(kind, dof, idx) for kind, (_, dof), idx in self.layout]
-        method = f"MuJoCo mjd_inverseFD (centred differences at {scene_rules.DIFFERENCE_STEP:g}, extrapolated)"
+        method = "MuJoCo mjd_inverseFD (centred differences, extrapolated, at the step of least estimated error)"
         return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v), mass,
                                               -force_q, -force_v, error, method)
 
@@ -468,7 +468,7 @@ class MujocoModel:
         is the centred difference, extrapolated (engines.scene.extrapolated_differences) with its truncation
         error, plus rounding (engines.scene.difference_rounding) of the largest term of qfrc_inverse (M qacc, the
         bias, the passive forces)."""
-        nv, difference_step = self.m.nv, scene_rules.DIFFERENCE_STEP
+        nv = self.m.nv
 
         def centred(step):
             ends = []
@@ -484,10 +484,17 @@ class MujocoModel:
             mujoco.mj_inverse(self.m, self.d)
             inertial = self.d.qfrc_inverse - self.d.qfrc_bias + self.d.qfrc_passive  # M qacc
             size = max(np.max(np.abs(x)) for x in (inertial, self.d.qfrc_bias, self.d.qfrc_passive))
-            (force_q, force_v), truncation = scene_rules.extrapolated_differences(centred, difference_step)
+            # the step whose estimate, truncation (falling as step^4) plus rounding (growing as 1/step), is least:
+            # a fast spin curves the forces on a shorter scale than the default step's
+            best = None
+            for step in scene_rules.DIFFERENCE_STEPS:
+                (force_q, force_v), truncation = scene_rules.extrapolated_differences(centred, step)
+                error = truncation + scene_rules.difference_rounding(size, step)
+                if best is None or error < best[2]:
+                    best = force_q, force_v, error
         finally:
             self.m.opt.integrator = integrator
-        return force_q, force_v, truncation + scene_rules.difference_rounding(size, difference_step)
+        return best
 
     def points(self, t, q):
         """World positions of the traced bodies' centres of mass, and the chain of body origins."""

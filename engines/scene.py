@@ -154,6 +154,10 @@ def ball_joint_state_matrix(omega, acc_theta, acc_omega):
 # against Pinocchio's analytic derivatives) are off by 1e-10 to 1e-9 |F|.  1e-3 rather than 3e-3 keeps truncation,
 # which grows as h^4 for forces that change faster (over a short lever), far below rounding.
 DIFFERENCE_STEP = 1e-3
+# MuJoCo's inverse dynamics is differenced at each of these and the least estimated error kept: a fast spin (the
+# top's 44 rad/s) curves the forces on a far shorter scale than a radian, and rounding, not truncation, then
+# dominates only at the smaller steps.
+DIFFERENCE_STEPS = (3e-3, 1e-3, 3e-4, 1e-4, 3e-5)
 
 # How much rounding an evaluation of the forces accumulates, in units of eps |F|, |F| the largest of the terms it
 # sums (its intermediate terms may be larger: gravity against the bodies' accelerations).  Measured on MuJoCo's
