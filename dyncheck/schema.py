@@ -108,7 +108,10 @@ SCHEMA = ("table", {
                              "periods": "int > 0",
                              "campbell?": ("table", {"parameter": "str", "values": ("list", "expr"), "why": "str"}),
                              "boundary?": ("list", ("table", {"parameter": "str", "bracket": ("pair", "expr"),
-                                                              "expected": "str", "why": "str"}))}),
+                                                              "expected": "str", "why": "str"})),
+                             "floquet?": ("table", {"why": "str", "period": "str", "q": ("list", "expr"),
+                                                    "v": ("list", "expr"), "periods": "int > 0",
+                                                    "amplitude": "number > 0"})}),
 })
 
 SCALARS = {"str": ((str,), "a string"), "int": ((int,), "an integer"), "bool": ((bool,), "true or false"),
@@ -730,6 +733,21 @@ MEANINGS = {
                                       "expression of the parameters, evaluated where the study runs (it may have no "
                                       "value at other parameters, as a square root of a difference).",
     "vibration.boundary[i].why": "Where the formula comes from.",
+    "vibration.floquet": "About a periodic motion, where the base's motion makes the equations periodic in t (no "
+                         "equilibrium): the orbit by shooting Newton-Raphson on the derivation, each source's monodromy "
+                         "matrix, its Floquet multipliers and the stability verdict, the largest multiplier checked by "
+                         "stroboscopic runs.  At the case's own numbers (no overrides).",
+    "vibration.floquet.why": "What the periodic motion is, and why the equations are periodic.",
+    "vibration.floquet.period": "The period T of the equations, an expression of the parameters and pi, e.g. "
+                                "`2*pi/abs(beta_rate)` (checked: the accelerations at t and t + T agree).  Evaluated by "
+                                "the analysis, not on load: where it has no value, or one not > 0, at the run's "
+                                "parameters (a disk at rest, beta_rate = 0), the analysis is not applicable and says why.",
+    "vibration.floquet.q": "The coordinates where shooting starts, at t = 0 (one per coordinate).",
+    "vibration.floquet.v": "The rates where it starts (one per coordinate).",
+    "vibration.floquet.periods": "How long the stroboscopic runs last, in periods.",
+    "vibration.floquet.amplitude": "The largest coordinate displacement of the runs from the orbit, along the "
+                                   "eigenvector of the largest multiplier: small enough that its nonlinear shift "
+                                   f"stays below {ceilings.MOTION:g} of it.",
 }
 # The unit of a key's numbers, where it has one.
 KEY_UNITS = {
@@ -750,6 +768,10 @@ KEY_UNITS = {
     "vibration.amplitude": "coord_units",
     **dict.fromkeys(["vibration.campbell.values", "vibration.boundary[i].bracket", "vibration.boundary[i].expected"],
                     "the parameter's"),
+    "vibration.floquet.period": "s",
+    "vibration.floquet.q": "coord_units",
+    "vibration.floquet.v": "coord_units per s",
+    "vibration.floquet.amplitude": "coord_units",
 }
 
 

@@ -17,21 +17,26 @@ finite-differenced inverse dynamics, Pinocchio's analytic RNEA derivatives).  Ei
 first-order perturbation bound from their matrix's error estimate (|d lambda| <= ||dA|| / s, s the
 cosine between the left and right eigenvectors), which sets every tolerance on them.
 
-`analyse(case)` returns a `Vibration` (rows included); `sweep(case)` the Campbell diagram's data and the
+Where the base's motion makes the equations periodic in t, `[vibration.floquet]` linearises them about a
+periodic motion instead (`floquet`): the orbit by shooting, each source's monodromy matrix along it, its
+eigenvalues (the Floquet multipliers) and the largest one checked by stroboscopic runs.
+
+`analyse(case)` returns a `Vibration` (rows included, the Floquet analysis in its `floquet`); `sweep(case)` the Campbell diagram's data and the
 stability boundary (a study: `dyncheck report` runs it).
 """
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
 import scipy.linalg
+from scipy.integrate import DOP853
 
-from dyncheck import ceilings, store
+from dyncheck import ceilings, expressions, store
 from dyncheck.results import Status, no_number, row
-from dyncheck.simulate import Unstable, simulate
+from dyncheck.simulate import Unstable, fastest_frequency, scipy_budget, simulate
 
 EPS = np.finfo(float).eps
 # Central differences extrapolated once (Richardson: fourth order): truncation ~h^4 f^(5) and rounding eps f / h
@@ -67,9 +72,20 @@ def validate(case):
     if table is None:
         return
     n = len(case.coords)
-    for key in ("q", "v"):
-        if len(table[key]) != n:
-            raise ValueError(f"{case.file}: vibration.{key} has {len(table[key])} entries; the case has {n} "
+    if "floquet" in table:
+        period = table["floquet"]["period"]
+        try:
+            unknown = expressions.names(period) - set(case.params) - {"pi"}
+        except ValueError as error:
+            raise ValueError(f"{case.file}: vibration.floquet.period = {period!r} is not an expression: {error}") from None
+        if unknown:
+            raise ValueError(f"{case.file}: vibration.floquet.period = {period!r} names {', '.join(sorted(unknown))}, "
+                             "not a parameter")
+    guesses = {key: table[key] for key in ("q", "v")}
+    guesses.update({f"floquet.{key}": table["floquet"][key] for key in ("q", "v") if "floquet" in table})
+    for key, guess in guesses.items():
+        if len(guess) != n:
+            raise ValueError(f"{case.file}: vibration.{key} has {len(guess)} entries; the case has {n} "
                              f"coordinates ({', '.join(case.coords)})")
     names = state_names(case.coords)
     for name in table["solve"]:
@@ -294,11 +310,17 @@ class Modes:
 
 
 def modal(linear):
-    """Eigenvalues, eigenvectors and the verdict of a linearisation.  Each eigenvector is the null vector of
-    A - lambda I from its singular value decomposition (left and right at once): accurate to the matrix's
-    error over the rest of the spectrum's distance, where LAPACK's eigenvectors lose digits beside a cluster
-    of near-zero eigenvalues (the top's cyclic coordinates: 1e-7 from perturbations of 1e-14)."""
-    a = linear.state_matrix
+    """Eigenvalues, eigenvectors and the verdict of a linearisation."""
+    values, bounds, left, right = eigensystem(linear.state_matrix, linear.full_errors())
+    return Modes(values, bounds, left, right, verdict(values, bounds))
+
+
+def eigensystem(a, errors):
+    """(eigenvalues, their bounds, left and right eigenvectors) of a matrix `a` whose entries carry the absolute
+    errors `errors`.  Each eigenvector is the null vector of A - lambda I from its singular value decomposition
+    (left and right at once): accurate to the matrix's error over the rest of the spectrum's distance, where
+    LAPACK's eigenvectors lose digits beside a cluster of near-zero eigenvalues (the top's cyclic coordinates:
+    1e-7 from perturbations of 1e-14)."""
     values = scipy.linalg.eigvals(a)
     size = len(a)
     left, right = np.empty((size, size), complex), np.empty((size, size), complex)
@@ -309,11 +331,10 @@ def modal(linear):
     # First order, entry by entry: |d lambda| <= |y|^T |dA| |x| / |y^H x| (invariant under rescaling a coordinate,
     # which the norm bound ||dA|| / s is not: psi in rad beside l in m), plus the eigensolver's rounding, a hundred
     # eps times the matrix's norm over the cosine.
-    spread = np.einsum("ij,ik,kj->j", np.abs(left), linear.full_errors(), np.abs(right))
+    spread = np.einsum("ij,ik,kj->j", np.abs(left), errors, np.abs(right))
     bounds = (spread + 1e2 * EPS * np.linalg.norm(a)) / np.maximum(cosines, EPS)
     order = np.lexsort((values.imag, np.round(np.abs(values), 12)))
-    values, bounds, left, right = values[order], bounds[order], left[:, order], right[:, order]
-    return Modes(values, bounds, left, right, verdict(values, bounds))
+    return values[order], bounds[order], left[:, order], right[:, order]
 
 
 def eigenvalue_sensitivity(linear, modes, i, errors):
@@ -373,12 +394,17 @@ class Motion:
         return complex(self.growth, self.frequency)
 
 
+def along(vector, n):
+    """The real state displacement along an eigenvector (coordinates, then rates), scaled so that its largest
+    coordinate component is 1."""
+    return (vector / vector[:n][np.argmax(np.abs(vector[:n]))]).real
+
+
 def mode_run(case, model, source, eq, modes, i, amplitude, periods, method, dt=None):
     """The run of `model` from the equilibrium displaced by `amplitude` along mode i of `modes`, measured."""
     n = len(eq.q)
     lam = modes.eigenvalues[i]
-    full = modes.right[:, i] / modes.right[:n, i][np.argmax(np.abs(modes.right[:n, i]))]
-    start = eq.state + amplitude * full.real
+    start = eq.state + amplitude * along(modes.right[:, i], n)
     period = 2 * math.pi / lam.imag
     mujoco_step = case.integration["mujoco_step"]
     output_step = mujoco_step * max(1, round(period / RUNS_PER_PERIOD / mujoco_step))
@@ -415,6 +441,7 @@ class Vibration:
     shift: tuple  # per oscillating mode of the reference: the nonlinear shift of its frequency at the amplitude
     rows: tuple
     failure: str = ""  # why there is no analysis (no equilibrium, a periodic one)
+    floquet: "Floquet | None" = None  # about the periodic motion of [vibration.floquet]
 
 
 ENGINES = ("mujoco", "pinocchio")
@@ -422,10 +449,20 @@ ENGINES = ("mujoco", "pinocchio")
 
 def analyse(case):
     """The equilibrium of `[vibration]`, each source's linearisation and modes, the motion of every
-    oscillating mode in every source, and the rows that compare them; None for a case without the table."""
+    oscillating mode in every source, and the rows that compare them; with `[vibration.floquet]` also the
+    periodic motion's (`floquet`), its rows after the equilibrium's.  None for a case without the table."""
     table = settings(case)
     if table is None:
         return None
+    about_equilibrium = equilibrium_analysis(case, table)
+    periodic = floquet(case)
+    if periodic is None:
+        return about_equilibrium
+    return replace(about_equilibrium, floquet=periodic, rows=about_equilibrium.rows + periodic.rows)
+
+
+def equilibrium_analysis(case, table):
+    """`analyse` about the equilibrium."""
     scene = linearised(case)
     check = "vibration"
     reference = scene.model("reference")
@@ -440,8 +477,8 @@ def analyse(case):
     drift = steady(reference, eq, (0.29 * horizon, 0.71 * horizon))
     if drift > NEWTON_TOLERANCE * SAFETY:
         why = (f"not an equilibrium at every time: the accelerations along q* + q*' t reach {drift:.2e} of the "
-               "balancing terms (the base's motion makes the linearised equations periodic; a Floquet analysis "
-               "is not built)")
+               "balancing terms (the base's motion makes the linearised equations periodic: linearise about a "
+               "periodic motion instead, [vibration.floquet])")
         rows.append(no_number(check, "steady equilibrium", ("reference",), why, Status.FAIL))
         return Vibration(table["why"], table["overrides"], eq, {}, {}, (), (), tuple(rows), why)
     pointwise = case.tolerance["pointwise"]["value"]
@@ -613,6 +650,405 @@ def motion_rows(case, modes, motions, shift):
     return rows
 
 
+# -- about a periodic motion: Floquet ---------------------------------------------------------------
+# Where the base's motion makes the equations periodic in t (the book's arm and disk both turning: seen from the
+# disk, the arm's centripetal acceleration turns at the disk's rate), there is no equilibrium but a periodic
+# motion, x(t + T) = x(t).  Small motions about it obey x' = A(t) x with A periodic; over one period they are
+# multiplied by the monodromy matrix Phi(T), and its eigenvalues, the Floquet multipliers mu, say whether they grow
+# (some |mu| > 1), decay (every |mu| < 1) or neither.
+
+# A(t) is sampled along the orbit at SAMPLES points of the period and interpolated trigonometrically (it is
+# periodic and smooth): the variational equations then cost no evaluation of a model, where integrating them with
+# the orbit would evaluate a source's linearisation at each of DOP853's ~13 stages per step (MuJoCo's takes
+# 0.5 ms, the derivation's `jacobian` 3 to 6 ms: 2 to 15 s per period of the book's 1.8.1 at its tight rtol).
+# Along the book's orbits A's harmonics fall to the rounding of its entries by the 8th multiple of the
+# period's frequency; SAMPLES resolves up to the 16th.  The twin from every other sample, integrated 100 times
+# less tightly, measures the interpolation's error with the integrator's.
+SAMPLES = 32
+
+
+class NoOrbit(ValueError):
+    """Shooting found no periodic motion; the message says from where, and what was left."""
+
+
+@dataclass(frozen=True)
+class OrbitPoint:
+    """A state of the periodic motion, where a source is linearised (what `derivation_linear` and
+    `engine_linear` read of an equilibrium)."""
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+
+    @property
+    def state(self):
+        return np.concatenate([self.q, self.v])
+
+
+@store.register
+@dataclass(frozen=True)
+class Monodromy:
+    """Phi(T) from one source, its error estimate (entry by entry), its eigenvalues (the Floquet multipliers, with
+    first-order bounds from the error estimate, as `modal`'s), eigenvectors and the verdict."""
+    source: str
+    matrix: np.ndarray  # Phi(T), (2n, 2n), x = (dq, dq')
+    errors: np.ndarray  # |Phi(T) - its twin's| (every other sample of A, the case's rtol instead of its tight one)
+    trace_integral: float  # the integral of trace A over the period: det Phi(T) = exp of it (Liouville)
+    multipliers: np.ndarray  # complex, sorted by |mu| then imaginary part
+    bounds: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    verdict: str
+    method: str  # of the source's linearisation
+
+    @property
+    def eigenvalues(self):
+        """The multipliers, as `match` reads them."""
+        return self.multipliers
+
+    def distinct(self):
+        """Indices of the multipliers shown: every real one and one of each complex pair (imaginary part >= 0)."""
+        return [i for i, (mu, bound) in enumerate(zip(self.multipliers, self.bounds)) if mu.imag >= -SAFETY * bound]
+
+    def largest(self):
+        """The multiplier of largest |mu| (among those within SAFETY bounds of it, the largest imaginary part)."""
+        size = np.abs(self.multipliers)
+        near = np.flatnonzero(size >= np.max(size - SAFETY * self.bounds))
+        return int(near[np.argmax(self.multipliers[near].imag)])
+
+
+@store.register
+@dataclass(frozen=True)
+class Floquet:
+    """The periodic motion of `[vibration.floquet]`, each source's monodromy matrix and multipliers, and their
+    check by stroboscopic runs: what the page's subsection shows."""
+    why: str
+    period: float  # T, s
+    orbit: np.ndarray  # the derivation's states over one period from t = 0, at 2 SAMPLES + 1 equal steps
+    iterations: int  # of shooting Newton-Raphson
+    monodromy: dict  # {source: Monodromy}
+    motions: tuple  # of Motion: (reference, pinocchio, mujoco, reference at twice the amplitude, mujoco at dt/2)
+    shift: float  # the nonlinear shift of the largest multiplier at the amplitude
+    rows: tuple
+    failure: str = ""  # why there is no analysis (T not a period of the equations, no orbit)
+
+
+def floquet_settings(case):
+    """The case's `[vibration.floquet]` table with its guess evaluated (the period is evaluated by `period_of`), or
+    None."""
+    table = case.spec.get("vibration", {}).get("floquet")
+    if table is None:
+        return None
+    return {**table, "q": np.array([case.value(x, "vibration.floquet.q") for x in table["q"]]),
+            "v": np.array([case.value(x, "vibration.floquet.v") for x in table["v"]])}
+
+
+def period_of(case, table):
+    """T at the case's parameters; ValueError saying why there is none (a disk at rest relative to the arm: the
+    equations do not depend on t, and 2 pi / beta' has no value)."""
+    period = case.value(table["period"], "vibration.floquet.period")
+    if period <= 0:
+        raise ValueError(f"{case.file}: vibration.floquet.period = {table['period']!r} is {period:g}, not > 0")
+    return period
+
+
+def floquet(case):
+    """The periodic motion of `[vibration.floquet]` at the case's own numbers: the period checked, the orbit by
+    shooting, each source's monodromy matrix and multipliers, their comparison, the stroboscopic runs; None for a
+    case without the table."""
+    table = floquet_settings(case)
+    if table is None:
+        return None
+    check = "vibration"
+    try:
+        period = table["period"] = period_of(case, table)
+    except ValueError as error:
+        why = f"no period at these parameters: {error}"
+        return Floquet(table["why"], math.nan, np.empty((0, 2 * len(case.coords))), 0, {}, (), math.nan,
+                       (no_number(check, "periodic motion", ("reference",), why, Status.NOT_APPLICABLE),), why)
+    drift = periodicity(case, case.model("reference"), period)
+    rows = [row(check, f"period T = {period:.10g} s of the equations", ("reference",), drift, NEWTON_TOLERANCE,
+                "|q''(t + T, q, q') - q''(t, q, q')| at the case's random states, relative to the largest |q''|; "
+                "allowed: rounding", ceiling=ceilings.POINTWISE)]
+    if drift > NEWTON_TOLERANCE:
+        why = f"T = {period:.10g} s is not a period of the equations (they change by {drift:.2e} of their size)"
+        return Floquet(table["why"], period, np.empty((0, 2 * len(case.coords))), 0, {}, (), math.nan,
+                       tuple(rows), why)
+    guess = np.concatenate([table["q"], table["v"]])
+    try:
+        states, iterations, residual, error = periodic_orbit(case, "reference", guess, period)
+    except (NoOrbit, Unstable) as failure:
+        rows.append(without_orbit(case, guess, period, str(failure)))
+        return Floquet(table["why"], period, np.empty((0, 2 * len(case.coords))), 0, {}, (), math.nan,
+                       tuple(rows), str(failure))
+    rows.append(row(check, "periodic orbit (shooting: |x(T) - x(0)| left)", ("reference",), residual, error,
+                    f"{iterations} iterations of Newton-Raphson; relative to each state variable's scale; allowed: the "
+                    "run's own error estimate (its difference from the same at the case's rtol)",
+                    ceiling=ceilings.RUN))
+    samples = {}
+    for source in ("reference",) + ENGINES:
+        try:
+            samples[source] = state_matrices(case, source, states[:-1], period)
+        except ValueError as failure:  # a scene the engine cannot linearise (closed loops)
+            rows.append(no_number(check, "monodromy matrix", (source,), str(failure), Status.FAIL))
+    monodromy = monodromies(case, samples, period)
+    rows += floquet_rows(monodromy, case.tolerance["pointwise"]["value"])
+    motions, shift = stroboscopic_checks(case, states[0], monodromy, table)
+    rows += stroboscopic_rows(case, monodromy, motions, shift, period)
+    return Floquet(table["why"], period, states, iterations, monodromy, tuple(motions), shift, tuple(rows))
+
+
+def periodicity(case, model, period):
+    """How much the accelerations change when t moves by `period`, at the case's random states, relative to the
+    largest |q''|: rounding for a period of the equations."""
+    change = size = 0.0
+    for t, q, v in case.sample_states():
+        now, later = (np.asarray(model.accelerations(s, q, v), dtype=float) for s in (t, t + period))
+        change, size = max(change, float(np.max(np.abs(later - now)))), max(size, float(np.max(np.abs(now))))
+    return change / max(size, EPS)
+
+
+def orbit_run(case, model, x, period, rtol):
+    """The states of `model`'s run from x at t = 0 over one period by DOP853 at `rtol`, at 2 SAMPLES + 1 times."""
+    n = len(case.coords)
+    with np.errstate(all="ignore"):
+        run = simulate(model, (x[:n], x[n:]), period, "DOP853", rtol=rtol, output_step=period / (2 * SAMPLES),
+                       work=False, omega=fastest_frequency(case))
+    return run[state_names(case.coords)].to_numpy()
+
+
+def periodic_orbit(case, source, guess, period):
+    """Shooting Newton-Raphson for x0 with phi_T(x0) = x0, phi_T the run over one period at the case's tight rtol,
+    the Jacobian Phi(T) - I (the derivation's monodromy matrix along the run).  Converged
+    when |phi_T(x0) - x0| is within the run's own error estimate, its difference from the same run at the case's
+    rtol: below it, the residual is the integrator's error, and no step can reduce it further.  Returns (the
+    states over the period at 2 SAMPLES + 1 times, iterations, the residual and its estimate, each the largest
+    over the state variables relative to their scales); NoOrbit if it does not converge."""
+    model = case.model(source)
+    x = np.asarray(guess, dtype=float)
+    integration = case.integration
+    residual, error = math.inf, None
+    for iteration in range(NEWTON_ITERATIONS):
+        states = orbit_run(case, model, x, period, integration["tight_rtol"])
+        scale = scales_of(x)
+        residual = float(np.max(np.abs(states[-1] - x) / scale))
+        if error is None or residual <= error:  # the twin where it may decide: first, and where the last one says so
+            loose = orbit_run(case, model, x, period, integration["rtol"])
+            error = float(np.max(np.abs(loose[-1] - states[-1]) / scale))
+            if residual <= error:
+                return states, iteration, residual, error
+        # from a quarter of the samples: the Jacobian's error (1e-10) is far below what slows Newton's convergence
+        samples, _ = state_matrices(case, source, states[:-1:4], period)
+        jacobian_, _ = transition(samples[:, None], period, integration["rtol"], fastest_frequency(case))
+        x = x - np.linalg.solve(jacobian_[0] - np.eye(len(x)), states[-1] - x)
+    names = state_names(case.coords)
+    raise NoOrbit(f"shooting Newton-Raphson on the {source} from {dict(zip(names, np.round(guess, 6)))} did not converge in "
+                  f"{NEWTON_ITERATIONS} iterations: |x(T) - x(0)| left {residual:.3g} (relative) at "
+                  f"{dict(zip(names, np.round(x, 6)))}")
+
+
+def without_orbit(case, guess, period, why):
+    """The row of a case whose derivation has no periodic motion near the guess: not applicable if MuJoCo has none
+    there either (the parameters leave none: a spring too soft for the spin), a failure if it has."""
+    try:
+        found = periodic_orbit(case, "mujoco", guess, period)[0][0]
+    except (ValueError, Unstable):  # NoOrbit, a blow-up, a scene MuJoCo cannot linearise
+        return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
+                         f"neither has one near the guess: {why}", Status.NOT_APPLICABLE)
+    return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
+                     f"MuJoCo has one from {dict(zip(state_names(case.coords), np.round(found, 6)))}, the derivation "
+                     f"none: {why}", Status.FAIL)
+
+
+def state_matrices(case, source, states, period):
+    """(A of `source` at `states`, equally spaced over the period from t = 0, (len(states), 2n, 2n), how it was
+    linearised): the derivation's by `jacobian`, an engine's by its own derivatives (`engine_linear`)."""
+    n = len(case.coords)
+    model = case.model(source)
+    linearise = derivation_linear if source == "reference" else engine_linear
+    times = np.arange(len(states)) * period / len(states)
+    linear = [linearise(model, source, OrbitPoint(t, x[:n], x[n:])) for t, x in zip(times, states)]
+    return np.array([lin.state_matrix for lin in linear]), linear[0].method
+
+
+def transition(samples, period, rtol, omega):
+    """(Phi(T), the integral of trace A over [0, T]) of X' = A(t) X, X(0) = I, for each of several sources at once
+    (one run: the same steps for all), by DOP853 at rtol = atol, with A(t) the trigonometric interpolant of
+    `samples`, (N, sources, 2n, 2n): A at t_k = k T / N, k = 0 ... N - 1."""
+    count, sources, size = samples.shape[:3]
+    coefficients = np.fft.rfft(samples, axis=0) / count
+    coefficients[1:(count + 1) // 2] *= 2  # each harmonic below the Nyquist frequency stands for its conjugate too
+    frequencies = 2j * math.pi * np.arange(len(coefficients)) / period
+
+    def variational(t, y):
+        a = np.tensordot(np.exp(frequencies * t), coefficients, axes=1).real
+        return np.concatenate([(a @ y[:-sources].reshape(sources, size, size)).ravel(),
+                               np.trace(a, axis1=1, axis2=2)])
+
+    start = np.concatenate([np.tile(np.eye(size).ravel(), sources), np.zeros(sources)])
+    end = dop853(variational, start, period, rtol, omega)
+    return end[:-sources].reshape(sources, size, size), end[-sources:]
+
+
+def dop853(rhs, start, t_end, rtol, omega):
+    """y(t_end) of y' = rhs(t, y), y(0) = start, by scipy's DOP853 at rtol = atol, within the step budget of a run
+    of frequency omega (dyncheck.simulate.scipy_budget); Unstable if it blows up or exceeds it."""
+    budget = scipy_budget("DOP853", t_end, rtol, np.inf, omega)
+    solver = DOP853(rhs, 0.0, start, t_end, rtol=rtol, atol=rtol)
+    steps = 0
+    while solver.status == "running":
+        message = solver.step()
+        steps += 1
+        if solver.status == "failed" or not np.all(np.isfinite(solver.y)):
+            raise Unstable("DOP853", solver.t, steps, message or "state is not finite")
+        budget.check(solver.t, steps)
+    return solver.y
+
+
+def monodromies(case, samples, period):
+    """{source: Monodromy} from `samples`, {source: (A at 2 SAMPLES equal steps over the period, method)}: Phi(T)
+    by DOP853 at the case's tight rtol; its error estimate, the difference from the same from every other sample at
+    the case's rtol (the twin's interpolation and integration errors both larger, so it bounds them)."""
+    integration, omega = case.integration, fastest_frequency(case)
+    stacked = np.stack([matrices for matrices, _ in samples.values()], axis=1)
+    matrices, traces = transition(stacked, period, integration["tight_rtol"], omega)
+    twins, _ = transition(stacked[::2], period, integration["rtol"], omega)
+    monodromy = {}
+    for (source, (_, method)), matrix, twin, trace in zip(samples.items(), matrices, twins, traces):
+        errors = np.abs(matrix - twin)
+        multipliers, bounds, left, right = eigensystem(matrix, errors)
+        monodromy[source] = Monodromy(source, matrix, errors, float(trace), multipliers, bounds, left, right,
+                                      floquet_verdict(multipliers, bounds), method)
+    return monodromy
+
+
+def floquet_verdict(multipliers, bounds):
+    """"unstable" where some |mu| exceeds 1 by more than SAFETY times its bound; "asymptotically stable" where every
+    |mu| is below 1 by more than that; else "marginally stable" (on the unit circle within the bounds: small motions
+    neither grow nor decay over a period in the linear equations, and the nonlinear terms decide)."""
+    size = np.abs(multipliers)
+    if np.any(size - 1 > SAFETY * bounds):
+        return "unstable"
+    if np.all(1 - size > SAFETY * bounds):
+        return "asymptotically stable"
+    return "marginally stable"
+
+
+def floquet_rows(monodromy, pointwise):
+    """Each pair of sources: Phi(T), each multiplier (one of each complex pair, numbered as the derivation's), the
+    verdict.  Allowed: both error estimates (bounds) times SAFETY plus the case's pointwise tolerance (what the scenes
+    model differently), relative."""
+    rows = []
+    reference = monodromy["reference"]
+    sources = list(monodromy)
+    for k, a in enumerate(sources):
+        for b in sources[k + 1:]:
+            mo_a, mo_b = monodromy[a], monodromy[b]
+            scale = np.max(np.abs(mo_a.matrix))
+            rows.append(row("vibration", "monodromy matrix Phi(T)", (a, b),
+                            np.max(np.abs(mo_a.matrix - mo_b.matrix)) / scale,
+                            SAFETY * (np.max(mo_a.errors) + np.max(mo_b.errors)) / scale + pointwise,
+                            f"relative to its largest entry ({scale:.3g})", ceiling=ceilings.POINTWISE))
+            for label, r in enumerate(reference.distinct(), start=1):
+                i, j = match(reference, mo_a)[r], match(reference, mo_b)[r]
+                mu, other = mo_a.multipliers[i], mo_b.multipliers[j]
+                rows.append(row("vibration", f"Floquet multiplier {label}", (a, b), abs(other - mu) / abs(mu),
+                                SAFETY * (mo_a.bounds[i] + mo_b.bounds[j]) / abs(mu) + pointwise,
+                                f"{multiplier_text(mu)} vs {multiplier_text(other)}", ceiling=ceilings.POINTWISE))
+            same = mo_a.verdict == mo_b.verdict
+            rows.append(row("vibration", "stability (Floquet)", (a, b), 0.0 if same else 1.0, 0.0,
+                            f"{mo_a.verdict} vs {mo_b.verdict}", ceiling=0.0))
+    return rows
+
+
+def multiplier_text(mu):
+    """|mu| and its angle in degrees."""
+    return f"|mu| {abs(mu):.10g} at {math.degrees(np.angle(mu)):.6g} deg"
+
+
+def stroboscopic_checks(case, start, monodromy, table):
+    """The largest multiplier of the derivation measured in runs from the orbit's x0 displaced by the amplitude along
+    each source's own eigenvector: the derivation and Pinocchio by DOP853 at the case's tight rtol, MuJoCo by its RK4
+    at its step (which must divide T: None for its runs otherwise), and the twins: the derivation at twice the
+    amplitude, MuJoCo at half the step.  Returns (motions, the nonlinear shift of mu at the amplitude, from the
+    derivation's twin: as `motion_checks`'s)."""
+    amplitude, periods, period = table["amplitude"], table["periods"], table["period"]
+    dt = case.integration["mujoco_step"]
+    reference = monodromy["reference"]
+    i = reference.largest()
+
+    def run(source, method, scale=1.0, step=None):
+        own = monodromy[source]
+        return stroboscopic_run(case, source, start, own, match(reference, own)[i], scale * amplitude, periods,
+                                period, method, step)
+
+    why = undivided(case, period)
+    mujoco = (lambda step: Motion("mujoco", i, amplitude, None, None, why)) if why else \
+        (lambda step: run("mujoco", "mujoco:RK4", step=step))
+    motions = [run("reference", "DOP853"), run("pinocchio", "DOP853"), mujoco(dt), run("reference", "DOP853", 2.0),
+               mujoco(dt / 2)]
+    shift = abs(multiplier(motions[3], period) - multiplier(motions[0], period)) if motions[0].ok and motions[3].ok \
+        else math.inf
+    return motions, shift
+
+
+def undivided(case, period):
+    """Why MuJoCo's run has no state at the multiples of T (its step does not divide T), or None."""
+    dt = case.integration["mujoco_step"]
+    steps = period / dt
+    if abs(steps - round(steps)) <= 1e-9 * steps:
+        return None
+    return f"MuJoCo's step {dt:g} s does not divide the period T = {period:.10g} s ({steps:.6g} steps)"
+
+
+def stroboscopic_run(case, source, start, monodromy, j, amplitude, periods, period, method, dt=None):
+    """The run of `source` over `periods` periods from `start` displaced by `amplitude` along multiplier j's
+    eigenvector, sampled once per period: its modal coordinate z_k (the left eigenvector's projection of
+    x(kT) - x0) goes as mu^k; mu measured by least squares, z_{k+1} = mu z_k, as the exponent log(mu) / T."""
+    n = len(start) // 2
+    displaced = start + amplitude * along(monodromy.right[:, j], n)
+    options = {"dt": dt} if dt else {"rtol": case.integration["tight_rtol"], "omega": fastest_frequency(case)}
+    try:
+        with np.errstate(all="ignore"):
+            run = simulate(case.model(source), (displaced[:n], displaced[n:]), periods * period, method,
+                           output_step=period, work=False, **options)
+    except (Unstable, ArithmeticError, np.linalg.LinAlgError) as error:
+        return Motion(source, j, amplitude, None, None, f"{method}: {error}")
+    left = monodromy.left[:, j].conj()
+    z = (run[state_names(case.coords)].to_numpy() - start) @ left / (left @ monodromy.right[:, j])
+    exponent = np.log(np.vdot(z[:-1], z[1:]) / np.vdot(z[:-1], z[:-1])) / period
+    return Motion(source, j, amplitude, float(exponent.imag), float(exponent.real))
+
+
+def multiplier(motion, period):
+    """The multiplier a stroboscopic run shows: exp(its exponent T)."""
+    return np.exp(motion.exponent * period)
+
+
+def stroboscopic_rows(case, monodromy, motions, shift, period):
+    """Each source's measured multiplier against its own largest one, relative to |mu|: allowed SAFETY times the
+    nonlinear shift, MuJoCo's step error (RK4 at dt and dt/2: their difference is 15/16 of the error at dt) and the
+    multiplier's bound; the ceiling that of a mode's run (ceilings.MOTION)."""
+    rows = []
+    mujoco_twin = motions[4]
+    for motion in motions[:3]:
+        source = motion.source
+        label = "largest Floquet multiplier, stroboscopic run"
+        if not motion.ok:
+            cannot = source == "mujoco" and undivided(case, period)  # a check that cannot be made, not a blow-up
+            rows.append(no_number("vibration", label, (source,), motion.why, Status.FAIL if cannot else Status.UNSTABLE))
+            continue
+        own = monodromy[source]
+        mu, bound = own.multipliers[motion.mode], own.bounds[motion.mode]
+        measured = multiplier(motion, period)
+        step_error = (abs(measured - multiplier(mujoco_twin, period)) * 16 / 15
+                      if source == "mujoco" and mujoco_twin.ok else 0.0)
+        rows.append(row("vibration", label, (source,), abs(measured - mu) / abs(mu),
+                        SAFETY * (shift + step_error + bound) / abs(mu) + ceilings.ROUNDING_FLOOR,
+                        f"run {multiplier_text(measured)}, linear {multiplier_text(mu)}; amplitude {motion.amplitude:g}, "
+                        f"its nonlinear shift {shift / abs(mu):.1e}", ceiling=ceilings.MOTION))
+    return rows
+
+
 # -- the Campbell diagram and the stability boundary (a study: dyncheck report) ----------------------
 
 @store.register
@@ -751,9 +1187,8 @@ def either_side(case, scene, table, parameter, boundary, side, stable_above):
     slowest = modes.oscillating()[0]
     n = len(eq.q)
     period = 2 * math.pi / modes.eigenvalues[slowest].imag
-    full = modes.right[:, slowest] / modes.right[:n, slowest][np.argmax(np.abs(modes.right[:n, slowest]))]
     amplitude = table["amplitude"]
-    start = eq.state + amplitude * full.real
+    start = eq.state + amplitude * along(modes.right[:, slowest], n)
     run_scene, q0, v0 = vary(scene, parameter, value, start[:n], start[n:])
     start = np.concatenate([q0, v0])
     model = run_scene.model("reference")

@@ -69,6 +69,7 @@ def section(result, case, tmp):
               f"*The mode shapes*: each mode's coordinate displacements, scaled so that the largest is 1, from each "
               "source's linearisation (bars side by side: colour and hatch per source).  Coinciding bars are "
               "the check: the rows `mode shape` above give the largest difference.", ""]
+    lines += floquet_lines(vib, case)
     sweep = (result.studies or {}).get("vibration")
     if sweep is not None:
         chart = f"figures/{case.name}_campbell.png"
@@ -234,3 +235,61 @@ def figure_campbell(sweep, case, path):
     fig.tight_layout()
     fig.savefig(path, dpi=150)
     plt.close(fig)
+
+
+def floquet_lines(vib, case):
+    """The subsection on the book's periodic motion: the period, the orbit, each source's Floquet multipliers (their
+    magnitude, angle and exponent), the verdict and the stroboscopic runs; none for a case without
+    [vibration.floquet]."""
+    floquet = vib.floquet
+    if floquet is None:
+        return []
+    lines = ["### About the book's periodic motion (Floquet)", "",
+             " ".join(case.prose(floquet.why, "vibration.floquet.why").split()), ""]
+    if not floquet.monodromy:
+        return lines + [f"No analysis: {floquet.failure}", ""]
+    n = len(case.coords)
+    units = dict(zip(case.coords, case.spec["coord_units"]))
+    coordinates = floquet.orbit[:-1, :n]  # equally spaced over one period
+    amplitude = np.max(np.abs(coordinates - coordinates.mean(axis=0)), axis=0)
+    lines += [f"**Period** T = {floquet.period:.10g} s: the equations repeat after it (the row `period T`).  **The "
+              f"periodic orbit**, by shooting Newton-Raphson on the {source_name('reference', case)} "
+              f"({floquet.iterations} iterations), starts at "
+              + ", ".join(f"{c} = {_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, :n])) + "; "
+              + ", ".join(f"{c}' = {_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, n:]))
+              + "; its amplitude (the largest |q - mean| over the period): "
+              + ", ".join(f"{c} {x:.4g} {units[c]}" for c, x in zip(case.coords, amplitude)) + ".", ""]
+    reference = floquet.monodromy["reference"]
+    table = []
+    for label, r in enumerate(reference.distinct(), start=1):
+        for source, monodromy in floquet.monodromy.items():
+            mu = monodromy.multipliers[int(np.argmin(np.abs(monodromy.multipliers - reference.multipliers[r])))]
+            exponent = np.log(mu) / floquet.period
+            table.append({"multiplier": label, "source": source_name(source, case), "|mu|": f"{abs(mu):.12g}",
+                          "angle [deg]": f"{math.degrees(np.angle(mu)):.8g}", "Re log(mu)/T [1/s]": f"{exponent.real:.3g}",
+                          "Im log(mu)/T [rad/s]": f"{exponent.imag:.8g}"})
+    verdicts = {source_name(s, case): m.verdict for s, m in floquet.monodromy.items()}
+    same = len(set(verdicts.values())) == 1
+    words = {"marginally stable": "Every multiplier lies on the unit circle within its error bound: small motions about "
+                                  "the periodic one neither grow nor decay from period to period in the linear "
+                                  "equations, and the nonlinear terms decide.",
+             "asymptotically stable": "Every multiplier lies inside the unit circle beyond its error bound: small "
+                                      "motions about the periodic one decay.",
+             "unstable": "A multiplier lies outside the unit circle beyond its error bound: small motions about the "
+                         "periodic one grow."}
+    lines += [f"**Floquet multipliers**, the eigenvalues of the monodromy matrix Phi(T) (one of each complex pair), "
+              "from each source's own linearisation along the orbit; the exponent log(mu)/T's imaginary part is a "
+              f"frequency known only up to multiples of 2 pi / T = {2 * math.pi / floquet.period:.6g} rad/s:", "",
+              pd.DataFrame(table).to_markdown(index=False, disable_numparse=True), "",
+              "**Stability (Floquet)**: " + (f"{reference.verdict} by every source.  " + words[reference.verdict]
+                                             if same else "; ".join(f"{s}: {v}" for s, v in verdicts.items()) + "."), ""]
+    runs = [m for m in floquet.motions[:3] if m.ok]
+    if runs:
+        mu = reference.multipliers[reference.largest()]
+        lines += [f"**By motion**: each source's run from the orbit displaced by {runs[0].amplitude:g} along its "
+                  f"eigenvector of the largest multiplier (|mu| {abs(mu):.10g} at {math.degrees(np.angle(mu)):.8g}°), "
+                  "sampled once per period: the measured multiplier, " + "; ".join(
+                      f"{source_name(m.source, case)} |mu| {abs(np.exp(m.exponent * floquet.period)):.10g} at "
+                      f"{math.degrees(m.frequency * floquet.period):.8g}°" for m in runs)
+                  + " (the rows `largest Floquet multiplier, stroboscopic run`).", ""]
+    return lines

@@ -1,0 +1,124 @@
+"""Floquet analysis about the book's periodic motions (dyncheck/vibration.py, `floquet`): with the arm and the disk
+both turning, the 1.8.1 and 1.8.3 equations are periodic in t; the periodic orbit, each source's monodromy matrix
+and multipliers agree, Liouville's formula holds, the arm at rest gives back the equilibrium's exp(lambda T), and a
+bad table is refused naming its field."""
+
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dyncheck
+from dyncheck import vibration
+from dyncheck.results import Status
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+BOOK = ("rotating_pendulum", "spring_pendulum")
+
+
+@pytest.fixture(scope="module")
+def periodic():
+    """The Floquet analysis of both cases at the book's numbers."""
+    return {name: vibration.floquet(dyncheck.load_case(name)) for name in BOOK}
+
+
+@pytest.mark.parametrize("name", BOOK)
+def test_every_floquet_row_passes_at_the_books_numbers(periodic, name):
+    floquet = periodic[name]
+    assert floquet.rows and all(r.status == Status.PASS for r in floquet.rows), [r for r in floquet.rows
+                                                                                 if r.status != Status.PASS]
+    assert set(floquet.monodromy) == {"reference", "mujoco", "pinocchio"}
+    quantities = {r.quantity for r in floquet.rows}
+    assert {"monodromy matrix Phi(T)", "Floquet multiplier 1", "stability (Floquet)",
+            "largest Floquet multiplier, stroboscopic run"} <= quantities
+    # the orbit closes: its last state (after one period) is its first
+    assert np.allclose(floquet.orbit[-1], floquet.orbit[0], rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("name", BOOK)
+def test_the_multipliers_product_is_liouvilles_exp_of_the_integrated_trace(periodic, name):
+    """det Phi(T) = exp(integral of trace A over the period); undamped, the trace integrates to 0 over a period
+    (it is -2 l'/(l0 + l) for the spring pendulum, a derivative of a periodic function), so the product is 1."""
+    for source, monodromy in periodic[name].monodromy.items():
+        product = np.prod(monodromy.multipliers)
+        # first order: d(prod mu) = prod mu * sum(d mu / mu)
+        allowed = vibration.SAFETY * abs(product) * np.sum(monodromy.bounds / np.abs(monodromy.multipliers))
+        assert abs(product - np.exp(monodromy.trace_integral)) <= allowed, source
+        assert abs(monodromy.trace_integral) < 1e-9, source
+        assert abs(product - 1) <= allowed, source
+
+
+@pytest.mark.parametrize("name", BOOK)
+def test_with_the_arm_at_rest_the_multipliers_are_the_equilibriums_exp_lambda_t(name):
+    """alpha' = 0: the vibration table's overrides (alpha' = 0, beta' = alpha' + beta') leave the scene as it is, the
+    periodic motion is the relative equilibrium and Phi(T) = exp(A T), its multipliers exp(lambda T)."""
+    case = dyncheck.load_case(name, alpha_rate=0.0)
+    floquet = vibration.floquet(case)
+    assert all(r.status == Status.PASS for r in floquet.rows), [r for r in floquet.rows if r.status != Status.PASS]
+    table, scene = vibration.settings(case), vibration.linearised(case)
+    assert scene.params == case.params
+    eq = vibration.equilibrium(scene.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords)
+    # the orbit stays at the equilibrium, within what shooting leaves: a swing of 1e-11 rad, 1e-10 rad/s
+    assert np.allclose(floquet.orbit, eq.state, rtol=0, atol=1e-9)
+    period = floquet.period
+    for source, monodromy in floquet.monodromy.items():
+        model = scene.model(source)
+        linear = (vibration.derivation_linear(model, source, eq) if source == "reference"
+                  else vibration.engine_linear(model, source, eq))
+        modes = vibration.modal(linear)
+        expected = np.exp(modes.eigenvalues * period)
+        for mu, bound in zip(monodromy.multipliers, monodromy.bounds):
+            k = int(np.argmin(np.abs(expected - mu)))
+            # exp(lambda T) moves by |exp(lambda T)| T |d lambda|
+            allowed = vibration.SAFETY * (bound + abs(expected[k]) * period * modes.bounds[k])
+            assert abs(mu - expected[k]) <= allowed, (source, mu, expected[k], allowed)
+
+
+def test_a_wrong_period_fails_and_stops_the_analysis():
+    # half the period: the arm's pull, seen from the disk, points the other way
+    case = dyncheck.load_case("rotating_pendulum")
+    case.spec["vibration"]["floquet"]["period"] = "pi/abs(beta_rate)"
+    floquet = vibration.floquet(case)
+    assert [r.status for r in floquet.rows] == [Status.FAIL] and floquet.rows[0].quantity.startswith("period T = 4 s")
+    assert "is not a period of the equations" in floquet.failure and not floquet.monodromy
+
+
+def test_a_disk_at_rest_has_no_period_and_is_not_applicable():
+    floquet = vibration.floquet(dyncheck.load_case("rotating_pendulum", beta_rate=0.0))
+    assert [r.status for r in floquet.rows] == [Status.NOT_APPLICABLE] and "no period" in floquet.rows[0].detail
+
+
+@pytest.mark.parametrize("edit, message", [
+    (("q = [0.06]", "q = [0.06, 0.0]"), "vibration.floquet.q has 2 entries"),
+    (("v = [0.0]\nperiods = 1", "v = []\nperiods = 1"), "vibration.floquet.v has 0 entries"),
+    (('period = "2*pi/abs(beta_rate)"', 'period = "2*pi/abs(beta_rat)"'),
+     "vibration.floquet.period = '2*pi/abs(beta_rat)' names beta_rat, not a parameter"),
+    (('period = "2*pi/abs(beta_rate)"', 'period = "2*pi/"'), "vibration.floquet.period = '2*pi/' is not an expression"),
+])
+def test_a_bad_floquet_table_is_refused_naming_its_field(tmp_path, edit, message):
+    folder = tmp_path / "rotating_pendulum"
+    shutil.copytree(CASES / "rotating_pendulum", folder, ignore=shutil.ignore_patterns("__pycache__"))
+    toml = folder / "case.toml"
+    text = toml.read_text()
+    start = text.index("[vibration.floquet]")
+    assert text[start:].count(edit[0]) == 1
+    toml.write_text(text[:start] + text[start:].replace(*edit))
+    with pytest.raises(ValueError, match=re.escape(message)):
+        vibration.validate(dyncheck.load_case("rotating_pendulum", tmp_path))
+
+
+@pytest.mark.parametrize("edit, message", [
+    (("periods = 1", "periods = 0"), "vibration.floquet.periods"),
+    (("amplitude = 2e-4", "amplitude = -2e-4"), "vibration.floquet.amplitude"),
+])
+def test_a_bad_floquet_number_is_refused_on_load(tmp_path, edit, message):
+    folder = tmp_path / "rotating_pendulum"
+    shutil.copytree(CASES / "rotating_pendulum", folder, ignore=shutil.ignore_patterns("__pycache__"))
+    toml = folder / "case.toml"
+    text = toml.read_text()
+    start = text.index("[vibration.floquet]")
+    toml.write_text(text[:start] + text[start:].replace(*edit))
+    with pytest.raises(ValueError, match=message):
+        dyncheck.load_case("rotating_pendulum", tmp_path)
