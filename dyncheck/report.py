@@ -148,7 +148,8 @@ def write_summary(result, case, tmp):
                "worst_engine_error": worst if math.isfinite(worst) else None,  # JSON has no NaN
                "random": random_tried(result, case),
                "cheapest": None if sweep is None or sweep.empty else  # for the index: level -> method
-               {f"{r['level']:.0e}": r["cheapest"] for _, r in work_precision.cheapest(sweep).iterrows()}}
+               {f"{r['level']:.0e}": r["cheapest"] for _, r in work_precision.cheapest(sweep).iterrows()},
+               "vibration": vibration_page.summary(result.vibration)}
     rel = f"data/{case.name}.json"
     (tmp / rel).write_text(json.dumps(summary, indent=1) + "\n")
     return rel
@@ -862,6 +863,7 @@ def write_index(tmp, cases):
                 " are in the [errata](errata.md)." if any(c["findings"] for c in cases) else "."), "",
              markdown_table(pd.DataFrame(rows)), "",
              *speed_table(cases),
+             *vibration_page.index_lines(cases),
              f"The last run tried {sum(t['parameter_sets'] for t in tried)} random parameter sets besides"
              f" {'the book' if book else 'each case'}'s and {states} random states in all ({plural(len(cases), 'case')};"
              f" seeds on each case page): {derivations}, MuJoCo and Pinocchio "

@@ -1059,6 +1059,8 @@ class Sweep:
     unit: str
     why: str
     data: pd.DataFrame  # source, value, mode (1, 2, ... by frequency), frequency [rad/s], largest_real [1/s]
+    branch: pd.DataFrame  # value, and the equilibrium's solved state variables there: how it moves with the parameter
+    branch_units: dict  # {state variable: unit}
     boundary: float | None  # the swept parameter's boundary, where [vibration.boundary] has one in it
     findings: tuple  # sentences with the numbers
     wall: float
@@ -1075,13 +1077,17 @@ def sweep(case, progress=None):
     parameter = campbell["parameter"]
     if progress:
         progress(f"{case.name}: Campbell diagram over {parameter}")
-    records, missing, guess = [], [], (table["q"], table["v"])
+    records, branch, missing, guess = [], [], [], (table["q"], table["v"])
+    names = state_names(case.coords)
     for value in [scene.value(x, "vibration.campbell.values") for x in campbell["values"]]:
         point, eq, _ = stable_equilibrium(scene, table, parameter, value, guess)
         if eq is None:
             missing.append(value)
             continue
         guess = (eq.q, eq.v)
+        # an angle as the page shows it, in (-pi, pi]: Newton-Raphson may land a whole turn away
+        shown = lambda name, x: float(np.angle(np.exp(1j * x))) if unit(case, name) == "rad" else float(x)
+        branch.append({"value": value, **{name: shown(name, eq.state[names.index(name)]) for name in table["solve"]}})
         for source in ("reference",) + ENGINES:
             model = point.model(source)
             lin = derivation_linear(model, source, eq) if source == "reference" else engine_linear(model, source, eq)
@@ -1100,8 +1106,9 @@ def sweep(case, progress=None):
         if boundary is not None:
             boundaries[settings_["parameter"]] = boundary
         findings += sentences
-    return Sweep(parameter, unit(case, parameter), campbell["why"], pd.DataFrame(records),
-                 boundaries.get(parameter), tuple(findings), time.perf_counter() - start)
+    return Sweep(parameter, unit(case, parameter), campbell["why"], pd.DataFrame(records), pd.DataFrame(branch),
+                 {name: unit(case, name) for name in table["solve"]}, boundaries.get(parameter), tuple(findings),
+                 time.perf_counter() - start)
 
 
 def vary(scene, name, value, q, v):
@@ -1159,7 +1166,8 @@ def boundary_search(case, scene, table, settings_, progress):
     expected = scene.value(settings_["expected"], "vibration.boundary.expected")
     sentences = [f"Boundary from the eigenvalues: {parameter} = {boundary:.7g} {unit(case, parameter)} (bisection to "
                  f"{BOUNDARY_RESOLUTION:.0e}); the formula `{settings_['expected']}` gives {expected:.7g}: "
-                 f"{(boundary / expected - 1):+.1e} relative.  {' '.join(settings_['why'].split())}"]
+                 f"{(boundary / expected - 1):+.1e} relative.  "
+                 + " ".join(scene.prose(settings_["why"], "vibration.boundary.why").split())]
     sentences += [either_side(case, scene, table, parameter, boundary, side, x_good > x_bad) for side in (+1, -1)]
     return boundary, sentences
 

@@ -154,8 +154,13 @@ def _value(x):
     return "0" if abs(x) < 1e-12 else f"{x:.10g}"
 
 
+def _degrees(x):
+    """The phase of x in whole degrees, without a sign on zero."""
+    return f"{round(math.degrees(np.angle(x))) + 0:d}"
+
+
 def _shape_entry(x):
-    return f"{x.real:.4g}" if abs(x.imag) <= 1e-9 else f"{abs(x):.4g}∠{math.degrees(np.angle(x)):.0f}°"
+    return f"{x.real:.4g}" if abs(x.imag) <= 1e-9 else f"{abs(x):.4g}∠{_degrees(x)}°"
 
 
 def figure_modes(vib, case, path):
@@ -163,7 +168,7 @@ def figure_modes(vib, case, path):
     ref = vib.modes["reference"]
     n = len(case.coords)
     modes = ref.oscillating()
-    fig, axes = plt.subplots(1, len(modes), figsize=(3.2 * len(modes) + 0.6, 3.0), squeeze=False)
+    fig, axes = plt.subplots(1, len(modes), figsize=(max(3.2 * len(modes) + 0.6, 5.5), 3.2), squeeze=False)
     width = 0.8 / len(vib.modes)
     for ax, (k, i) in zip(axes[0], enumerate(modes)):
         lam = ref.eigenvalues[i]
@@ -180,7 +185,7 @@ def figure_modes(vib, case, path):
                    hatch=HATCH[source], edgecolor="black", linewidth=0.5, label=source_name(source, case))
         if complex_:
             for c, value in enumerate(shapes["reference"]):
-                ax.text(c, abs(value) + 0.03, f"{math.degrees(np.angle(value)):.0f}°", ha="center", fontsize=7)
+                ax.text(c, abs(value) + 0.03, f"{_degrees(value)}°", ha="center", fontsize=7)
         ax.axhline(0.0, color="black", lw=0.6)
         ax.set_xticks(range(n), case.coords)
         ax.set_ylim((0.0, 1.2) if complex_ else (-1.15, 1.15))
@@ -199,9 +204,10 @@ def sweep_lines(sweep, case, chart):
     lines = [f"### Campbell diagram: frequencies against {sweep.parameter}", "",
              " ".join(case.prose(sweep.why, "vibration.campbell.why").split()), "",
              f"![Campbell diagram]({chart})", "",
-             f"*The Campbell diagram*: each oscillating mode's frequency (top) and the largest real part of the "
-             f"eigenvalues (bottom) at each {sweep.parameter}, from the derivation (line) and both engines "
-             "(markers); a positive real part is an unstable equilibrium.", ""]
+             f"*The Campbell diagram*: the equilibrium's state at each {sweep.parameter} (top: how it moves with it), "
+             "each oscillating mode's frequency (middle) and the largest real part of the eigenvalues (bottom), from "
+             "the derivation (line) and both engines (markers); a positive real part is an unstable equilibrium.",
+             ""]
     for sentence in sweep.findings:
         lines += [f"- {sentence}"]
     return lines + [""]
@@ -210,7 +216,17 @@ def sweep_lines(sweep, case, chart):
 def figure_campbell(sweep, case, path):
     """Frequencies and the largest real part against the swept parameter, every source."""
     data = sweep.data
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 5.0), sharex=True, height_ratios=[3, 1.4])
+    fig, (branch, top, bottom) = plt.subplots(3, 1, figsize=(6.4, 6.6), sharex=True, height_ratios=[1.6, 3, 1.4])
+    axes = [branch, branch.twinx()] if len(sweep.branch_units) == 2 else [branch]
+    for ax, (name, unit), style in zip(axes, sweep.branch_units.items(), ("-", "--")):
+        ax.plot(sweep.branch["value"], sweep.branch[name], color="black", ls=style, marker=".",
+                label=f"{name} [{unit}]")
+        ax.set_ylabel(f"{name} [{unit}]", fontsize=8)
+    branch.set_title("the equilibrium (derivation)", fontsize=8)
+    if len(axes) == 2:
+        lines = axes[0].get_lines() + axes[1].get_lines()
+        branch.legend(lines, [line.get_label() for line in lines], fontsize=7)
+    branch.grid(alpha=0.3)
     markers = {"reference": None, "mujoco": "^", "pinocchio": "s"}
     for source, group in data.groupby("source", sort=False):
         style = SOURCE_STYLE[source]
@@ -221,7 +237,7 @@ def figure_campbell(sweep, case, path):
         bottom.plot(real.index, real.to_numpy(), color=style["color"], ls="-" if source == "reference" else "none",
                     marker=markers[source], ms=4, mfc="none")
     if sweep.boundary is not None:
-        for ax in (top, bottom):
+        for ax in (branch, top, bottom):
             ax.axvline(sweep.boundary, color="black", ls="--", lw=0.8)
         top.text(sweep.boundary, top.get_ylim()[1], f" boundary {sweep.boundary:.5g}", va="top", fontsize=8)
     bottom.axhline(0.0, color="black", lw=0.6)
@@ -265,7 +281,7 @@ def floquet_lines(vib, case):
         for source, monodromy in floquet.monodromy.items():
             mu = monodromy.multipliers[int(np.argmin(np.abs(monodromy.multipliers - reference.multipliers[r])))]
             exponent = np.log(mu) / floquet.period
-            table.append({"multiplier": label, "source": source_name(source, case), "|mu|": f"{abs(mu):.12g}",
+            table.append({"multiplier": label, "source": source_name(source, case), "modulus": f"{abs(mu):.12g}",
                           "angle [deg]": f"{math.degrees(np.angle(mu)):.8g}", "Re log(mu)/T [1/s]": f"{exponent.real:.3g}",
                           "Im log(mu)/T [rad/s]": f"{exponent.imag:.8g}"})
     verdicts = {source_name(s, case): m.verdict for s, m in floquet.monodromy.items()}
@@ -293,3 +309,44 @@ def floquet_lines(vib, case):
                       f"{math.degrees(m.frequency * floquet.period):.8g}°" for m in runs)
                   + " (the rows `largest Floquet multiplier, stroboscopic run`).", ""]
     return lines
+
+
+def summary(vib):
+    """The analysis in short, for data/<case>.json and the index: None without `[vibration]`."""
+    if vib is None:
+        return None
+    ref = vib.modes.get("reference")
+    floquet = vib.floquet.monodromy.get("reference") if vib.floquet is not None else None
+    return {"frequencies": None if ref is None else [float(ref.eigenvalues[i].imag) for i in ref.oscillating()],
+            "verdict": None if ref is None else ref.verdict,
+            "relative": vib.equilibrium is not None and bool(np.any(vib.equilibrium.v != 0)),
+            "overridden": {name: float(value) for name, value in vib.overrides.items()},
+            "multipliers": None if floquet is None else [float(math.degrees(np.angle(floquet.multipliers[i])))
+                                                         for i in range(len(floquet.multipliers))
+                                                         if floquet.multipliers[i].imag > floquet.bounds[i]],
+            "floquet_verdict": None if floquet is None else floquet.verdict}
+
+
+def index_lines(cases):
+    """The index's table of the vibration analyses (the summaries' `vibration`), or nothing."""
+    rows = []
+    for case in cases:
+        vib = case.get("vibration")
+        if not vib:
+            continue
+        about = ", ".join(f"{name} = {value:.4g}" for name, value in vib["overridden"].items())
+        rows.append({"case": f"[{case['case']}]({case['case']}.md)",
+                     "linearised about": ("a steady motion (relative equilibrium)" if vib["relative"] else
+                                          "rest (equilibrium)") + (f", with {about}" if about else ""),
+                     "frequencies [rad/s]": "-" if vib["frequencies"] is None else
+                     ", ".join(f"{w:.6g}" for w in vib["frequencies"]) or "none",
+                     "stability": vib["verdict"] or "no equilibrium",
+                     "periodic motion: multipliers' angles [deg], stability": "-" if vib["multipliers"] is None else
+                     ", ".join(f"{a:.5g}" for a in vib["multipliers"]) + f"; {vib['floquet_verdict']}"})
+    if not rows:
+        return []
+    return ["Vibration analysis (the book's step 16; the section \"Vibration analysis\" of each page): the natural"
+            " frequencies about each equilibrium, from the derivation's eigenvalues (MuJoCo's, Pinocchio's and runs in"
+            " each agree, row by row on the page), and about the book's own periodic motions the Floquet multipliers:",
+            "",
+            pd.DataFrame(rows).to_markdown(index=False, disable_numparse=True), ""]
