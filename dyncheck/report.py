@@ -863,7 +863,7 @@ def write_index(tmp, cases):
                 " are in the [errata](errata.md)." if any(c["findings"] for c in cases) else "."), "",
              markdown_table(pd.DataFrame(rows)), "",
              *speed_table(cases),
-             *vibration_page.index_lines(cases),
+             *vibration_page.index_lines(cases, book),
              f"The last run tried {sum(t['parameter_sets'] for t in tried)} random parameter sets besides"
              f" {'the book' if book else 'each case'}'s and {states} random states in all ({plural(len(cases), 'case')};"
              f" seeds on each case page): {derivations}, MuJoCo and Pinocchio "

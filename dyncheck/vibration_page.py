@@ -96,7 +96,7 @@ def linear_equations(vib, case):
                   *[latex_matrix(name, matrices[name], largest) + "\n" for name in shown],
                   ("Zero here: " + ", ".join(f"{n} ({WORDS[n]})" for n in zero) + "." if zero else ""), ""]
     ref = vib.linear["reference"]
-    lines += [f"The {source_name('reference', case)}'s first-order form x' = A x, x = ({coords}, and their rates), "
+    lines += [f"The {source_name('reference', case)}'s first-order form z' = A z, z = ({coords}, and their rates), "
               f"by central differences of its accelerations (error estimate {ref.error:.1e}):", "",
               latex_matrix("A", ref.state_matrix, np.max(np.abs(ref.state_matrix))), ""]
     return lines
@@ -327,8 +327,9 @@ def summary(vib):
             "floquet_verdict": None if floquet is None else floquet.verdict}
 
 
-def index_lines(cases):
-    """The index's table of the vibration analyses (the summaries' `vibration`), or nothing."""
+def index_lines(cases, book):
+    """The index's table of the vibration analyses (the summaries' `vibration`), or nothing; `book`: the index of
+    the book's examples (else a folder of one's own cases)."""
     rows = []
     for case in cases:
         vib = case.get("vibration")
@@ -345,8 +346,9 @@ def index_lines(cases):
                      ", ".join(f"{a:.5g}" for a in vib["multipliers"]) + f"; {vib['floquet_verdict']}"})
     if not rows:
         return []
-    return ["Vibration analysis (the book's step 16; the section \"Vibration analysis\" of each page): the natural"
-            " frequencies about each equilibrium, from the derivation's eigenvalues (MuJoCo's, Pinocchio's and runs in"
-            " each agree, row by row on the page), and about the book's own periodic motions the Floquet multipliers:",
-            "",
+    step, motions = ("the book's step 16; ", "the book's own periodic motions") if book else ("", "periodic motions")
+    periodic = any(case["vibration"]["multipliers"] for case in cases if case.get("vibration"))
+    return [f"Vibration analysis ({step}the section \"Vibration analysis\" of each page): the natural frequencies"
+            " about each equilibrium, from the derivation's eigenvalues (MuJoCo's, Pinocchio's and runs in each agree,"
+            " row by row on the page)" + (f", and about {motions} the Floquet multipliers:" if periodic else ":"), "",
             pd.DataFrame(rows).to_markdown(index=False, disable_numparse=True), ""]
