@@ -470,9 +470,7 @@ def equilibrium_analysis(case, table):
         eq = equilibrium(reference, 0.0, table["q"], table["v"], table["solve"], case.coords)
     except NoEquilibrium as error:
         return without_equilibrium(scene, table, str(error))
-    rows = [row(check, "equilibrium (Newton-Raphson: |q''| left)", ("reference",), eq.residual, NEWTON_TOLERANCE,
-                f"{eq.iterations} iterations; relative to {eq.scale:.3g}, the balancing terms' size",
-                ceiling=ceilings.POINTWISE)]
+    rows = []  # Newton-Raphson's residual is its own stopping rule, no check: the page states it
     horizon = case.initial[2]
     drift = steady(reference, eq, (0.29 * horizon, 0.71 * horizon))
     if drift > NEWTON_TOLERANCE * SAFETY:
@@ -730,6 +728,8 @@ class Floquet:
     shift: float  # the nonlinear shift of the largest multiplier at the amplitude
     rows: tuple
     failure: str = ""  # why there is no analysis (T not a period of the equations, no orbit)
+    residual: float = math.nan  # |x(T) - x(0)| left by shooting (its stopping rule: within the run's own error estimate)
+    residual_error: float = math.nan  # that estimate
 
 
 def floquet_settings(case):
@@ -780,10 +780,6 @@ def floquet(case):
         rows.append(without_orbit(case, guess, period, str(failure)))
         return Floquet(table["why"], period, np.empty((0, 2 * len(case.coords))), 0, {}, (), math.nan,
                        tuple(rows), str(failure))
-    rows.append(row(check, "periodic orbit (shooting: |x(T) - x(0)| left)", ("reference",), residual, error,
-                    f"{iterations} iterations of Newton-Raphson; relative to each state variable's scale; allowed: the "
-                    "run's own error estimate (its difference from the same at the case's rtol)",
-                    ceiling=ceilings.RUN))
     samples = {}
     for source in ("reference",) + ENGINES:
         try:
@@ -794,7 +790,8 @@ def floquet(case):
     rows += floquet_rows(monodromy, case.tolerance["pointwise"]["value"])
     motions, shift = stroboscopic_checks(case, states[0], monodromy, table)
     rows += stroboscopic_rows(case, monodromy, motions, shift, period)
-    return Floquet(table["why"], period, states, iterations, monodromy, tuple(motions), shift, tuple(rows))
+    return Floquet(table["why"], period, states, iterations, monodromy, tuple(motions), shift, tuple(rows),
+                   residual=residual, residual_error=error)
 
 
 def periodicity(case, model, period):
