@@ -353,6 +353,12 @@ def term_errors(linear):
     return ceilings.POINTWISE * np.abs(linear.state_matrix[linear.n:])
 
 
+def verdict_row(quantity, sources, first, second):
+    """Two sources' verdicts: the error counts a disagreement as 1, and none is allowed (a tolerance of 1 or more would
+    pass one: the ceiling is half that)."""
+    return row("vibration", quantity, sources, float(first != second), 0.0, f"{first} vs {second}", ceiling=0.5)
+
+
 def verdict(values, bounds):
     """"unstable" where an eigenvalue's real part is positive beyond its bound; "asymptotically stable" where
     every one is negative beyond it; else "marginally stable" (on the imaginary axis within the bounds:
@@ -567,9 +573,7 @@ def comparison_rows(linear, modes, pointwise):
                                 "eigenvalue from the rest of the spectrum (its reduced resolvent); ceiling: the "
                                 f"shape's change under a term of {ceilings.POINTWISE:g} of every entry of A",
                                 ceiling=max(ceilings.POINTWISE, shape_bound(la, mo_a, i, term_errors(la)))))
-            same = mo_a.verdict == mo_b.verdict
-            rows.append(row("vibration", "stability", (a, b), 0.0 if same else 1.0, 0.0,
-                            f"{mo_a.verdict} vs {mo_b.verdict}", ceiling=0.0))
+            rows.append(verdict_row("stability", (a, b), mo_a.verdict, mo_b.verdict))
     return rows
 
 
@@ -951,9 +955,7 @@ def floquet_rows(monodromy, pointwise):
                 rows.append(row("vibration", f"Floquet multiplier {label}", (a, b), abs(other - mu) / abs(mu),
                                 SAFETY * (mo_a.bounds[i] + mo_b.bounds[j]) / abs(mu) + pointwise,
                                 f"{multiplier_text(mu)} vs {multiplier_text(other)}", ceiling=ceilings.POINTWISE))
-            same = mo_a.verdict == mo_b.verdict
-            rows.append(row("vibration", "stability (Floquet)", (a, b), 0.0 if same else 1.0, 0.0,
-                            f"{mo_a.verdict} vs {mo_b.verdict}", ceiling=0.0))
+            rows.append(verdict_row("stability (Floquet)", (a, b), mo_a.verdict, mo_b.verdict))
     return rows
 
 
