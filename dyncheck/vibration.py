@@ -11,11 +11,11 @@ M (the engines always; a derivation with `mass_matrix`), they are also M dq'' + 
 K = -df/dq (its symmetric part the stiffness, its skew part the circulatory forces) and C = -df/dq' (its
 symmetric part the damping, its skew part the gyroscopic forces), f the force side of M q'' = f.
 
-Sources: the derivation by central differences of its accelerations (an error estimate from the same at
-twice the step); MuJoCo and Pinocchio by their own derivatives (their adapters' `linearisation`: MuJoCo's
-finite-differenced inverse dynamics, Pinocchio's analytic RNEA derivatives).  Eigenvalues carry a
-first-order perturbation bound from their matrix's error estimate (|d lambda| <= ||dA|| / s, s the
-cosine between the left and right eigenvectors), which sets every tolerance on them.
+Sources: the derivation by central differences of its accelerations, extrapolated (an error estimate from the
+same at twice the step); MuJoCo and Pinocchio by their own derivatives (their adapters' `linearisation`:
+MuJoCo's finite-differenced inverse dynamics, Pinocchio's analytic RNEA derivatives).  Eigenvalues carry a
+first-order perturbation bound from their matrix's error estimate, entry by entry (|d lambda| <= |y|^T |dA| |x|
+/ |y^H x|, y and x the left and right eigenvectors), which sets every tolerance on them.
 
 Where the base's motion makes the equations periodic in t, `[vibration.floquet]` linearises them about a
 periodic motion instead (`floquet`): the orbit by shooting, each source's monodromy matrix along it, its
@@ -169,7 +169,6 @@ class Equilibrium:
     residual: float  # the largest |q''| left, relative to `scale`
     scale: float  # the balancing terms' size: the Jacobian times the unknowns' scale (rad/s^2 or m/s^2)
     iterations: int
-    solved: tuple  # the state variables solved for
 
     @property
     def state(self):
@@ -198,7 +197,7 @@ def equilibrium(model, t, q, v, solve, coords):
             break
         if np.max(np.abs(residual)) <= NEWTON_TOLERANCE * scale:
             return Equilibrium(t, x[:n].copy(), x[n:].copy(), float(np.max(np.abs(residual)) / scale), float(scale),
-                               iteration, tuple(solve))
+                               iteration)
         step = np.linalg.lstsq(jac, -residual, rcond=None)[0]
         for _ in range(30):
             trial = accelerations(x[unknown] + step)
@@ -213,9 +212,10 @@ def equilibrium(model, t, q, v, solve, coords):
 
 
 def steady(model, eq, times):
-    """Whether the equilibrium is one at every time: the accelerations vanish along q* + q*' t (a relative
-    equilibrium's coordinates move at their rates) at `times` as at t (a base whose motion the equations
-    feel, as a spinning arm carrying a spinning disk, makes the linearised equations periodic instead)."""
+    """How far the equilibrium is from one at every time: the largest |q''| along q* + q*' t (a relative
+    equilibrium's coordinates move at their rates) at `times`, relative to the balancing terms; rounding where
+    it is steady (a base whose motion the equations feel, as a spinning arm carrying a spinning disk, makes the
+    linearised equations periodic instead)."""
     worst = 0.0
     for t in times:
         acc = model.accelerations(eq.t + t, eq.q + eq.v * t, eq.v)
@@ -245,7 +245,7 @@ class Linear:
 
     def full_errors(self):
         """The entries' errors as a (2n, 2n) matrix, zeros in the exact upper block."""
-        return np.vstack([np.zeros_like(self.errors), self.errors])
+        return full(self.errors)
 
     def second_order(self):
         """(M, C, K) of M dq'' + C dq' + K dq = 0, or None without a mass matrix."""
@@ -294,7 +294,7 @@ class Modes:
     """The eigenvalues of A with their first-order bounds, the left and right eigenvectors (columns, unit
     length), and the stability verdict."""
     eigenvalues: np.ndarray  # complex, sorted by |lambda| then imaginary part
-    bounds: np.ndarray  # |d lambda| <= ||dA||_F / s for the matrix's error estimate
+    bounds: np.ndarray  # first-order bounds of the eigenvalues under the matrix's error estimate (`eigensystem`)
     left: np.ndarray
     right: np.ndarray
     verdict: str
@@ -327,22 +327,24 @@ def eigensystem(a, errors):
     for i, lam in enumerate(values):
         u, _, vh = scipy.linalg.svd(a - lam * np.eye(size))
         left[:, i], right[:, i] = u[:, -1], vh[-1].conj()
+    # the eigensolver's own rounding besides: a hundred eps times the matrix's norm, over the cosine
     cosines = np.abs(np.einsum("ij,ij->j", left.conj(), right))
-    # First order, entry by entry: |d lambda| <= |y|^T |dA| |x| / |y^H x| (invariant under rescaling a coordinate,
-    # which the norm bound ||dA|| / s is not: psi in rad beside l in m), plus the eigensolver's rounding, a hundred
-    # eps times the matrix's norm over the cosine.
-    spread = np.einsum("ij,ik,kj->j", np.abs(left), errors, np.abs(right))
-    bounds = (spread + 1e2 * EPS * np.linalg.norm(a)) / np.maximum(cosines, EPS)
+    bounds = first_order_change(left, right, errors) + 1e2 * EPS * np.linalg.norm(a) / np.maximum(cosines, EPS)
     order = np.lexsort((values.imag, np.round(np.abs(values), 12)))
     return values[order], bounds[order], left[:, order], right[:, order]
 
 
-def eigenvalue_sensitivity(linear, modes, i, errors):
-    """The first-order change of eigenvalue i under entry errors `errors` (n, 2n) of A's lower block:
-    |y|^T |dA| |x| / |y^H x|."""
-    full = np.vstack([np.zeros_like(errors), errors])
-    left, right = modes.left[:, i], modes.right[:, i]
-    return float(np.abs(left) @ full @ np.abs(right) / max(abs(left.conj() @ right), EPS))
+def first_order_change(left, right, errors):
+    """The first-order change of each eigenvalue (columns of the eigenvectors `left`, `right`) under entry errors
+    `errors` of its matrix, entry by entry: |y|^T |dA| |x| / |y^H x| (invariant under rescaling a coordinate, which
+    the norm bound ||dA|| / s is not: psi in rad beside l in m)."""
+    cosines = np.abs(np.einsum("ij,ij->j", left.conj(), right))
+    return np.einsum("ij,ik,kj->j", np.abs(left), errors, np.abs(right)) / np.maximum(cosines, EPS)
+
+
+def full(errors):
+    """Errors (n, 2n) of A's lower block as a (2n, 2n) matrix: the upper block, [0, I], is exact."""
+    return np.vstack([np.zeros_like(errors), errors])
 
 
 def term_errors(linear):
@@ -444,7 +446,7 @@ class Vibration:
     linear: dict  # {source: Linear}
     modes: dict  # {source: Modes}
     motions: tuple  # of Motion
-    shift: tuple  # per oscillating mode of the reference: the nonlinear shift of its frequency at the amplitude
+    shift: tuple  # per oscillating mode of the reference: the nonlinear shift of its lambda at the amplitude
     rows: tuple
     failure: str = ""  # why there is no analysis (no equilibrium, a periodic one)
     floquet: "Floquet | None" = None  # about the periodic motion of [vibration.floquet]
@@ -558,7 +560,7 @@ def comparison_rows(linear, modes, pointwise):
             for i in mo_a.oscillating():
                 j = pairs[i]
                 lam, other = mo_a.eigenvalues[i], mo_b.eigenvalues[j]
-                moved = eigenvalue_sensitivity(la, mo_a, i, term_errors(la)) / abs(lam)
+                moved = first_order_change(mo_a.left[:, [i]], mo_a.right[:, [i]], full(term_errors(la)))[0] / abs(lam)
                 rows.append(row("vibration", f"frequency {mode_label(mo_a, i)}", (a, b),
                                 abs(other - lam) / abs(lam),
                                 SAFETY * (mo_a.bounds[i] + mo_b.bounds[j]) / abs(lam) + pointwise,
@@ -587,8 +589,8 @@ def shape_bound(linear, modes, i, errors=None):
     u, sigma, vh = scipy.linalg.svd(a - modes.eigenvalues[i] * np.eye(len(a)))
     resolvent = (vh[:-1].conj().T / sigma[:-1]) @ u[:, :-1].conj().T
     x = np.abs(modes.right[:, i])
-    full = linear.full_errors() if errors is None else np.vstack([np.zeros_like(errors), errors])
-    spread = np.abs(resolvent) @ (full @ x) + 1e2 * EPS * np.linalg.norm(a) / sigma[-2]
+    entries = linear.full_errors() if errors is None else full(errors)
+    spread = np.abs(resolvent) @ (entries @ x) + 1e2 * EPS * np.linalg.norm(a) / sigma[-2]
     n = linear.n
     return 2 * float(np.max(spread[:n])) / float(np.max(x[:n]))
 
@@ -1079,7 +1081,7 @@ def sweep(case, progress=None):
     records, branch, missing, guess = [], [], [], (table["q"], table["v"])
     names = state_names(case.coords)
     for value in [scene.value(x, "vibration.campbell.values") for x in campbell["values"]]:
-        point, eq, _ = stable_equilibrium(scene, table, parameter, value, guess)
+        point, eq, reference = equilibrium_at(scene, table, parameter, value, guess)
         if eq is None:
             missing.append(value)
             continue
@@ -1087,10 +1089,9 @@ def sweep(case, progress=None):
         # an angle as the page shows it, in (-pi, pi]: Newton-Raphson may land a whole turn away
         shown = lambda name, x: float(np.angle(np.exp(1j * x))) if unit(case, name) == "rad" else float(x)
         branch.append({"value": value, **{name: shown(name, eq.state[names.index(name)]) for name in table["solve"]}})
-        for source in ("reference",) + ENGINES:
-            model = point.model(source)
-            lin = derivation_linear(model, source, eq) if source == "reference" else engine_linear(model, source, eq)
-            modes = modal(lin)
+        each = {"reference": reference, **{source: modal(engine_linear(point.model(source), source, eq))
+                                           for source in ENGINES}}
+        for source, modes in each.items():
             real = np.where(np.abs(modes.eigenvalues.real) > SAFETY * modes.bounds, modes.eigenvalues.real, 0.0)
             for k, i in enumerate(modes.oscillating()):
                 records.append({"source": source, "value": value, "mode": k + 1,
@@ -1121,15 +1122,20 @@ def vary(scene, name, value, q, v):
     return scene, x[:n], x[n:]
 
 
-def stable_equilibrium(scene, table, name, value, guess):
-    """(scene, equilibrium, verdict) of the derivation with `name` at `value`, starting from `guess` (q, v);
-    (scene, None, why) where there is none."""
+def equilibrium_at(scene, table, name, value, guess):
+    """(scene, equilibrium, the derivation's modes there) with `name` at `value`, starting Newton-Raphson from
+    `guess` (q, v); (scene, None, None) where there is no equilibrium."""
     scene, q, v = vary(scene, name, value, *guess)
     try:
         eq = equilibrium(scene.model("reference"), 0.0, q, v, table["solve"], scene.coords)
-    except NoEquilibrium as error:
-        return scene, None, str(error)
-    return scene, eq, modal(derivation_linear(scene.model("reference"), "reference", eq)).verdict
+    except NoEquilibrium:
+        return scene, None, None
+    return scene, eq, modal(derivation_linear(scene.model("reference"), "reference", eq))
+
+
+def stable(modes):
+    """Whether an equilibrium's modes (None: there is none) say it is stable."""
+    return modes is not None and modes.verdict != "unstable"
 
 
 BOUNDARY_RESOLUTION = 1e-6  # the bisection's relative width: far below any formula's difference worth naming
@@ -1147,17 +1153,17 @@ def boundary_search(case, scene, table, settings_, progress):
         progress(f"{case.name}: stability boundary in {parameter}")
     ends = [scene.value(x, "vibration.boundary.bracket") for x in settings_["bracket"]]
     guess = (table["q"], table["v"])
-    states = [stable_equilibrium(scene, table, parameter, x, guess)[1:] for x in ends]
-    stable = [eq is not None and verdict_ != "unstable" for eq, verdict_ in states]
-    if stable[0] == stable[1]:
+    states = [equilibrium_at(scene, table, parameter, x, guess)[1:] for x in ends]
+    holds = [stable(modes) for _, modes in states]
+    if holds[0] == holds[1]:
         return None, [f"The bracket {parameter} in [{ends[0]:g}, {ends[1]:g}] does not hold the boundary: the "
-                      f"equilibrium is {'stable' if stable[0] else 'unstable or absent'} at both ends."]
-    good, bad = (0, 1) if stable[0] else (1, 0)
+                      f"equilibrium is {'stable' if holds[0] else 'unstable or absent'} at both ends."]
+    good, bad = (0, 1) if holds[0] else (1, 0)
     x_good, x_bad, eq_good = ends[good], ends[bad], states[good][0]
     while abs(x_bad - x_good) > BOUNDARY_RESOLUTION * abs(x_good):
         mid = 0.5 * (x_good + x_bad)
-        _, eq, verdict_ = stable_equilibrium(scene, table, parameter, mid, (eq_good.q, eq_good.v))
-        if eq is not None and verdict_ != "unstable":
+        _, eq, modes = equilibrium_at(scene, table, parameter, mid, (eq_good.q, eq_good.v))
+        if stable(modes):
             x_good, eq_good = mid, eq
         else:
             x_bad = mid
@@ -1186,11 +1192,9 @@ def either_side(case, scene, table, parameter, boundary, side, stable_above):
     its largest displacement over the start's says whether the motion stays near the equilibrium."""
     stable_value = boundary * (1 + EITHER_SIDE if stable_above else 1 - EITHER_SIDE)
     value = boundary * (1 + side * EITHER_SIDE)
-    stable_scene, eq, _ = stable_equilibrium(scene, table, parameter, stable_value, (table["q"], table["v"]))
+    _, eq, modes = equilibrium_at(scene, table, parameter, stable_value, (table["q"], table["v"]))
     if eq is None:
         return f"No run at {parameter} = {value:.5g}: no equilibrium on the stable side to start from."
-    linear_ = derivation_linear(stable_scene.model("reference"), "reference", eq)
-    modes = modal(linear_)
     slowest = modes.oscillating()[0]
     n = len(eq.q)
     period = 2 * math.pi / modes.eigenvalues[slowest].imag

@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 
 from dyncheck.results import OWN_WORDS
-from dyncheck.vibration import SAFETY
+from dyncheck.vibration import MATRIX_NAMES, SAFETY, match
 from dyncheck.style import SOURCE_STYLE, plt
 
 NAMES = {"reference": "reference", "mujoco": "MuJoCo", "pinocchio": "Pinocchio"}
@@ -66,7 +66,7 @@ def section(result, case, tmp):
     figure_modes(vib, case, tmp / chart)
     files.append(chart)
     lines += [f"![mode shapes]({chart})", "",
-              f"*The mode shapes*: each mode's coordinate displacements, scaled so that the largest is 1, from each "
+              "*The mode shapes*: each mode's coordinate displacements, scaled so that the largest is 1, from each "
               "source's linearisation (bars side by side: colour and hatch per source).  Coinciding bars are "
               "the check: the rows `mode shape` above give the largest difference.", ""]
     lines += floquet_lines(vib, case)
@@ -94,15 +94,12 @@ def linear_equations(vib, case):
                   "analytic derivatives (SI units; MuJoCo's and the derivation's agree to the rows `vibration` "
                   "above):", "",
                   *[latex_matrix(name, matrices[name], largest) + "\n" for name in shown],
-                  ("Zero here: " + ", ".join(f"{n} ({WORDS[n]})" for n in zero) + "." if zero else ""), ""]
+                  ("Zero here: " + ", ".join(f"{n} ({MATRIX_NAMES[n]})" for n in zero) + "." if zero else ""), ""]
     ref = vib.linear["reference"]
     lines += [f"The {source_name('reference', case)}'s first-order form z' = A z, z = ({coords}, and their rates), "
               f"by central differences of its accelerations (error estimate {ref.error:.1e}):", "",
               latex_matrix("A", ref.state_matrix, np.max(np.abs(ref.state_matrix))), ""]
     return lines
-
-
-WORDS = {"K": "stiffness", "N": "circulatory", "D": "damping", "G": "gyroscopic"}
 
 
 def frequency_lines(vib, case):
@@ -116,7 +113,7 @@ def frequency_lines(vib, case):
     for k, i in enumerate(ref.oscillating()):
         lam = ref.eigenvalues[i]
         entry = {"mode": k + 1}
-        nearest = {source: int(np.argmin(np.abs(modes.eigenvalues - lam))) for source, modes in vib.modes.items()}
+        nearest = {source: match(ref, modes)[i] for source, modes in vib.modes.items()}
         for source, modes in vib.modes.items():
             entry[f"{source_name(source, case)} [rad/s]"] = f"{modes.eigenvalues[nearest[source]].imag:.10g}"
         entry["[Hz]"] = f"{lam.imag / (2 * math.pi):.6g}"
@@ -128,17 +125,23 @@ def frequency_lines(vib, case):
         shape = ref.shape(i, n)
         entry["shape"] = ", ".join(f"{c} {_shape_entry(x)}" for c, x in zip(case.coords, shape))
         table.append(entry)
-    verdicts = {source_name(s, case): m.verdict for s, m in vib.modes.items()}
-    same = len(set(verdicts.values())) == 1
     amplitude = vib.motions[0].amplitude if vib.motions else None
     lines = ["**Natural frequencies** (imaginary parts of the eigenvalues of A; the runs: the frequency of the modal "
              f"coordinate in a run from the equilibrium displaced along the mode by {amplitude:g} in its largest "
              "coordinate, MuJoCo by its RK4, the others by DOP853):", "",
              pd.DataFrame(table).to_markdown(index=False, disable_numparse=True), "",
-             ("**Stability**: " + (f"{next(iter(verdicts.values()))} by every source" if same else
-                                   "; ".join(f"{s}: {v}" for s, v in verdicts.items()))
-              + ".  " + VERDICT_WORDS[next(iter(verdicts.values()))] if same else ""), ""]
+             stability_line("**Stability**", vib.modes, case, VERDICT_WORDS), ""]
     return lines
+
+
+def stability_line(title, by_source, case, words):
+    """The verdicts of `by_source` ({source: its Modes or Monodromy}): one, with its meaning in `words`, where every
+    source gives it; else each source's."""
+    verdicts = {source_name(s, case): m.verdict for s, m in by_source.items()}
+    if len(set(verdicts.values())) == 1:
+        verdict = next(iter(verdicts.values()))
+        return f"{title}: {verdict} by every source.  {words[verdict]}"
+    return f"{title}: " + "; ".join(f"{s}: {v}" for s, v in verdicts.items()) + "."
 
 
 VERDICT_WORDS = {
@@ -172,10 +175,7 @@ def figure_modes(vib, case, path):
     width = 0.8 / len(vib.modes)
     for ax, (k, i) in zip(axes[0], enumerate(modes)):
         lam = ref.eigenvalues[i]
-        shapes = {}
-        for source, modes_s in vib.modes.items():
-            j = int(np.argmin(np.abs(modes_s.eigenvalues - lam)))
-            shapes[source] = modes_s.shape(j, n)
+        shapes = {source: modes_s.shape(match(ref, modes_s)[i], n) for source, modes_s in vib.modes.items()}
         # A gyroscopic mode moves its coordinates out of phase: its bars are magnitudes, each phase written over it.
         complex_ = any(np.max(np.abs(shape.imag)) > 1e-9 for shape in shapes.values())
         for s, (source, shape) in enumerate(shapes.items()):
@@ -280,13 +280,11 @@ def floquet_lines(vib, case):
     table = []
     for label, r in enumerate(reference.distinct(), start=1):
         for source, monodromy in floquet.monodromy.items():
-            mu = monodromy.multipliers[int(np.argmin(np.abs(monodromy.multipliers - reference.multipliers[r])))]
+            mu = monodromy.multipliers[match(reference, monodromy)[r]]
             exponent = np.log(mu) / floquet.period
             table.append({"multiplier": label, "source": source_name(source, case), "modulus": f"{abs(mu):.12g}",
                           "angle [deg]": f"{math.degrees(np.angle(mu)):.8g}", "Re log(mu)/T [1/s]": f"{exponent.real:.3g}",
                           "Im log(mu)/T [rad/s]": f"{exponent.imag:.8g}"})
-    verdicts = {source_name(s, case): m.verdict for s, m in floquet.monodromy.items()}
-    same = len(set(verdicts.values())) == 1
     words = {"marginally stable": "Every multiplier lies on the unit circle within its error bound: small motions about "
                                   "the periodic one neither grow nor decay from period to period in the linear "
                                   "equations, and the nonlinear terms decide.",
@@ -298,8 +296,7 @@ def floquet_lines(vib, case):
               "from each source's own linearisation along the orbit; the exponent log(mu)/T's imaginary part is a "
               f"frequency known only up to multiples of 2 pi / T = {2 * math.pi / floquet.period:.6g} rad/s:", "",
               pd.DataFrame(table).to_markdown(index=False, disable_numparse=True), "",
-              "**Stability (Floquet)**: " + (f"{reference.verdict} by every source.  " + words[reference.verdict]
-                                             if same else "; ".join(f"{s}: {v}" for s, v in verdicts.items()) + "."), ""]
+              stability_line("**Stability (Floquet)**", floquet.monodromy, case, words), ""]
     runs = [m for m in floquet.motions[:3] if m.ok]
     if runs:
         mu = reference.multipliers[reference.largest()]

@@ -331,7 +331,10 @@ class MujocoModel:
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        qacc = self._solve(t, q, v)[3]
+        return self._case_accelerations(q, v, self._solve(t, q, v)[3])
+
+    def _case_accelerations(self, q, v, qacc):
+        """The case's accelerations from every dof's `qacc` at the case's state (q, v)."""
         out = np.zeros(len(self.coords))
         for kind, (_, dof), idx in self.layout:
             if kind == "scalar":
@@ -458,8 +461,8 @@ class MujocoModel:
         force_q, force_v, error = self._inverse_derivatives()
         layout = [(kind, dof, idx) for kind, (_, dof), idx in self.layout]
         method = "MuJoCo mjd_inverseFD (centred differences, extrapolated, at the step of least estimated error)"
-        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v), mass,
-                                              -force_q, -force_v, error, method)
+        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self._case_accelerations(q, v, qacc),
+                                              mass, -force_q, -force_v, error, method)
 
     def _inverse_derivatives(self):
         """d(qfrc_inverse)/dqpos and /dqvel (nv, nv, a row per force) at self.d's state and qacc, the positions

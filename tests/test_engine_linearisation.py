@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from dyncheck import vibration
 from dyncheck.case import load_case
 from engines import scene
 
@@ -28,28 +29,13 @@ def states(case):
     return [(t, q, v), random, other]
 
 
-# The step of the differences of the accelerations, relative to max(1, |x|): the accelerations are rational in
-# the coordinates (M^-1), the spring pendulum's in l0 + l ~ 0.1 m, so that at engines.scene's 1e-3 (0.01 of it)
-# their extrapolated differences' truncation is ~3e-8 relative; at 1e-4 ~3e-12, and rounding ~2e-11 relative.
-STEP = 1e-4
-
-
 def accelerations_jacobian(model, t, q, v):
-    """d(q'')/d(q, q') (n, 2n) of a model's own `accelerations`, by engines.scene's extrapolated differences, and
-    their error: the truncation estimate plus rounding (engines.scene.difference_rounding of the accelerations)."""
+    """d(q'')/d(q, q') (n, 2n) of a model's own `accelerations`, by dyncheck.vibration's extrapolated differences (the
+    derivation's linearisation), and their largest error estimate."""
     x = np.concatenate([q, v])
-    n, relative = len(q), np.maximum(1.0, np.abs(x))
-
-    def centred(h):
-        out = np.zeros((n, 2 * n))
-        for j, step in enumerate(h * relative):
-            unit = step * np.eye(2 * n)[j]
-            out[:, j] = (model.accelerations(t, *np.split(x + unit, 2)) -
-                         model.accelerations(t, *np.split(x - unit, 2))) / (2 * step)
-        return [out]
-
-    (jacobian,), truncation = scene.extrapolated_differences(centred, STEP)
-    return jacobian, truncation + scene.difference_rounding(np.max(np.abs(model.accelerations(t, q, v))), STEP)
+    jacobian, errors = vibration.jacobian(lambda y: np.asarray(model.accelerations(t, *np.split(y, 2)), dtype=float),
+                                          x, vibration.scales_of(x))
+    return jacobian, float(np.max(errors))
 
 
 @pytest.fixture(scope="module", params=CASES, ids=[name for name, _ in CASES])

@@ -4,7 +4,6 @@ and multipliers agree, Liouville's formula holds, the arm at rest gives back the
 bad table is refused naming its field."""
 
 import re
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +12,7 @@ import pytest
 import dyncheck
 from dyncheck import vibration
 from dyncheck.results import Status
+from test_vibration import edited_case
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 BOOK = ("rotating_pendulum", "spring_pendulum")
@@ -98,15 +98,8 @@ def test_a_disk_at_rest_has_no_period_and_is_not_applicable():
     (('period = "2*pi/abs(beta_rate)"', 'period = "2*pi/"'), "vibration.floquet.period = '2*pi/' is not an expression"),
 ])
 def test_a_bad_floquet_table_is_refused_naming_its_field(tmp_path, edit, message):
-    folder = tmp_path / "rotating_pendulum"
-    shutil.copytree(CASES / "rotating_pendulum", folder, ignore=shutil.ignore_patterns("__pycache__"))
-    toml = folder / "case.toml"
-    text = toml.read_text()
-    start = text.index("[vibration.floquet]")
-    assert text[start:].count(edit[0]) == 1
-    toml.write_text(text[:start] + text[start:].replace(*edit))
     with pytest.raises(ValueError, match=re.escape(message)):
-        vibration.validate(dyncheck.load_case("rotating_pendulum", tmp_path))
+        vibration.validate(edited_case(tmp_path, CASES / "rotating_pendulum", ("case.toml", *edit)))
 
 
 @pytest.mark.parametrize("edit, message", [
@@ -114,11 +107,5 @@ def test_a_bad_floquet_table_is_refused_naming_its_field(tmp_path, edit, message
     (("amplitude = 2e-4", "amplitude = -2e-4"), "vibration.floquet.amplitude"),
 ])
 def test_a_bad_floquet_number_is_refused_on_load(tmp_path, edit, message):
-    folder = tmp_path / "rotating_pendulum"
-    shutil.copytree(CASES / "rotating_pendulum", folder, ignore=shutil.ignore_patterns("__pycache__"))
-    toml = folder / "case.toml"
-    text = toml.read_text()
-    start = text.index("[vibration.floquet]")
-    toml.write_text(text[:start] + text[start:].replace(*edit))
     with pytest.raises(ValueError, match=message):
-        dyncheck.load_case("rotating_pendulum", tmp_path)
+        edited_case(tmp_path, CASES / "rotating_pendulum", ("case.toml", *edit))

@@ -104,23 +104,24 @@ def test_no_equilibrium_in_either_is_not_applicable(monkeypatch):
     assert [r.status for r in vib.rows] == [Status.NOT_APPLICABLE] and "neither has one" in vib.rows[0].detail
 
 
+def edited_case(tmp_path, folder, *edits):
+    """The case `folder` copied into tmp_path, each edit (file, old, new) made where `old` stands once, and loaded."""
+    copy = tmp_path / folder.name
+    shutil.copytree(folder, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    for file, old, new in edits:
+        text = (copy / file).read_text()
+        assert text.count(old) == 1, (file, old)
+        (copy / file).write_text(text.replace(old, new))
+    return dyncheck.load_case(folder.name, tmp_path)
+
+
 def planted(tmp_path, old, new):
-    """The forced cart-pendulum example in tmp_path with one edit of its equations (and without its studies)."""
-    folder = tmp_path / "forced_cart_pendulum"
-    shutil.copytree(EXAMPLES / "forced_cart_pendulum", folder, ignore=shutil.ignore_patterns("studies.py", "__pycache__"))
-    toml = folder / "case.toml"
-    text = toml.read_text()
-    start = text.index("[stability]")
-    toml.write_text(text[:start] + text[text.index("# Vibration analysis"):])
-    equations = folder / "equations.py"
-    source = equations.read_text()
-    assert source.count(old) == 1
-    equations.write_text(source.replace(old, new))
-    return dyncheck.load_case("forced_cart_pendulum", tmp_path)
+    """The forced cart-pendulum example with one edit of its equations."""
+    return edited_case(tmp_path, EXAMPLES / "forced_cart_pendulum", ("equations.py", old, new))
 
 
 def test_the_damped_example_is_asymptotically_stable_and_checked(tmp_path):
-    vib = vibration.analyse(planted(tmp_path, "import numpy as np", "import numpy as np"))  # no edit
+    vib = vibration.analyse(edited_case(tmp_path, EXAMPLES / "forced_cart_pendulum"))
     assert all(r.status == Status.PASS for r in vib.rows)
     assert {m.verdict for m in vib.modes.values()} == {"asymptotically stable"}
     assert any(r.quantity == "D (damping)" and r.sources == ("reference", "pinocchio") for r in vib.rows)
@@ -147,9 +148,5 @@ def test_a_derivation_without_the_engines_equilibrium_fails(tmp_path):
     (("periods = 10", "periods = 0"), "periods"),
 ])
 def test_a_bad_vibration_table_is_refused_naming_its_field(tmp_path, edit, message):
-    folder = tmp_path / "forced_cart_pendulum"
-    shutil.copytree(EXAMPLES / "forced_cart_pendulum", folder, ignore=shutil.ignore_patterns("__pycache__"))
-    toml = folder / "case.toml"
-    toml.write_text(toml.read_text().replace(*edit))
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace("[", r"\[")):
-        vibration.validate(dyncheck.load_case("forced_cart_pendulum", tmp_path))
+        vibration.validate(edited_case(tmp_path, EXAMPLES / "forced_cart_pendulum", ("case.toml", *edit)))
