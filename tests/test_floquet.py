@@ -109,3 +109,12 @@ def test_a_bad_floquet_table_is_refused_naming_its_field(tmp_path, edit, message
 def test_a_bad_floquet_number_is_refused_on_load(tmp_path, edit, message):
     with pytest.raises(ValueError, match=message):
         edited_case(tmp_path, CASES / "rotating_pendulum", ("case.toml", *edit))
+
+
+def test_a_disk_rate_whose_period_mujocos_step_does_not_divide_is_still_run():
+    """--set beta_rate=20: T = 2 pi / 20 s is no whole number of the case's 1e-4 s steps; MuJoCo's stroboscopic run
+    takes the longest step below it that divides T, and its row is judged like the others'."""
+    floquet = vibration.floquet(dyncheck.load_case("spring_pendulum", beta_rate=20.0))
+    rows = [r for r in floquet.rows if r.quantity.startswith("largest Floquet multiplier")]
+    assert [r.sources for r in rows] == [("reference",), ("pinocchio",), ("mujoco",)]
+    assert all(r.status == Status.PASS for r in rows), rows
