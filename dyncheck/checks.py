@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dyncheck import ceilings, residuals, schema, vibration
+from dyncheck import animation, ceilings, residuals, schema, vibration
 from dyncheck.case import SOURCES
 from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.expressions import evaluate as evaluate_expression
@@ -526,7 +526,8 @@ def run_case(case, localise=True):
         rows, localisations = in_own_words(rows), tuple(replace(loc, source=OWN_WORDS[loc.source])
                                                        for loc in localisations)
     return CaseResult(folder=str(case.folder), spec=case.spec, overrides=dict(case.overrides), rows=tuple(rows),
-                      findings=findings, sample=sample, runs=runs, program=program, drawings=drawings(case, runs),
+                      findings=findings, sample=sample, runs=runs, program=program,
+                      drawings={**drawings(case, runs), "animation": animation.frames(case, runs, program)},
                       wall=time.perf_counter() - start, localisations=localisations, vibration=vibrations)
 
 

@@ -59,6 +59,8 @@ def main(argv=None):
                              "after the overrides, so that the book's pages stay as they are)")
     report.add_argument("--no-studies", action="store_true",
                         help="leave out the work-precision and stability studies (minutes) from the pages")
+    report.add_argument("--no-animations", action="store_true",
+                        help="leave out the animations (GIFs, seconds per case) from the pages")
     report.add_argument("--from", type=Path, metavar="DIR", dest="saved",
                         help="render the pages from results saved in DIR (a report's results/ folder, or "
                              "`run --results DIR`) instead of running anything; needs neither engine")
@@ -102,7 +104,7 @@ def main(argv=None):
                 writing = f"--results {args.results}"
                 save_results(results, args.results)
         elif not interrupted:  # a report of some cases would pass for one of all
-            results = make_report(results, cases, args.out, args.no_studies)
+            results = make_report(results, cases, args.out, args.no_studies, not args.no_animations)
         if not interrupted:  # a JUnit file has no word for "some cases did not run": it would pass for all
             writing = f"--junit {args.junit}"  # the one file that close() writes
             close(results, args.junit, start)
@@ -140,12 +142,13 @@ def run_cases(cases, localise=True):
     return results, None
 
 
-def make_report(results, cases, out, no_studies):
-    """The studies of each case added to its results, and the pages written; the results."""
+def make_report(results, cases, out, no_studies, animations=True):
+    """The studies of each case added to its results, and the pages written (with `animations`, their GIFs);
+    the results."""
     from dyncheck.report import write_reports
     start = time.perf_counter()
     results = [result if no_studies else result.with_studies(study_case(case)) for result, case in zip(results, cases)]
-    written = write_reports(results, out)
+    written = write_reports(results, out, animations)
     print(f"studies and pages: wrote {len(written)} files to {out}/ in {time.perf_counter() - start:.1f} s")
     print_results(results, table=False)
     return results
@@ -157,7 +160,7 @@ def report_saved(args, start):
     if args.cases or args.set or args.no_studies:
         raise ValueError("--from renders saved results as they are: give no CASE, --set or --no-studies with it")
     results = load_results(args.saved)
-    written = write_reports(results, args.out)
+    written = write_reports(results, args.out, not args.no_animations)
     print(f"pages: wrote {len(written)} files to {args.out}/ from {args.saved}/")
     print_results(results, table=False)
     close(results, args.junit, start)

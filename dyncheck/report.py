@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck import expressions, stability, vibration_page, work_precision
+from dyncheck import animation, expressions, stability, vibration_page, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.messages import plural
@@ -35,9 +35,9 @@ from dyncheck.style import plt
 ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
 
 
-def write_reports(results, out):
+def write_reports(results, out, animations=True):
     """Write the pages of `results` into the folder `out`, keeping what it holds of other cases, and
-    return the files written (relative to `out`).
+    return the files written (relative to `out`); `animations`: with each case's GIF.
 
     The new tree is a copy of `out` with this run's files written over it, and its index and errata
     are made from the summaries it holds; it is built beside `out` and exchanged with it in one
@@ -58,7 +58,7 @@ def write_reports(results, out):
             # The pages from the results as saved: what `report --from` renders from them.
             for result in (load_result(tree / "results" / result.name) for result in results):
                 case = Case(result.folder, result.overrides, result.spec)
-                written += write_case_page(result, case, tree)
+                written += write_case_page(result, case, tree, animations)
                 written.append(write_summary(result, case, tree))
             cases = summaries(tree, out)
             written.append(write_index(tree, cases))
@@ -460,7 +460,7 @@ def scene_table(case):
     return markdown_table(pd.DataFrame(rows))
 
 
-def write_case_page(result, case, tmp):
+def write_case_page(result, case, tmp, animations=True):
     rows = result.rows
     name = case.name
     coord_unit = dict(zip(case.coords, case.spec["coord_units"]))
@@ -582,9 +582,10 @@ def write_case_page(result, case, tmp):
                       f"*Localised automatically* (edits of the printed expression searched until one agrees"
                       f" with the engines): {f.localised}.", "", f.explanation, ""]
     vibration_lines, vibration_files = vibration_page.section(result, case, tmp)
+    animation_lines, animation_files = animation.section(result, case, tmp, animations)
     sections, study_files = study_sections(result, case, tmp)
-    study_files += vibration_files
-    lines += vibration_lines + sections + [
+    study_files += vibration_files + animation_files
+    lines += animation_lines + vibration_lines + sections + [
         "## Figures",
         "",
         *[f"![{kind}]({path})\n" for kind, path in figures.items() if kind != "scene"],

@@ -74,6 +74,11 @@ SCHEMA = ("table", {
         "figures?": ("map", ("table", {"x": "str", "y": "str", "title": "str", "xlabel": "str", "ylabel": "str",
                                        "xlim?": RANGE, "ylim?": RANGE, "equal?": "bool"})),
     }),
+    # what the case page's animation shows beside the motion (dyncheck/animation.py)
+    "animation?": ("table", {"program?": ("one of", "beside", "ghost"),
+                             "arrow?": ("table", {"force": ("list", "str"), "at": ("list", "str"), "about": "str"}),
+                             "graph?": ("table", {"y": "str", "title": "str", "ylabel": "str", "ylim?": RANGE}),
+                             "caption?": "str"}),
     "scene": ("table", {
         "coords": ("map", "str"),  # book coordinate -> hinge or slide joint
         "euler?": ("table", {"joint": "str", "coords": ("list", "str")}),  # ball joint in Euler angles
@@ -621,6 +626,21 @@ MEANINGS = {
     "report.figures.<name>.xlim": "The x axis's range.  Absent: the data's.",
     "report.figures.<name>.ylim": "The y axis's range.  Absent: the data's.",
     "report.figures.<name>.equal": "true: the same scale on both axes.",
+    "animation": "What the case page's animation (a GIF of the motion in 3-D, or in its plane) shows beside the "
+                 "motion; absent: the motion alone.",
+    "animation.program": "The book's program's run (`program`) drawn `beside` the exact motion or as a `ghost` over it.",
+    "animation.arrow": "A force drawn as an arrow at each frame, from the exact run; the largest is half the "
+                       "scene's extent long.",
+    "animation.arrow.force": f"Its three world components (x, y, z): {ALONG_RUN}.",
+    "animation.arrow.at": f"The point it acts at (x, y, z, m): {ALONG_RUN}.",
+    "animation.arrow.about": "What the arrow is, for the caption.",
+    "animation.graph": "A quantity drawn beside the motion against time, growing with the frames, with its "
+                       "largest value dashed.",
+    "animation.graph.y": f"The quantity: {ALONG_RUN}.",
+    "animation.graph.title": "The graph's title.",
+    "animation.graph.ylabel": "Its axis's label, with the unit.",
+    "animation.graph.ylim": "Its axis's range.  Absent: the data's.",
+    "animation.caption": "What to see in the animation: the caption's last sentences.",
     "scene": "How the scene files (scene.xml for MuJoCo, scene.urdf for Pinocchio) map to the case.",
     "scene.coords": "Each coordinate of a hinge or slide joint, by name: that joint's name in the scene files.",
     "scene.euler": "A ball joint whose orientation the book writes in Euler angles.",
@@ -881,7 +901,7 @@ def markdown():
               "- the file's numbers of type \"a number or an expression in quotes\", `constraints[i].expression`, "
               "`runaway[i].when` and every `{= expression}` in prose: "
               "the parameters, `pi` and numpy's " + ", ".join(f"`{name}`" for name in expressions.FUNCTIONS) + ";",
-              "- along a run (`report.stop`, `report.values`, `report.figures`, `program.figures`, `program.plots`): "
+              "- along a run (`report.stop`, `report.values`, `report.figures`, `program.figures`, `program.plots`, `animation.arrow`, `animation.graph`): "
               "the run's columns, arrays over its output times (each coordinate, its rate `<coord>_rate`, each "
               "reaction, `energy`, `work`, and `<body>_x`, `<body>_y`, `<body>_z` of each body of `scene.paths`), "
               "`t`, the parameters, `pi`, numpy's " + ", ".join(f"`{name}`" for name in expressions.FUNCTIONS)
