@@ -25,11 +25,11 @@ from dyncheck.results import heading
 from dyncheck.style import MIN_FONT, plt
 
 MAX_FRAMES = 100
-MIN_INTERVAL = 0.04  # s between frames: 25 per second at most, so that the GIF plays about in real time
-WIDTH = 480  # pixels of one 3-D panel; a frame is a panel wide per panel
-HEIGHT = 420
+MIN_INTERVAL = 0.05  # s between frames: 20 per second at most, so that the GIF plays about in real time
+WIDTH = 400  # pixels of one 3-D panel; a frame is a panel wide per panel
+HEIGHT = 360
 DPI = 100
-COLOURS = 48  # the GIF's palette: the figure's few colours and their antialiased edges
+COLOURS = 64  # the GIF's palette: the figure's few colours and their antialiased edges
 GL_BACKENDS = ("egl", "osmesa")  # MUJOCO_GL values under which MuJoCo's renderer draws
 VIEW = dict(elev=22.0, azim=-55.0)  # matplotlib's 3-D camera, degrees
 
@@ -224,10 +224,10 @@ class Animator:
                 line, = ax.plot(*pick(f.dots[0, d][None]), "o", ms=size, **style)
                 moves.append((line, lambda i, f=f, d=d: f.dots[i, d][None]))
         for b in range(panel.paths.shape[1]):
-            line, = ax.plot(*pick(panel.paths[:1, b]), color="tab:blue", lw=0.7)
+            line, = ax.plot(*pick(panel.paths[:1, b]), color="tab:blue", lw=1.2)
             moves.append((line, lambda i, b=b: panel.paths[panel.path_times <= panel.frames.times[i] + 1e-9, b]))
         if panel.arrows is not None:
-            line, = ax.plot(*pick(panel.arrows[0]), color="tab:purple", lw=2, marker=">", markevery=[1], ms=5)
+            line, = ax.plot(*pick(panel.arrows[0]), color="tab:purple", lw=2.5, marker="o", markevery=[1], ms=4)
             moves.append((line, lambda i: panel.arrows[i]))
         axes_names = "xyz"
         for j, setter in zip(self.used, (ax.set_xlim, ax.set_ylim, getattr(ax, "set_zlim", None))):
@@ -311,7 +311,12 @@ def write_gif(result, case, path, gl=None):
     animator = Animator(result, case, gl)
     images = [animator.frame(i) for i in range(len(animator.times))]
     plt.close(animator.fig)
-    palette = images[-1].quantize(COLOURS, method=Image.Quantize.MEDIANCUT)  # the last frame: every path drawn
+    # One palette from the first, middle and last frames side by side: every colour drawn, every path grown.
+    sample = [images[0], images[len(images) // 2], images[-1]]
+    montage = Image.new("RGB", (sample[0].width * 3, sample[0].height))
+    for k, image in enumerate(sample):
+        montage.paste(image, (k * image.width, 0))
+    palette = montage.quantize(COLOURS, method=Image.Quantize.MEDIANCUT)
     frames_p = [image.quantize(palette=palette, dither=Image.Dither.NONE) for image in images]
     times = animator.times
     interval = 10 * round(100 * (times[1] - times[0])) if len(times) > 1 else 100  # GIF counts hundredths

@@ -63,7 +63,8 @@ class MujocoPainter:
 
     def __init__(self, width, height):
         self.model = mujoco.MjModel.from_xml_string(
-            '<mujoco><visual><global offwidth="2000" offheight="2000"/></visual>'
+            '<mujoco><visual><global offwidth="2000" offheight="2000"/>'
+            '<headlight ambient=".6 .6 .6" diffuse=".5 .5 .5"/></visual>'
             '<worldbody><light pos="0 0 3" dir="0 0 -1" directional="true"/></worldbody></mujoco>')
         self.data = mujoco.MjData(self.model)
         self.renderer = mujoco.Renderer(self.model, height, width)
@@ -79,16 +80,16 @@ class MujocoPainter:
         scene = self.renderer.scene
         width = 0.006 * view[1]  # the lines' radius: a fixed share of the view
         for a, b in segments:
-            self._connector(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, width, a, b, colours.get("segment", (.3, .3, .3, 1)))
+            self._connector(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, width, a, b, colours.get("segment", (.75, .75, .75, 1)))
         for ring in rims:
             for a, b in zip(ring[:-1], ring[1:]):
-                self._connector(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, width / 2, a, b, colours.get("rim", (.2, .4, .8, 1)))
+                self._connector(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, width / 2, a, b, colours.get("rim", (.3, .8, .3, 1)))
         for a, b in arrows:
-            self._connector(scene, mujoco.mjtGeom.mjGEOM_ARROW, width, a, b, colours.get("arrow", (.8, .1, .1, 1)))
+            self._connector(scene, mujoco.mjtGeom.mjGEOM_ARROW, width, a, b, colours.get("arrow", (.7, .3, .9, 1)))
         for point, size in zip(dots, sizes):
             geom = self._geom(scene)
             mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_SPHERE, np.full(3, size), point, np.eye(3).ravel(),
-                                np.array(colours.get("dot", (.1, .1, .1, 1)), dtype=np.float32))
+                                np.array(colours.get("dot", (.95, .6, .2, 1)), dtype=np.float32))
         return self.renderer.render()
 
     @staticmethod
