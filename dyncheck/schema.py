@@ -755,8 +755,8 @@ MEANINGS = {
                  "each frequency checked in a run.  Rows with check `vibration`; the page's section \"Vibration "
                  "analysis\".",
     "course": "The student's page, `<case>_student.md` beside the case page (dyncheck/student_page.py, "
-              "docs/student-pages.md): the book's procedure step by step in plain words, each result typeset from the "
-              "expression the code evaluates and checked against the engines by the run's rows.",
+              "[student-pages.md](student-pages.md)): the book's procedure step by step in plain words, each result "
+              "typeset from the expression the code evaluates and checked against the engines by the run's rows.",
     "course.intro": "The page's opening paragraph: what the example is and what it finds (Markdown, `$` maths).",
     "course.steps": "The steps, in the book's order.",
     "course.steps[i].title": "The step's heading.",
@@ -765,9 +765,8 @@ MEANINGS = {
     "course.steps[i].show": "The results the step typesets, each with its check.",
     "course.steps[i].show[i].expression": "The expression the code evaluates: `book:KEY` (the derivation's "
                                           "Book.PRINTED), `program:KEY` (Program.PRINTED), `frames:KEY` (the "
-                                          "derivation module's FRAMES, matrices of the angle `a`) or `case:PATH` (an "
-                                          "expression of this file by its dotted path, list items by number).  "
-                                          "Absent: a check alone.",
+                                          "derivation module's FRAMES, matrices of the angle `a`).  Absent: a check "
+                                          "alone.",
     "course.steps[i].show[i].label": "The left side, in LaTeX, e.g. `{}_{B_3}\\mathbf{a}_E`.",
     "course.steps[i].show[i].quantities": "The quantities whose rows check it.  Absent: the expression's KEY (a "
                                           "vector's name stands for its components).",

@@ -7,7 +7,6 @@ case.  An expression is named by where the code keeps it:
     book:KEY      the derivation's Book.PRINTED[KEY] (the book's formula as printed, as evaluated)
     program:KEY   its Program.PRINTED[KEY] (a line of the book's listing)
     frames:KEY    the derivation module's FRAMES[KEY] (a transformation matrix of the angle `a`)
-    case:PATH     an expression of the case file, by its dotted path (`vibration.boundary.1.expected`)
 Rendered from saved results only, like every page."""
 
 import math
@@ -82,22 +81,14 @@ def course(case):
 
 
 def expression_text(case, name, field):
-    """The expression string `name` (book:KEY, program:KEY, frames:KEY, case:PATH) as the code evaluates it."""
+    """The expression string `name` (book:KEY, program:KEY or frames:KEY) as the code evaluates it."""
     kind, _, key = name.partition(":")
     derivation = case.derivation
     tables = {"book": lambda: getattr(getattr(derivation, "Book", None), "PRINTED", {}),
               "program": lambda: getattr(getattr(derivation, "Program", None), "PRINTED", {}),
               "frames": lambda: getattr(derivation, "FRAMES", {})}
-    if kind == "case":
-        value = case.spec
-        for part in key.split("."):
-            value = value[int(part)] if isinstance(value, list) and part.isdigit() and int(part) < len(value) \
-                else value.get(part) if isinstance(value, dict) else None
-        if isinstance(value, str):
-            return value
-        raise ValueError(f"{case.file}: {field} = {name!r}: the case file has no expression at {key!r}")
     if kind not in tables:
-        raise ValueError(f"{case.file}: {field} = {name!r}: not book:KEY, program:KEY, frames:KEY or case:PATH")
+        raise ValueError(f"{case.file}: {field} = {name!r}: not book:KEY, program:KEY or frames:KEY")
     table = tables[kind]()
     if key not in table:
         raise ValueError(f"{case.file}: {field} = {name!r}: {case.spec['derivation']} has no {kind} expression "
@@ -189,13 +180,13 @@ def check_sentence(shown, rows):
 
 # -- the page -------------------------------------------------------------------------------
 
-def finding_of(result, shown):
-    """The finding that says the book's `shown` result is wrong, with its right expression, or None."""
-    key = shown.expression.partition(":")[2]
+def right_side(result, printed):
+    """(finding, right expression) where a finding of the run pairs the printed expression `printed` with the
+    right one (dyncheck.results.Pair: a localised edit, or the case file's `right`, checked by a row); else None."""
     for finding in result.findings:
-        right = getattr(finding, "right", None) or {}
-        if key in right and any(shown.source in s.split(" vs ")[0] for s in finding.sources):
-            return finding, right[key]
+        for pair in getattr(finding, "pairs", ()):
+            if pair.printed == printed:
+                return finding, pair.right
     return None
 
 
@@ -204,12 +195,12 @@ def maths(case, result, shown):
     boxed where a finding gives the right one."""
     text = expression_text(case, shown.expression, "course")
     symbols = symbol_table(case, shown.expression, shown.symbols)
-    wrong = finding_of(result, shown) if shown.source in ("book", "program") else None
+    wrong = right_side(result, text)
     if wrong is None:
         return [f"$${shown.label} = {typeset.latex(text, symbols)}$$", ""]
     finding, right = wrong
     printed, corrected = typeset.marked(text, right, symbols)
-    return ["As the book prints it (the boxed term differs):", "", f"$${shown.label} = {printed}$$", "",
+    return ["As the book prints it (boxed: what differs):", "", f"$${shown.label} = {printed}$$", "",
             f"Right (finding [{finding.id}](errata.md#{finding.id.replace('.', '').lower()})):", "",
             f"$${shown.label} = {corrected}$$", ""]
 
