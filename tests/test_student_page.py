@@ -52,6 +52,7 @@ def test_the_page_speaks_a_students_words(pages, name):
     page = (pages / f"{name}_student.md").read_text()
     assert not JARGON.search(page), JARGON.search(page)
     assert page.count("$") % 2 == 0  # every inline maths closed
+    assert not re.search(r"\\\\[a-zA-Z]", page)  # a backslash doubled by a TOML basic string: \\psi
     assert "np.float64" not in page and "array(" not in page
 
 
