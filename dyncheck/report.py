@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck import animation, expressions, stability, vibration_page, work_precision
+from dyncheck import animation, expressions, stability, student_page, vibration_page, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.messages import plural
@@ -59,6 +59,7 @@ def write_reports(results, out, animations=True):
             for result in (load_result(tree / "results" / result.name) for result in results):
                 case = Case(result.folder, result.overrides, result.spec)
                 written += write_case_page(result, case, tree, animations)
+                written += student_page.write(result, case, tree)  # after the case page: it shows its figures
                 written.append(write_summary(result, case, tree))
             cases = summaries(tree, out)
             written.append(write_index(tree, cases))
@@ -522,6 +523,8 @@ def write_case_page(result, case, tmp, animations=True):
         + (f"  \nParameters overridden (`--set`): {case.overrides_text()}; the book's figures and printed data"
            " do not apply to them" if case.overrides else ""),
         "",
+        *([f"For students: [the book's procedure step by step]({student_page.page_name(case)}).", ""]
+          if "course" in case.spec else []),
         "## The scene",
         "",
         " ".join(case.prose(case.spec["summary"], "summary").split()),
@@ -845,7 +848,9 @@ def write_index(tmp, cases):
     for case in cases:
         counts = pd.Series([c["status"] for c in case["checks"]]).value_counts()
         rows.append({
-            "case": f"[{case['case']}]({case['case']}.md)", "section": case["section"],
+            "case": f"[{case['case']}]({case['case']}.md)" + (f" ([step by step]({case['case']}_student.md))" if
+                                                                (tmp / f"{case['case']}_student.md").is_file() else ""),
+            "section": case["section"],
             "title": case["title"] + with_overrides(case),
             "status": case["status"].upper(), "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
             "worst engine error": "-" if case["worst_engine_error"] is None else f"{case['worst_engine_error']:.1e}",

@@ -117,6 +117,14 @@ SCHEMA = ("table", {
                              "floquet?": ("table", {"why": "str", "period": "str", "q": ("list", "expr"),
                                                     "v": ("list", "expr"), "periods": "int > 0",
                                                     "amplitude": "number > 0"})}),
+    # the student's page (dyncheck/student_page.py, which checks the expressions against the derivation)
+    "course?": ("table", {"intro": "str", "steps": ("list", ("table", {
+        "title": "str", "text": "str",
+        "show?": ("list", ("table", {"expression?": "str", "label?": "str", "quantities?": ("list", "str"),
+                                     "source?": ("one of", "book", "program", "reference", "mujoco", "pinocchio"),
+                                     "symbols?": ("map", "str"), "checked?": "str"})),
+        "figures?": ("list", ("table", {"figure": "str", "caption": "str"})),
+        "vibration?": "bool"}))}),
 })
 
 SCALARS = {"str": ((str,), "a string"), "int": ((int,), "an integer"), "bool": ((bool,), "true or false"),
@@ -411,6 +419,7 @@ def _cross_references(spec, file):
             raise _error(file, f"runaway[{i}].when", runaway["when"], "is not a comparison of the parameters, "
                          "such as k < m*Omega**2")
     _ceilings(spec, file)
+    _course(spec, file)
     for key, figure in spec.get("program", {}).get("figures", {}).items():
         lo, hi = figure["range"]
         if not lo < hi:
@@ -425,6 +434,41 @@ def _cross_references(spec, file):
         except ValueError as error:
             raise _error(file, f"program.outputs.{key}", expression, f"cannot be evaluated from MuJoCo's values at "
                          f"the program's states: {error}") from None
+
+
+def quantities(spec):
+    """The quantities a case's rows may name, as the case file implies them: each coordinate, its rate and
+    acceleration and its equation's residual, each reaction, point (a vector's name stands for its components),
+    program output and finding's quantity, the energy, the drive power and the work-energy balance, and the book's
+    printed Newton and Euler rows of the case's section (Book.printed_rows)."""
+    coords = spec["coords"]
+    names = {*coords, *(f"{c}_rate" for c in coords), *(f"{c}_acc" for c in coords), *(f"{c} residual" for c in coords),
+             *spec["reactions"], *spec["scene"].get("points", {}), *spec.get("program", {}).get("outputs", {}),
+             *(q for finding in spec.get("findings", []) for q in finding["quantities"]),
+             "energy", "drive_power", "work-energy balance"}
+    rows = {f"{law} {axis}{frame} ({spec.get('section', '')})" for law in ("Newton", "Euler") for axis in "XYZ"
+            for frame in ("", "1", "2", "3")}
+    return names | rows
+
+
+def _course(spec, file):
+    """The student's page names quantities the rows have, a label for each expression, and vibration results only
+    where the case has them."""
+    known = quantities(spec)
+    for i, step in enumerate(spec.get("course", {}).get("steps", [])):
+        for j, item in enumerate(step.get("show", [])):
+            field = f"course.steps[{i}].show[{j}]"
+            if "expression" not in item and "quantities" not in item:
+                raise _error(file, field, item, "shows nothing: give an expression, quantities that check it, or both")
+            if "expression" in item and "label" not in item:
+                raise _error(file, field, item, "has an expression but no label (its left side in LaTeX)")
+            for quantity in item.get("quantities", []):
+                if quantity not in known:
+                    raise _error(file, f"{field}.quantities", quantity, "is no quantity of this case"
+                                 + _hint(quantity, sorted(known)))
+        if step.get("vibration") and "vibration" not in spec:
+            raise _error(file, f"course.steps[{i}].vibration", True, "shows vibration results, but the case has no "
+                         "[vibration]")
 
 
 def _derivation(derivation, file):
@@ -730,6 +774,32 @@ MEANINGS = {
                  "linearised about it by the derivation and by both engines, their frequencies, modes and stability, "
                  "each frequency checked in a run.  Rows with check `vibration`; the page's section \"Vibration "
                  "analysis\".",
+    "course": "The student's page, `<case>_student.md` beside the case page (dyncheck/student_page.py, "
+              "[student-pages.md](student-pages.md)): the book's procedure step by step in plain words, each result "
+              "typeset from the expression the code evaluates and checked against the engines by the run's rows.",
+    "course.intro": "The page's opening paragraph: what the example is and what it finds (Markdown, `$` maths).",
+    "course.steps": "The steps, in the book's order.",
+    "course.steps[i].title": "The step's heading.",
+    "course.steps[i].text": "What the step does, in plain words, with inline `$...$` maths and `{= expression}` "
+                            "numbers (see Numbers in prose).",
+    "course.steps[i].show": "The results the step typesets, each with its check.",
+    "course.steps[i].show[i].expression": "The expression the code evaluates: `book:KEY` (the derivation's "
+                                          "Book.PRINTED), `program:KEY` (Program.PRINTED), `frames:KEY` (the "
+                                          "derivation module's FRAMES, matrices of the angle `a`).  Absent: a check "
+                                          "alone.",
+    "course.steps[i].show[i].label": "The left side, in LaTeX, e.g. `{}_{B_3}\\mathbf{a}_E`.",
+    "course.steps[i].show[i].quantities": "The quantities whose rows check it.  Absent: the expression's KEY (a "
+                                          "vector's name stands for its components).",
+    "course.steps[i].show[i].source": "Whose rows: those comparing this source with the engines or the exact "
+                                      "motion.  Absent: book or program for their expressions, else reference.",
+    "course.steps[i].show[i].symbols": "LaTeX for the expression's names here, e.g. `{ a = '\\alpha' }` for a "
+                                       "frame's angle.",
+    "course.steps[i].show[i].checked": "What the rows compare, in words, where it is not the expression itself.",
+    "course.steps[i].figures": "Figures of the case page shown in this step, each with its caption.",
+    "course.steps[i].figures[i].figure": "The figure's kind: `figures/<case>_<figure>.png` of the case page "
+                                         "(scene, coordinates, program, modes, ...).",
+    "course.steps[i].figures[i].caption": "What it shows and what to see in it, in plain words.",
+    "course.steps[i].vibration": "Show the vibration analysis's equilibrium, frequencies and stability here.",
     "vibration.why": "What is linearised, and why about this state.",
     "vibration.overrides": "Parameters changed for the linearised scene, e.g. the arm at rest so that the disk's spin "
                            "makes a relative equilibrium, or no resisting moment.",

@@ -147,6 +147,8 @@ class Book:
         "a_eq110": "Tz(th) @ array([Ldd*cos(th) - 2*Ld*w*sin(th) - L*wd*sin(th) - L*w**2*cos(th),"
                    " Ldd*sin(th) + 2*Ld*w*sin(th) + L*wd*cos(th) - L*w**2*sin(th), 0.0])",
     }
+    # The printed symbols' LaTeX (dyncheck.typeset), where its defaults do not know them.
+    LATEX = {"th": r"\theta", "w": r"\dot{\theta}", "wd": r"\ddot{\theta}", "Ld": r"\dot{L}", "Ldd": r"\ddot{L}"}
 
     def symbols(self, t, q=(), v=()):
         th, w, wd, L, Ld, Ldd = self._motion(t)

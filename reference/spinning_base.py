@@ -11,6 +11,8 @@ import functools
 
 import numpy as np
 
+from reference import printed
+
 # Vectors and matrices of the chain are tuples of floats: on 3-vectors numpy's overhead per
 # operation is most of the time, and the integrators evaluate the chain at every step.
 I3, K3, ZERO = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
@@ -39,14 +41,18 @@ def book_height(p, psi, length):
     return p["a"] + p["c"] + p["h"] - length * np.cos(psi)
 
 
+# The book's transformation matrices (1.8 (a)) as expressions of the angle `a`: T_z and T_x evaluate them, and the
+# student's page typesets them (dyncheck/student_page.py, `frames:T_z`).
+FRAMES = {"T_z": "array([[cos(a), sin(a), 0.0], [-sin(a), cos(a), 0.0], [0.0, 0.0, 1.0]])",
+          "T_x": "array([[1.0, 0.0, 0.0], [0.0, cos(a), sin(a)], [0.0, -sin(a), cos(a)]])"}
+
+
 def T_z(angle):
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    return printed.evaluate(FRAMES, {"a": angle, "sin": np.sin, "cos": np.cos, "array": np.array}, ("T_z",))["T_z"]
 
 
 def T_x(angle):
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
+    return printed.evaluate(FRAMES, {"a": angle, "sin": np.sin, "cos": np.cos, "array": np.array}, ("T_x",))["T_x"]
 
 
 def cross(a, b):

@@ -300,6 +300,10 @@ class Book:
                     "m*dn*h*(dp*cos(n) + ds) + m*h*(ddp*sin(n) + dp*dn*cos(n)),"
                     " m*g*sin(n) + m*dp*h*sin(n)*(dp*cos(n) + ds) - m*h*ddn,"
                     " m*g*cos(n) - m*h*(dn**2 + dp**2*sin(n)**2)])"}
+    # The printed symbols' LaTeX (dyncheck.typeset): the book's varphi, theta, phi; {} takes the argument.
+    LATEX = {"p": r"\varphi", "n": r"\theta", "dp": r"\dot{\varphi}", "dn": r"\dot{\theta}", "ds": r"\dot{\phi}",
+             "ddp": r"\ddot{\varphi}", "ddn": r"\ddot{\theta}", "dds": r"\ddot{\phi}", "TxT": "T_x({})^T",
+             "TzT": "T_z({})^T"}
 
     # The top's angular velocity (4) and acceleration (5) as printed in B2, turned into the inertial
     # frame by T_z(p)^T T_x(n)^T to meet the engines (whose body frame spins with the top).

@@ -43,10 +43,11 @@ import numpy as np
 
 from reference import printed
 
-from reference.spinning_base import T_z, base_terms, book_height, book_velocities, chain, last_state, particle_motion
+from reference.spinning_base import FRAMES, T_z, base_terms, book_height, book_velocities, chain, last_state, particle_motion
 
 COORDS = ("psi", "l")
 REACTIONS = ("R",)
+COORD_ACCS = ("psi_acc", "l_acc")
 
 
 class Book:
@@ -59,17 +60,8 @@ class Book:
         self.p = dict(params)
 
     def accelerations(self, t, q, v):
-        p = self.p
-        psi, l = q
-        psi_rate, l_rate = v
-        _, omega, base = base_terms(p, t)
-        length = p["l0"] + l
-        s, c = np.sin(psi), np.cos(psi)
-        psi_acc = (-p["g"] / length * s + base / length * c
-                   + omega**2 * s * c - 2 * l_rate * psi_rate / length)
-        l_acc = (-p["k"] / p["m"] * l + p["g"] * c + base * s
-                 + length * (psi_rate**2 + omega**2 * s**2))
-        return np.array([psi_acc, l_acc])
+        found = printed.evaluate(self.PRINTED, self._names(t, q, v), COORD_ACCS)
+        return np.array([found["psi_acc"], found["l_acc"]])
 
     # R = m a_E,x with the printed a_E,x (one L psi' Omega cos(psi) term).  The string is the code
     # (evaluated with `symbols`), so that dyncheck can search edits of it.
@@ -84,15 +76,22 @@ class Book:
                "a_D": "array([-b*alpha_rate**2*sin(beta), -K*cos(psi), K*sin(psi)])",
                "a_E": "array([-(b*alpha_rate**2*sin(beta) + L*psi_rate*Omega*cos(psi) + 2*l_rate*Omega*sin(psi)),"
                       " -K*cos(psi) - L*Omega**2*sin(psi)*cos(psi) + L*psi_acc + 2*l_rate*psi_rate,"
-                      " K*sin(psi) + L*(psi_rate**2 + Omega**2*sin(psi)**2) - l_acc])"}
+                      " K*sin(psi) + L*(psi_rate**2 + Omega**2*sin(psi)**2) - l_acc])",
+               # (h), the equations of motion solved for psi'' (Y3) and l'' (Z3)
+               "psi_acc": "-g/L*sin(psi) + K/L*cos(psi) + Omega**2*sin(psi)*cos(psi) - 2*l_rate*psi_rate/L",
+               "l_acc": "-k/m*l + g*cos(psi) + K*sin(psi) + L*(psi_rate**2 + Omega**2*sin(psi)**2)"}
+
+    def _names(self, t, q, v):
+        """The symbols of the printed expressions but psi'' and l''."""
+        p = self.p
+        beta, omega, base = base_terms(p, t)
+        return {"m": p["m"], "k": p["k"], "g": p["g"], "b": p["b"], "alpha_rate": p["alpha_rate"], "beta": beta,
+                "Omega": omega, "K": base, "L": p["l0"] + q[1], "l": q[1], "psi": q[0], "psi_rate": v[0],
+                "l_rate": v[1], "sin": np.sin, "cos": np.cos, "array": np.array}
 
     def symbols(self, t, q, v):
-        p = self.p
-        beta, omega, k = base_terms(p, t)
-        psi_acc, l_acc = self.accelerations(t, q, v)
-        return {"m": p["m"], "b": p["b"], "alpha_rate": p["alpha_rate"], "beta": beta, "Omega": omega, "K": k,
-                "L": p["l0"] + q[1], "psi": q[0], "psi_rate": v[0], "l_rate": v[1], "psi_acc": psi_acc,
-                "l_acc": l_acc, "sin": np.sin, "cos": np.cos, "array": np.array}
+        names = self._names(t, q, v)
+        return {**names, **printed.evaluate(self.PRINTED, names, COORD_ACCS)}
 
     def point_accelerations(self, t, q, v):
         names = self.symbols(t, q, v)
@@ -302,6 +301,8 @@ class Program:
                  " + (lo+l)*(psid**2+(alfad+betad)**2*sin(psi)**2)",
         "R": "m*(b*alfad**2*sin(beta) + (lo+l)*psid*(alfad+betad)*cos(psi) - 2*ld*(alfad+betad)*sin(psi))",
     }
+    # The listing's symbols' LaTeX (dyncheck.typeset), where its defaults do not know them.
+    LATEX = {"alfad": r"\dot{\alpha}", "betad": r"\dot{\beta}", "psid": r"\dot{\psi}", "ld": r"\dot{l}"}
 
     def symbols(self, t, q, v):
         p = self.p
