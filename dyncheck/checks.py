@@ -15,7 +15,7 @@ from dyncheck.expressions import evaluate as evaluate_expression
 from dyncheck.expressions import namespace, of_parameters
 from dyncheck.localise import localise
 from dyncheck.messages import suggest
-from dyncheck.results import OWN_WORDS, CaseResult, Finding, Outcome, Status, no_number, row
+from dyncheck.results import OWN_WORDS, CaseResult, Finding, Outcome, Pair, Status, no_number, row
 from dyncheck.simulate import (ERROR_EXPONENT, Escape, Unstable, energy_residual, fastest_frequency, simulate,
                                state_columns)
 from dyncheck.stability.long_runs import agreement_horizon
@@ -512,6 +512,8 @@ def run_case(case, localise=True):
     vibrations = vibration.analyse(case)
     rows += vibrations.rows if vibrations else []
     rows = book_numbers_only(case, apply_findings(case, rows + program_rows + data_checks(case)))
+    right_rows, right = right_sides(case, sample)
+    rows += right_rows
     rows = runaway_rows(limit, runs, rows)  # a bounded run's failure is no finding of the book
     parameter_draws = parameter_sets(case)[0]
     localisations = residuals.localise(case, rows, residuals_found, parameter_draws)
@@ -521,7 +523,7 @@ def run_case(case, localise=True):
     drawn = lambda source, outcome: replace(outcome, **({"twin": with_paths(case, outcome.twin)} if source == "reference"
                                                         else {"run": with_paths(case, outcome.run)}))
     runs = {source: drawn(source, outcome) if outcome.ok else outcome for source, outcome in runs.items()}
-    findings = tuple(findings_of(case, rows, sample, runs, localise))
+    findings = tuple(findings_of(case, rows, sample, runs, localise, right, program))
     if case.one_derivation:
         rows, localisations = in_own_words(rows), tuple(replace(loc, source=OWN_WORDS[loc.source])
                                                        for loc in localisations)
@@ -732,53 +734,143 @@ def account(case, finding, field):
     return f"*At the book's numbers (the case file's account, not this run's):* {text}" if case.overrides else text
 
 
+def finding_source(case, finding):
+    """The model a finding's printed expressions belong to: the book's derived equations, or its program."""
+    return case.model("program" if any("program" in s for s in finding["sources"]) else "book")
+
+
+def components(key, values):
+    """A printed vector's components as the checks name them in `values`: a_eq110_x, ... or Rx, ..."""
+    for names in ([f"{key}_{axis}" for axis in "xyz"], [f"{key}{axis}" for axis in "xyz"]):
+        if all(n in values for n in names):
+            return names
+    return [key]
+
+
 def localise_finding(case, finding, sample):
-    """The smallest edit of the book's printed expression that explains `finding` (dyncheck.localise)."""
-    # The finding's source: the book's derived equations, or its program.
-    book = case.model("program" if any("program" in s for s in finding["sources"]) else "book")
+    """The smallest edit of the book's printed expression that explains `finding` (dyncheck.localise), in
+    words, and the pairs (printed, edited expression) of the quantities it explains."""
+    book = finding_source(case, finding)
     printed = getattr(book, "PRINTED", {})
     if "mujoco" in sample["failures"]:
-        return f"not searched: MuJoCo's values at the random states failed ({sample['failures']['mujoco']})"
+        return f"not searched: MuJoCo's values at the random states failed ({sample['failures']['mujoco']})", ()
     engine = sample["values"]["mujoco"]
-
-    def components(key):
-        """A printed vector's components as the checks name them: a_eq110_x, ... or Rx, ..."""
-        for names in ([f"{key}_{axis}" for axis in "xyz"], [f"{key}{axis}" for axis in "xyz"]):
-            if all(n in engine for n in names):
-                return names
-        return [key]
-
-    quantities = [k for k in printed if set(components(k)) & set(finding["quantities"])]
+    quantities = [k for k in printed if set(components(k, engine)) & set(finding["quantities"])
+                  and all(n in engine for n in components(k, engine))]
     if not quantities:
-        return "not searched: the book's module declares no printed expression for " + ", ".join(finding["quantities"])
-    parts = []
+        return ("not searched: the book's module declares no printed expression of the engines' values for "
+                + ", ".join(finding["quantities"])), ()
+    parts, pairs = [], []
     for quantity in quantities:
-        names = components(quantity)
+        names = components(quantity, engine)
         target = engine[names[0]] if len(names) == 1 else np.column_stack([engine[n] for n in names])
         namespaces = [book.symbols(t, q, v) for t, q, v in sample["states"]]
         found, tried, printed_error = localise(printed[quantity], namespaces, target,
                                                case.tolerance["pointwise"]["value"])
         if found:
-            parts.append(f"{quantity}: " + "; or ".join(f"{label} (then off by {err:.1e})" for label, err in found)
+            parts.append(f"{quantity}: " + "; or ".join(f"{label} (then off by {err:.1e})" for label, err, _ in found)
                          + f" [{tried} edits tried; as printed off by {printed_error:.2g}]")
+            label, err, edited = found[0]
+            pairs.append(Pair(printed[quantity], edited, "the book's expression, the code that runs",
+                              f"the localised edit: {label} (then off by {err:.1e} from MuJoCo at the random states)",
+                              quantity, getattr(book, "LATEX", {})))
         else:
             parts.append(f"{quantity}: none of the {tried} searched edits (single and pairs) explains it"
                          f" (as printed off by {printed_error:.2g})")
-    return "; ".join(parts)
+    return "; ".join(parts), tuple(pairs)
 
 
-def findings_of(case, rows, sample, runs, localise=True):
-    """The case's registered findings with their measured size, where and how established, and effect."""
+def right_sides(case, sample):
+    """Each finding's `right` expressions (case file) at the random states against the reference, a row
+    each: the right side the errata typeset is proven, not retyped.  The target is the reference's value
+    of the quantity, or 0 for a printed row (right side minus left side, which is 0 when the row holds)."""
+    rows, pairs = [], {}
+    for i, finding in enumerate(case.findings):
+        if not finding.get("right"):
+            continue
+        model = finding_source(case, finding)
+        printed = getattr(model, "PRINTED", {})
+        for key, expression in finding["right"].items():
+            if key not in printed:
+                raise ValueError(f"{case.folder / 'case.toml'}: findings[{i}].right: '{key}' is not a printed "
+                                 f"expression of the book's module{suggest(key, printed)}")
+            sources = ("finding's right", "reference")
+            if "reference" in sample["failures"]:
+                rows.append(no_number("pointwise", key, sources, sample["failures"]["reference"], Status.FAIL))
+                continue
+            reference = sample["values"]["reference"]
+            names = components(key, reference)
+            namespaces = [model.symbols(t, q, v) for t, q, v in sample["states"]]
+            with np.errstate(all="ignore"):
+                right = np.array([np.asarray(eval(compile(expression, "<right>", "eval"), {"__builtins__": {}}, n),
+                                             dtype=float) for n in namespaces])
+                book = np.array([np.asarray(eval(compile(printed[key], "<printed>", "eval"), {"__builtins__": {}},
+                                                 n), dtype=float) for n in namespaces])
+            of_reference = all(n in reference for n in names)
+            target = (np.column_stack([reference[n] for n in names]).reshape(right.shape) if of_reference
+                      else np.zeros_like(right))
+            scale = max(np.max(np.abs(target)), np.max(np.abs(book))) or 1.0
+            rows.append(row("pointwise", key, sources, relative_error(right, target, scale),
+                            case.tolerance["pointwise"]["value"], f"finding {finding['id']}: {key} = {expression}, "
+                            f"at {len(namespaces)} random states, relative to the larger of the printed and the "
+                            f"reference's largest magnitude ({scale:.3g})", ceiling=ceilings.POINTWISE))
+            pairs.setdefault(finding["id"], []).append(
+                Pair(printed[key], expression, "the book's expression, the code that runs", "the case file's right "
+                     "expression, checked against the reference at the random states", key if of_reference else "0",
+                     getattr(model, "LATEX", {})))
+    return rows, pairs
+
+
+def value_pairs(case, finding, program):
+    """The book's values against the right ones, for a finding of its data, its figures or its program's
+    integrator: the printed datum against its formula, a figure's axis against the exact motion's range,
+    the listing's run against the exact motion at the end of the run."""
+    pairs = []
+    for item in case.spec.get("data", []):
+        if item["name"] in finding["quantities"] and "book data vs book formula" in finding["sources"]:
+            valued = lambda expression: (expression if re.fullmatch(r"[\d.e+-]+", expression)
+                                         else f"{expression} == {case.value(expression):.6g}")
+            bound = "" if item.get("relation", "equal") == "equal" else ", the most the printed value may be"
+            pairs.append(Pair(valued(item["printed"]), valued(item["formula"]), f"printed ({item['where']})",
+                              f"the book's formula at the case's parameters{bound}"))
+    if not program:
+        return pairs
+    figures = case.spec.get("program", {}).get("figures", {})
+    for name, figure in figures.items():
+        if name in finding["quantities"] and any("book figure" in s for s in finding["sources"]):
+            lo, hi = figure["range"]
+            values = evaluate_expression(figure["expression"], namespace(case, program["tight"]))
+            pairs.append(Pair(f"{lo:g} <= {figure['expression']} <= {hi:g}",
+                              f"{np.min(values):.4g} <= {figure['expression']} <= {np.max(values):.4g}",
+                              f"the figure's axis ({figure['where']})",
+                              "the exact motion (the reference integrated tightly) over the book's run"))
+    columns = [q for q in finding["quantities"] if q in program["listing"].columns]
+    if columns and "program vs tight reference" in finding["sources"]:
+        end = program["listing"].index[-1]
+        at = lambda run: ", ".join(f"{run[c].iloc[-1]:.4g}" for c in columns)
+        pairs.append(Pair(f"array([{at(program['listing'])}])", f"array([{at(program['tight'])}])",
+                          f"the listing's run ({program['integrator']} at dt = {program['dt']:.4g} s) at "
+                          f"t = {end:.4g} s", f"the exact motion at t = {end:.4g} s",
+                          f"array([{', '.join(columns)}])", getattr(case.model("book"), "LATEX", {})))
+    return pairs
+
+
+def findings_of(case, rows, sample, runs, localise=True, right=None, program=None):
+    """The case's registered findings with their measured size, where and how established, and effect;
+    with their book-vs-right pairs: the localised edits, the case file's checked `right` ({id: pairs},
+    right_sides), or the values `program` (program_checks' runs) and the case's data give."""
     engines = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= set(ENGINES)]
     out = []
     for finding in case.findings:
         errors = [r.error for r in rows if r.finding == finding["id"] and r.error is not None]
+        localised, pairs = localise_finding(case, finding, sample) if localise else (
+            "not searched in this run (`dyncheck run` searches with --json or --results)", ())
+        pairs += tuple((right or {}).get(finding["id"], ())) + tuple(value_pairs(case, finding, program))
         out.append(Finding(
             id=finding["id"], title=finding["title"], where=finding["where"],
             quantities=tuple(finding["quantities"]), sources=tuple(finding["sources"]),
             error=max(errors, default=None), explanation=account(case, finding, "explanation"),
             established=f"reference, MuJoCo and Pinocchio agree with each other to {max(engines, default=0):.1e} "
                         f"at {len(sample['states'])} random states",
-            effect=finding_effect(case, finding, runs), localised=localise_finding(case, finding, sample) if localise else
-            "not searched in this run (`dyncheck run` searches with --json or --results)"))
+            effect=finding_effect(case, finding, runs), localised=localised, pairs=pairs))
     return out

@@ -126,12 +126,12 @@ def _error(expression, namespaces, target, tolerance):
 def localise(expression, namespaces, target, tolerance):
     """The single edits, or failing those the pairs, that make `expression` agree with `target`.
 
-    Returns (edits that work, each as (description, error)), how many were tried, and the error
-    of the printed expression itself.
+    Returns (edits that work, each as (description, error, edited expression)), how many were tried,
+    and the error of the printed expression itself.
     """
     printed = _error(expression, namespaces, target, tolerance)
     singles = edits(expression)
-    found = [(label, err) for label, text in singles
+    found = [(label, err, text) for label, text in singles
              if (err := _error(text, namespaces, target, tolerance)) <= tolerance]
     tried = len(singles)
     if not found:
@@ -143,5 +143,5 @@ def localise(expression, namespaces, target, tolerance):
                     continue
                 seen.add(frozenset((first, second)))
                 if (err := _error(text2, namespaces, target, tolerance)) <= tolerance:
-                    found.append((f"{first}, and {second}", err))
+                    found.append((f"{first}, and {second}", err, text2))
     return found, tried, printed

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck import animation, expressions, stability, student_page, vibration_page, work_precision
+from dyncheck import animation, expressions, stability, student_page, typeset, vibration_page, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.messages import plural
@@ -150,7 +150,8 @@ def write_summary(result, case, tmp):
                "random": random_tried(result, case),
                "cheapest": None if sweep is None or sweep.empty else  # for the index: level -> method
                {f"{r['level']:.0e}": r["cheapest"] for _, r in work_precision.cheapest(sweep).iterrows()},
-               "vibration": vibration_page.summary(result.vibration)}
+               "vibration": vibration_page.summary(result.vibration),
+               "typeset": [{"finding": f.id, **typeset_pair(pair)} for f in result.findings for pair in f.pairs]}
     rel = f"data/{case.name}.json"
     (tmp / rel).write_text(json.dumps(summary, indent=1) + "\n")
     return rel
@@ -797,6 +798,23 @@ def with_overrides(summary):
     return f", with {summary['overridden']}" if summary.get("overridden") else ""
 
 
+def typeset_pair(pair):
+    """A finding's Pair as the errata show it: both sides in LaTeX, what differs boxed, and their origins."""
+    printed, right = typeset.marked(pair.printed, pair.right, pair.symbols)
+    lhs = typeset.latex(pair.lhs, pair.symbols) + " = " if pair.lhs else ""
+    return {"printed": lhs + printed, "right": lhs + right, "printed_from": pair.printed_from,
+            "right_from": pair.right_from}
+
+
+def errata_pairs(pairs):
+    """The lines of a finding's typeset pairs: "As printed" and "Right", each a display formula."""
+    lines = []
+    for pair in pairs:
+        lines += [f"*As printed* ({pair['printed_from']}):", "", "$$", pair["printed"], "$$", "",
+                  f"*Right* ({pair['right_from']}):", "", "$$", pair["right"], "$$", ""]
+    return lines
+
+
 def write_errata(tmp, cases):
     """errata.md: every finding of every case in one table, then each in full."""
     table = [{"finding": f"[{f['id']}](#{f['id'].replace('.', '').lower()})",
@@ -818,6 +836,7 @@ def write_errata(tmp, cases):
                       f"- *How established:* {f['established']}",
                       *([f"- *Effect:* {f['effect']}"] if f["effect"] else []),
                       f"- *Localised edit:* {f['localised']}", "",
+                      *errata_pairs([pair for pair in c.get("typeset", []) if pair["finding"] == f["id"]]),
                       f["explanation"], ""]
     programs = [c for c in cases if (tmp / f"figures/{c['case']}_program.png").exists()]
     if programs:

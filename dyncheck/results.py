@@ -7,7 +7,7 @@ file) carries RESULTS_VERSION; docs/results.md describes it.
 
 import enum
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 
 import pandas as pd
 
@@ -134,6 +134,19 @@ class StudyResult:
 
 @store.register
 @dataclass(frozen=True)
+class Pair:
+    """What a finding's book prints and what is right, as the errata typeset them side by side
+    (dyncheck.typeset.marked): expressions in Python syntax, those the code evaluates."""
+    printed: str  # the book's: its module's PRINTED entry, or the value its listing, figure or data uses
+    right: str  # the localised edit's expression, the case file's `right` (checked by a row), or a value measured
+    printed_from: str  # in words, what the printed side is
+    right_from: str  # in words, where the right side comes from
+    lhs: str = ""  # what both sides are the value of ("R"); "" when the sides are relations
+    symbols: dict = field(default_factory=dict)  # the names' LaTeX: the source module's LATEX
+
+
+@store.register
+@dataclass(frozen=True)
 class Finding:
     """A registered error of the book with what this run measured of it."""
     id: str
@@ -146,6 +159,7 @@ class Finding:
     established: str
     effect: str
     localised: str
+    pairs: tuple = ()  # of Pair: the book's expressions or values and the right ones
 
 
 @store.register

@@ -100,9 +100,10 @@ SCHEMA = ("table", {
         "plots?": ("list", ("table", {"x": "str", "y": "str", "title": "str", "xlim?": RANGE, "ylim?": RANGE})),
         "outputs?": ("map", "str"),
     }),
+    # right: {printed expression's key: the right expression}, checked against the reference (checks.right_sides)
     "findings?": ("list", ("table", {"id": "str", "title": "str", "where": "str", "effect?": "str",
                                      "sources": ("list", "str"), "quantities": ("list", "str"),
-                                     "explanation": "str"})),
+                                     "explanation": "str", "right?": ("map", "str")})),
     # data_checks divides by the formula's value
     "data?": ("list", ("table", {"name": "str", "printed": "expr", "formula": "expr != 0", "where": "str",
                                  "tolerance": "number >= 0", "relation?": ("one of", "equal", "at most")})),
@@ -760,6 +761,9 @@ MEANINGS = {
                            "never an engine's or the reference's alone.",
     "findings[i].quantities": "The quantities it covers.",
     "findings[i].explanation": "The evidence: what is printed, what is right, by how much.",
+    "findings[i].right": "The right expression of a printed one the search of edits does not find, by its key in "
+                         "the book's module's PRINTED, in that module's symbols; the run checks it against the "
+                         "reference at the random states, and the errata typeset it beside the printed one.",
     "data": "The book's printed numbers against its own formulas.",
     "data[i].name": "The quantity's name in the report.",
     "data[i].printed": "The printed value.",

@@ -118,7 +118,7 @@ def _refuse(node, why=""):
     text = ast.unparse(node)
     text = text if len(text) <= 40 else text[:37] + "..."
     raise ValueError(f"cannot typeset `{text}`{why}: an expression has only numbers, names, + - * / @ **, .T, "
-                     f"one comparison, calls of functions and array([...])")
+                     f"comparisons, calls of functions and array([...])")
 
 
 class _Typesetter:
@@ -160,9 +160,9 @@ class _Typesetter:
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
             sign = "-" if isinstance(node.op, ast.USub) else "+"
             return sign + self.bracketed(node.operand, PRODUCT), SIGN
-        if isinstance(node, ast.Compare) and len(node.ops) == 1 and type(node.ops[0]) in COMPARISONS:
-            return (f"{self.text(node.left)} {COMPARISONS[type(node.ops[0])]} {self.text(node.comparators[0])}",
-                    0)
+        if isinstance(node, ast.Compare) and all(type(op) in COMPARISONS for op in node.ops):  # a <= x <= b too
+            return " ".join([self.text(node.left)] + [f"{COMPARISONS[type(op)]} {self.text(value)}"
+                                                      for op, value in zip(node.ops, node.comparators)]), 0
         if isinstance(node, ast.Attribute) and node.attr == "T":  # a transpose
             return f"{{{self.bracketed(node.value, ATOM)}}}^T", POWER
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and not node.keywords:

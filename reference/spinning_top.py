@@ -303,7 +303,7 @@ class Book:
     # The printed symbols' LaTeX (dyncheck.typeset): the book's varphi, theta, phi; {} takes the argument.
     LATEX = {"p": r"\varphi", "n": r"\theta", "dp": r"\dot{\varphi}", "dn": r"\dot{\theta}", "ds": r"\dot{\phi}",
              "ddp": r"\ddot{\varphi}", "ddn": r"\ddot{\theta}", "dds": r"\ddot{\phi}", "TxT": "T_x({})^T",
-             "TzT": "T_z({})^T"}
+             "TzT": "T_z({})^T", "CM_Ixx": "I^{CM}_{xx}", "CM_Iyy": "I^{CM}_{yy}", "CM_Izz": "I^{CM}_{zz}"}
 
     # The top's angular velocity (4) and acceleration (5) as printed in B2, turned into the inertial
     # frame by T_z(p)^T T_x(n)^T to meet the engines (whose body frame spins with the top).
@@ -316,11 +316,16 @@ class Book:
         ddp, ddn, dds = self.accelerations(t, q, v)
         return {"m": p["m"], "g": p["g"], "h": p["h"], "p": q[0], "n": q[1], "dp": v[0], "dn": v[1],
                 "ds": v[2], "ddp": ddp, "ddn": ddn, "dds": dds, "sin": np.sin, "cos": np.cos, "array": np.array,
-                "TxT": self._tx_t, "TzT": self._tz_t}
+                "TxT": self._tx_t, "TzT": self._tz_t, **dict(zip(("CM_Ixx", "CM_Iyy", "CM_Izz"), self._cm_inertias()))}
 
     # (7), the acceleration of the centre of mass in B2 (lost signs restored from Newton's rows (10)).
     PRINTED["a_CM"] = ("TzT(p) @ TxT(n) @ array([h*(2*dn*dp*cos(n) + ddp*sin(n)), h*(dp**2*cos(n)*sin(n) - ddn),"
                        " -h*(dp**2*sin(n)**2 + dn**2)])")
+
+    # Euler's Y2 row of (10) as printed (p. 81), its right side (its left side is 0), with the precession
+    # rate p' in the first term (finding 1.10-euler-Y2; printed_rows has it term by term).
+    PRINTED["Euler Y2 (1.10)"] = ("-dn*dp*CM_Izz + dn*dp*cos(n)*(CM_Ixx - CM_Izz + CM_Iyy + 2*m*h**2)"
+                                  " + ddp*sin(n)*(CM_Iyy + m*h**2)")
 
     def point_accelerations(self, t, q, v):
         names = self.symbols(t, np.asarray(q, float), np.asarray(v, float))

@@ -23,12 +23,12 @@ TOL = 1e-12  # the edited expression is the right one up to rounding of a few op
 def test_a_single_slip_is_found(printed, edit):
     found, tried, error = localise(printed, NAMESPACES, TARGET, TOL)
     assert error > 1e-3 and tried == len(edits(printed))
-    assert edit in [label for label, _ in found]
+    assert edit in [label for label, *_ in found]
 
 
 def test_two_slips_are_found_as_a_pair():
     found, _, _ = localise("2*sin(x) - x*y*cos(y) - 6*y", NAMESPACES, TARGET, TOL)
-    assert any("sign of `x * y * cos(y)`" in label and "`6 * y` / 2" in label for label, _ in found)
+    assert any("sign of `x * y * cos(y)`" in label and "`6 * y` / 2" in label for label, *_ in found)
 
 
 def test_an_unrelated_expression_is_reported_unexplained():

@@ -43,6 +43,7 @@ def test_every_printed_expression_renders(module, cls):
     ("A.T @ B", "{A}^T B"),
     ("sqrt(k/m)", r"\sqrt{\frac{k}{m}}"),
     ("Izz <= 2*Ixx", r"I_{zz} \le 2 I_{xx}"),
+    ("-0.8 <= theta2 <= 0.8", r"-0.8 \le \theta_{2} \le 0.8"),
 ])
 def test_latex(expression, expected):
     assert latex(expression) == expected
@@ -62,7 +63,7 @@ def test_a_module_table_overrides_the_defaults_and_takes_arguments():
     assert latex("d1**2", {"d1": r"\dot{\theta}_1"}) == r"\dot{\theta}_1^2"
 
 
-@pytest.mark.parametrize("expression", ["x[0]", "f(x=1)", "x if y else z", "'text'", "a < b < c", "lambda: 1",
+@pytest.mark.parametrize("expression", ["x[0]", "f(x=1)", "x if y else z", "'text'", "a < b in c", "lambda: 1",
                                         "sqrt(a, b)", "a +"])
 def test_unknown_syntax_is_refused_with_a_clear_message(expression):
     with pytest.raises(ValueError, match="cannot typeset"):
@@ -85,3 +86,23 @@ def test_unknown_syntax_is_refused_with_a_clear_message(expression):
 ])
 def test_marked_boxes_exactly_what_differs(printed, right, expected):
     assert marked(printed, right) == expected
+
+
+def test_the_errata_show_a_printed_and_a_right_side_for_every_finding(results, tmp_path):
+    """Rendered from saved results by `report --from`: every finding has at least one typeset pair, each
+    display formula balanced, and the case file's right expressions pass their rows."""
+    from dyncheck.cli import main
+    from dyncheck.report import write_reports
+    with_findings = [result for result in results.values() if result.findings]
+    write_reports(with_findings, tmp_path / "full")
+    assert main(["report", "--from", str(tmp_path / "full" / "results"), "--out", str(tmp_path / "again")]) == 0
+    errata = (tmp_path / "again" / "errata.md").read_text()
+    for finding in [f for result in with_findings for f in result.findings]:
+        section = errata.split(f"## {finding.id}\n", 1)[1].split("\n## ", 1)[0]
+        assert "*As printed*" in section and "*Right*" in section, finding.id
+        formulas = section.split("$$\n")[1::2]
+        assert all(formula.count("{") == formula.count("}") for formula in formulas), finding.id
+        pairs = zip(formulas[::2], formulas[1::2])  # as printed, right: what differs boxed on one side or both
+        assert all(r"\boxed" in printed + right for printed, right in pairs), finding.id
+    rights = [r for result in with_findings for r in result.rows if "finding's right" in r.sources]
+    assert len(rights) == 2 and all(r.status.ok for r in rights), rights
