@@ -6,6 +6,7 @@ A figure is drawn for print: at most `TEXT_WIDTH` wide (an A4 page's text width)
 byte-for-byte the same when drawn again from the same data. On a page every figure has a caption
 under it (`embed`)."""
 
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -58,22 +59,32 @@ def save(fig, path):
     edge) is refused with a ValueError naming the file and what breaks the rule."""
     path = Path(path)
     try:
-        check(fig, path)
-        fig.savefig(path, dpi=DPI, metadata={"Software": None})
+        check_size(fig, path)
+        fig.savefig(path, dpi=DPI, metadata={"Software": None})  # lays the figure out
+        fig.set_layout_engine("none")  # the check and the twin keep that layout: laid out once, the same in all
+        try:
+            check_text(fig, path)
+        except ValueError:
+            path.unlink()
+            raise
         fig.savefig(path.with_suffix(".pdf"), metadata={"CreationDate": None, "Creator": None, "Producer": None})
     finally:
         plt.close(fig)
 
 
-def check(fig, path):
-    """ValueError unless `fig` prints at A4 text width with legible, uncut text (see `save`)."""
+def check_size(fig, path):
+    """ValueError unless `fig` fits the page's text width and height."""
     width, height = fig.get_size_inches()
     if width > TEXT_WIDTH + 1e-9:
         raise ValueError(f"{path}: the figure is {width:g} in wide, more than the page's text width {TEXT_WIDTH:g} in")
     if height > TEXT_HEIGHT + 1e-9:
         raise ValueError(f"{path}: the figure is {height:g} in tall, more than the page's {TEXT_HEIGHT:g} in")
+
+
+def check_text(fig, path):
+    """ValueError unless every text of `fig`, as last drawn, is at least MIN_FONT and inside the figure."""
+    fig.draw_without_rendering()  # at the figure's own resolution, which the extents below are in
     renderer = fig.canvas.get_renderer()
-    fig.draw_without_rendering()  # lays the figure out (constrained layout) as saving will
     canvas = fig.bbox.padded(1.0)  # a pixel of slack for rounding
     # Tick labels outside the view are not drawn: only their size counts (the list keeps them, so ids hold).
     ticks = [label for ax in fig.axes for axis in ax._axis_map.values()
@@ -88,6 +99,12 @@ def check(fig, path):
         box = text.get_window_extent(renderer)
         if id(text) not in tick_ids and not (canvas.contains(box.x0, box.y0) and canvas.contains(box.x1, box.y1)):
             raise ValueError(f"{path}: the text {text.get_text()!r} runs off the figure's edge")
+
+
+def title(name, what):
+    """A figure's title: the example it belongs to (its heading, "1.8.3 Spring-mass pendulum ..."), then
+    what the figure shows, on further lines when both would not fit the page's width."""
+    return f"{name}: {what}" if len(name) + len(what) < 80 else textwrap.fill(f"{name}:", 80) + "\n" + textwrap.fill(what, 80)
 
 
 def panels(rows=1, cols=1, height=3.6, **options):
@@ -143,11 +160,18 @@ def embed(path, alt, caption):
             f"*Figure: {caption.strip()}* ([vector PDF]({path.with_suffix('.pdf').as_posix()}))", ""]
 
 
+def along(source, points):
+    """SOURCE_STYLE[source] for a curve of `points` points: its markers every tenth of the points (a noisy
+    curve's length would crowd markers spaced by distance), each source's shifted as in SOURCE_STYLE."""
+    start, every = SOURCE_STYLE[source]["markevery"]
+    return {**SOURCE_STYLE[source], "markevery": (int(start * points), max(1, int(every * points)))}
+
+
 def method_style(label):
     """Colour and marker of the method a label starts with ("RK4 dt = ..."), {} for none."""
     method = max((m for m in METHOD_COLOUR if label == m or label.startswith(m + " ")), key=len, default=None)
     return {} if method is None else dict(color=METHOD_COLOUR[method], marker=METHOD_MARKER[method])
 
 
-__all__ = ["plt", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check", "embed", "panels", "legend_below",
-           "unique_handles", "thin", "log_range", "SOURCE_STYLE", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]
+__all__ = ["plt", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check_size", "check_text", "embed", "title", "panels", "legend_below",
+           "unique_handles", "thin", "log_range", "SOURCE_STYLE", "along", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]
