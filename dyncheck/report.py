@@ -16,6 +16,7 @@ import os
 import re
 import shutil
 import sys
+import textwrap
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -30,7 +31,7 @@ from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, con
                               inside_or_outside, load_result, reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
 from dyncheck.style import SOURCE_STYLE as STYLE
-from dyncheck.style import plt
+from dyncheck.style import TEXT_HEIGHT, TEXT_WIDTH, along, embed, legend_below, log_range, panels, plt, save, thin, title
 
 ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
 
@@ -167,14 +168,25 @@ def trajectories(result):
     return out
 
 
+def titled(case, what):
+    return title(heading(case.spec), what)
+
+
+def named(words, source):
+    """A source as the case's pages name it (OWN_WORDS for a case of one derivation; the engines by name)."""
+    return words.get(source, {"mujoco": "MuJoCo", "pinocchio": "Pinocchio"}.get(source, source))
+
+
 def figure_scene(result, case, path, *, words):
+    """The scene at t = 0 and the path of each point mass along the tight run; returns the caption."""
     tight = trajectories(result)["tight reference"]
     scene = result.drawings["scene"]
     origins, parents = scene["origins"], scene["parents"]
     paths = np.array([tight[[f"{body}_{axis}" for axis in "xyz"]].to_numpy() for body in case.scene["paths"]])
     paths = paths.reshape(len(case.scene["paths"]), len(tight), 3).transpose(1, 0, 2)  # (time, body, xyz)
+    paths = thin(paths)
     planar = np.ptp(np.concatenate([paths[..., 2].ravel(), origins[:, 2]])) < 1e-12
-    fig = plt.figure(figsize=(6.4, 5.2))
+    fig = plt.figure(figsize=(TEXT_WIDTH, 4.6))
     ax = fig.add_subplot(projection=None if planar else "3d")
     dims = 2 if planar else 3
     chain = np.vstack([np.zeros(3), origins])  # body 0 is the world origin
@@ -182,11 +194,11 @@ def figure_scene(result, case, path, *, words):
         seg = chain[[parent, i + 1], :dims].T
         ax.plot(*seg, color="0.3", lw=2)
     ax.scatter(*chain[:, :dims].T, color="0.3", s=12)
+    lines = ("-", "--", ":", "-.")  # one per body's path: told apart in grey
     for b, name in enumerate(case.scene["paths"]):
         arm = np.vstack([origins[scene["path_origins"][b]], paths[0, b]])  # body origin to its point mass
         ax.plot(*arm[:, :dims].T, color="0.3", lw=2)
-        ax.plot(*paths[:, b, :dims].T, lw=0.6,
-                label=f"{name} ({words.get('tight reference', 'tight reference')}, 0-{tight.index[-1]:g} s)")
+        ax.plot(*paths[:, b, :dims].T, lw=0.8, ls=lines[b % len(lines)], label=f"path of {name}")
         ax.scatter(*paths[0, b, :dims], s=40, marker="o", zorder=5)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -194,101 +206,152 @@ def figure_scene(result, case, path, *, words):
         ax.set_aspect("equal")
     else:
         ax.set_zlabel("z [m]")
-    ax.set_title(f"{heading(case.spec)}\nthe scene at t = 0 (grey) and the path in space", fontsize=9)
-    if case.scene["paths"]:
-        ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    ax.set_title(titled(case, "the scene at t = 0 and the path in space"))
+    legend_below(fig)
+    save(fig, path)
+    moving = ", ".join(case.scene["paths"])
+    return (f"The bodies and joints at t = 0 (grey lines, the dots their origins)"
+            + (f" and the path of {moving} over 0-{tight.index[-1]:g} s"
+               f" ({named(words, 'tight reference')}); axes in metres, {'the plane of motion' if planar else 'in space'}."
+               if moving else "; axes in metres."))
 
 
-def figure_series(result, columns, ylabel, title, path, *, words, log_error=False):
-    """Columns over time from every source, overlaid; with log_error, |source - tight reference|.  `words`:
-    the sources' names as the case's pages say them (dyncheck.results.OWN_WORDS for a case of one derivation)."""
+def figure_series(result, case, columns, ylabel, what, path, *, words, log_error=False):
+    """Columns over time from every source, overlaid, a panel each (two columns of panels beyond three);
+    with log_error, |source - tight reference| on log axes whose range follows the data.  `words`: the
+    sources' names as the case's pages say them.  Returns each source's largest departure from the tight
+    reference, {source: (departure, column)}, for the caption."""
     runs = trajectories(result)
     tight = runs["tight reference"]
-    fig, axes = plt.subplots(len(columns), 1, figsize=(7.5, 2.3 * len(columns)), sharex=True, squeeze=False)
-    for ax, column in zip(axes[:, 0], columns):
-        for label, run in runs.items():
-            if log_error:
-                if label == "tight reference":
-                    continue
-                ax.semilogy(run.index, (run[column] - tight[column]).abs() + 1e-300, label=words.get(label, label),
-                            **{**STYLE[label], "ls": "-", "lw": 0.8, "alpha": 0.8})
-            else:
-                ax.plot(run.index, run[column], label=words.get(label, label), **STYLE[label])
-        ax.set_ylabel(ylabel(column), fontsize=8)
-        ax.grid(alpha=0.3)
+    cols = 1 if len(columns) <= 3 else 2
+    rows = -(-len(columns) // cols)
+    fig, axes = panels(rows, cols, min(TEXT_HEIGHT - 0.5, 1.0 + 1.75 * rows), sharex=True)
+    worst = {}
+    for ax, column in zip(axes.flat, columns):
+        errors = {label: (run[column] - tight[column]).abs() for label, run in runs.items() if label != "tight reference"}
+        for label, error in errors.items():
+            if error.max() > worst.get(label, (-1.0, None))[0]:
+                worst[label] = (error.max(), column)
         if log_error:
-            ax.set_ylim(bottom=1e-16)
-    axes[0, 0].legend(fontsize=7, ncol=4, loc="lower left", bbox_to_anchor=(0, 1.0), frameon=False)
-    fig.suptitle(title, fontsize=9)
-    axes[-1, 0].set_xlabel("t [s]")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+            errors = {label: thin(error) for label, error in errors.items()}
+            low, high = log_range(list(errors.values()))
+            for label, error in errors.items():
+                ax.semilogy(error.index, np.maximum(error, low), label=named(words, label), **along(label, len(error)))
+            ax.set_ylim(low, high)
+        else:
+            for label, run in runs.items():
+                run = thin(run[column])
+                ax.plot(run.index, run, label=named(words, label), **along(label, len(run)))
+        ax.set_ylabel(ylabel(column))
+    for ax in axes.flat[len(columns):]:
+        ax.set_axis_off()
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.suptitle(titled(case, what))
+    legend_below(fig, ncol=5)
+    save(fig, path)
+    return worst
 
 
-def figure_energy(result, path, *, words):
+def departures(worst, unit, words):
+    """"book 0.12 rad (psi), MuJoCo 3e-09 rad (psi)": each source's largest departure in words."""
+    return ", ".join(f"{named(words, source)} {error:.2g} {unit(column)} ({column})"
+                     for source, (error, column) in worst.items())
+
+
+def figure_energy(result, case, path, *, words):
+    """The energy balance along the run (top) and each source's miss of it (bottom); returns the caption."""
     # A derivation may define no energy: its runs have none, and the balance drawn is the first engine's.
-    runs = {label: run for label, run in trajectories(result).items() if {"energy", "work"} <= set(run)}
+    runs = {label: thin(run) for label, run in trajectories(result).items() if {"energy", "work"} <= set(run)}
     driven = any(run["work"].abs().max() > 0 for run in runs.values())  # from the results: no scene file read
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True)
+    fig, axes = panels(2, 1, 5.0, sharex=True)
+    top, bottom = axes[:, 0]
     shown = next(iter(runs), None)
     if shown is None:
-        top.text(0.5, 0.5, "no run has an energy: the derivation defines none and the engines' runs failed",
-                 ha="center", transform=top.transAxes, fontsize=8)
+        top.text(0.5, 0.5, "no run has an energy: the derivation defines none\nand the engines' runs failed",
+                 ha="center", transform=top.transAxes)
     else:
         balance = runs[shown]
-        top.plot(balance.index, balance["energy"] - balance["energy"].iloc[0], label="E(t) - E(0)", **STYLE[shown])
+        top.plot(balance.index, balance["energy"] - balance["energy"].iloc[0], label="E(t) - E(0)",
+                 **{**STYLE[shown], "marker": None})
         if driven:
             top.plot(balance.index, balance["work"], label="W(t), work of the drives, forces and dampers",
-                     color="tab:purple", lw=1)
+                     color="tab:purple", lw=1, ls="--")
         top.set_title("energy balance" + (": E(t) - E(0) = W(t)" if driven else ": E(t) = E(0)")
-                      + f" ({words.get(shown, shown)})", fontsize=9)
-        top.legend(fontsize=7, loc="upper right", framealpha=0.9)
-    top.set_ylabel("[J]")
-    top.grid(alpha=0.3)
-    for label, run in runs.items():
-        bottom.semilogy(run.index, energy_residual(run).abs() + 1e-300, label=words.get(label, label),
-                        **{**STYLE[label], "ls": "-", "lw": 0.8})
-    bottom.set_ylim(bottom=1e-16)
-    bottom.set_ylabel("|E(t) - E(0) - W(t)| [J]", fontsize=8)
+                      + f" ({named(words, shown)})")
+        top.legend(loc="lower left", bbox_to_anchor=(0, 1.12), ncol=2, frameon=False)
+    top.set_ylabel("energy [J]")
+    misses = {label: energy_residual(run).abs() for label, run in trajectories(result).items() if label in runs}
+    low, high = log_range(list(misses.values()))
+    for label, miss in misses.items():
+        miss = thin(miss)
+        bottom.semilogy(miss.index, np.maximum(miss, low), label=named(words, label), **along(label, len(miss)))
+    bottom.set_ylim(low, high)
+    bottom.set_ylabel("|E(t) - E(0) - W(t)| [J]")
     bottom.set_xlabel("t [s]")
-    bottom.legend(fontsize=7, ncol=4, loc="lower left", bbox_to_anchor=(0, 1.0), frameon=False)
-    bottom.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    fig.suptitle(titled(case, "energy along the run"))
+    legend_below(fig, *bottom.get_legend_handles_labels(), ncol=5)
+    save(fig, path)
+    if shown is None:
+        return "No energy: the derivation defines none and the engines' runs failed."
+    return (f"Top: the change of the total energy E(t) - E(0) ({named(words, shown)}'s run)"
+            + (", and the work W(t) done on the system, which it must equal" if driven else ", which must stay 0")
+            + ". Bottom: how far each source's run misses that balance, in joules; the largest miss: "
+            + ", ".join(f"{named(words, label)} {miss.max():.2g} J" for label, miss in misses.items()) + ".")
+
+
+def state_unit(case, column):
+    """The unit of a state column: its coordinate's, per second for a rate."""
+    units = dict(zip(case.coords, case.spec["coord_units"]))
+    return units[column[:-len("_rate")]] + "/s" if column.endswith("_rate") else units[column]
 
 
 def reaction_unit(case, name):
     return "N m" if case.scene["reactions"][name].get("quantity") == "moment" else "N"
 
 
-def figure_pointwise(result, path):
-    """Per random state, each source's deviation from `reference`, relative to the quantity's scale."""
+POINT_SOURCES = ("book", "mujoco", "pinocchio")  # the sources whose deviation from the reference is drawn
+
+
+def figure_pointwise(result, case, path, *, words):
+    """Per random state, each source's deviation from `reference`, relative to the quantity's scale, in a
+    grid of at most four panels across; returns the caption."""
     values = result.sample["values"]
     quantities = list(values["reference"])
-    fig, axes = plt.subplots(1, len(quantities), figsize=(2.3 * len(quantities), 3.2), sharey=True)
-    for ax, quantity in zip(np.atleast_1d(axes), quantities):
+    tolerance = case.tolerance["pointwise"]["value"]
+    deviations = {}
+    for quantity in quantities:
         ref = values["reference"][quantity]
         scale = np.max(np.abs(ref)) or 1.0
-        for i, source in enumerate(("book", "mujoco", "pinocchio")):
-            if source not in values:  # its evaluation failed (a failing row says where)
-                continue
-            dev = np.abs(values[source][quantity] - ref) / scale
-            ax.semilogy(np.full(len(dev), i) + np.linspace(-0.25, 0.25, len(dev)), dev + 1e-18, ".",
-                        ms=3, color=STYLE[source]["color"])
-        ax.axhline(1e-9, color="k", lw=0.8, ls="--")
-        ax.set_xticks(range(3), ["book", "mujoco", "pinocchio"], rotation=45, fontsize=7)
+        deviations[quantity] = {source: np.abs(values[source][quantity] - ref) / scale
+                                for source in POINT_SOURCES if source in values}  # absent: its evaluation failed
+    low, high = log_range([d for by_source in deviations.values() for d in by_source.values()] + [[tolerance]])
+    cols = min(4, len(quantities))
+    rows = -(-len(quantities) // cols)
+    fig, axes = panels(rows, cols, min(TEXT_HEIGHT - 0.5, 1.4 + 1.25 * rows), sharex=True, sharey=True)
+    for ax, quantity in zip(axes.flat, quantities):
+        for i, (source, dev) in enumerate(deviations[quantity].items()):
+            style = STYLE[source]
+            ax.semilogy(np.full(len(dev), i) + np.linspace(-0.3, 0.3, len(dev)), np.maximum(dev, low), ls="none",
+                        marker=style["marker"], ms=3, mfc=style.get("mfc"), color=style["color"],
+                        label=named(words, source))
+        ax.axhline(tolerance, color="k", lw=0.8, ls="--")
+        ax.set_xticks([])
+        ax.set_xlim(-0.6, len(POINT_SOURCES) - 0.4)
+        ax.set_ylim(low, high)
         ax.set_title(quantity, fontsize=8)
-        ax.set_ylim(1e-18, 10)
-    np.atleast_1d(axes)[0].set_ylabel("|source - reference| / max |reference|", fontsize=8)
-    fig.suptitle(f"pointwise, {len(result.sample['states'])} random states (dashed: tolerance)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    for ax in axes.flat[len(quantities):]:
+        ax.set_axis_off()
+    fig.supylabel("relative deviation from the reference [1]" if rows > 1 else "relative deviation [1]", fontsize=9)
+    fig.suptitle(titled(case, f"pointwise, {len(result.sample['states'])} random states"))
+    legend_below(fig, ncol=3)
+    save(fig, path)
+    worst = {source: max(((d[source].max(), q) for q, d in deviations.items() if source in d), default=None)
+             for source in POINT_SOURCES}
+    return (f"Each source's deviation from the reference at each of the {len(result.sample['states'])} random"
+            " states, |source - reference| / max |reference| over the states, one panel per quantity (marker and colour per"
+            f" source; exact agreement on the bottom edge); dashed: the tolerance {tolerance:g}. The largest: "
+            + ", ".join(f"{named(words, s)} {w[0]:.1e} ({w[1]})" for s, w in worst.items() if w is not None) + ".")
 
 
 def report_namespaces(result, case):
@@ -296,48 +359,85 @@ def report_namespaces(result, case):
     return {label: namespace(case, run) for label, run in trajectories(result).items()}
 
 
-def figure_extra(spaces, item, path):
-    """One of a case's own figures: y against x for every source, overlaid."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+def figure_extra(spaces, case, item, path, *, words):
+    """One of a case's own figures: y against x for every source, overlaid; returns the caption."""
+    fig, axes = panels(1, 1, 4.0)
+    ax = axes[0, 0]
     for label, names in spaces.items():
-        x, y = (evaluate(item[k], names) for k in ("x", "y"))
-        ax.plot(x, y, label=label, **STYLE[label])
+        x, y = (thin(np.asarray(evaluate(item[k], names), dtype=float)) for k in ("x", "y"))
+        ax.plot(x, y, label=named(words, label), **along(label, len(x)))
     ax.set_xlabel(item["xlabel"])
     ax.set_ylabel(item["ylabel"])
     if item.get("ylim"):
         ax.set_ylim(*item["ylim"])
     if item.get("equal"):
         ax.set_aspect("equal", adjustable="datalim")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=4, loc="lower left", bbox_to_anchor=(0, 1.0), frameon=False)
-    fig.suptitle(item["title"], fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    fig.suptitle(titled(case, item["title"]))
+    legend_below(fig, ncol=5)
+    save(fig, path)
+    return item.get("caption", item["title"]) + " Every source's run overlaid (line style, marker and colour per source)."
+
+
+PART = 0.05  # a program's run has left the exact motion where it is off by this fraction of that motion's range
 
 
 def figure_program(result, case, path):
-    """The book's program figures: left from the listing's run, right from the corrected equations."""
+    """The book's program figures: left from the listing's run, right from the reference's equations
+    integrated tightly (the exact motion, or the corrected one where the listing's formulas are wrong);
+    returns the caption."""
     runs = result.program
     plots = case.spec["program"]["plots"]
-    sides = (("listing", runs["listing"], "tab:red"),
-             ("corrected", runs["tight"], "black"))
-    fig, axes = plt.subplots(len(plots), 2, figsize=(9.0, 2.8 * len(plots)), squeeze=False)
+    right = ("corrected equations (the reference's), integrated tightly" if listing_formulas_wrong(result)
+             else "exact motion (the reference's equations, integrated tightly)")
+    sides = (("the book's program", runs["listing"], "tab:red", "--"),
+             (textwrap.fill(right, 34), runs["tight"], "black", "-"))
+    fig, axes = panels(len(plots), 2, min(TEXT_HEIGHT - 0.4, 0.9 + 2.0 * len(plots)))
     for row, item in enumerate(plots):
-        for col, (label, run, color) in enumerate(sides):
+        for col, (label, run, color, line) in enumerate(sides):
             names = namespace(case, run)
             ax = axes[row, col]
             x, y = evaluate(item["x"], names), evaluate(item["y"], names)
-            ax.plot(x, y, color=color, lw=0.8)
+            ax.plot(x, y, color=color, ls=line, lw=0.9)
             book_axes(ax, item, x, y)
-            ax.set_title(f"{item['title']}: {label}", fontsize=8)
-            ax.set_xlabel("t [s]" if item["x"] == "t" else item["x"], fontsize=8)
-            ax.grid(alpha=0.3)
-    fig.suptitle(f"{case.section}: the book's figures from its program ({runs['integrator']}, dt = {runs['dt']:.3g} s)"
-                 " and from the corrected equations; dashed: the book's axes", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+            ax.set_title(item["title"], fontsize=8)
+            ax.set_xlabel(plot_label(item, "x"), fontsize=8)
+            ax.set_ylabel(plot_label(item, "y"), fontsize=8)
+    for ax, (label, *_) in zip(axes[0], sides):
+        ax.set_title(f"{label}\n{ax.get_title()}", fontsize=8)
+    fig.suptitle(titled(case, f"the book's figures, from its program ({runs['integrator']}, dt = {runs['dt']:.3g} s)"
+                              " and from the equations"))
+    save(fig, path)
+    return (f"The book's figures redrawn: left from a line-by-line transcription of its program ({runs['integrator']},"
+            f" dt = {runs['dt']:.3g} s, red dashed), right from the {right} (black); the dashed grey frame is the"
+            f" book's printed axes. {program_parting(result, case, plots)}")
+
+
+def plot_label(item, axis):
+    """A program plot's axis label (program.plots[i].xlabel, ylabel; see dyncheck.schema for the defaults)."""
+    default = ("time [s]" if item["x"] == "t" else item["x"]) if axis == "x" else item["title"]
+    return item.get(f"{axis}label", default)
+
+
+def listing_formulas_wrong(result):
+    """Whether a registered finding says the listing's formulas are wrong (not only its integrator): a
+    program row with a finding other than the listing against the tight reference."""
+    return any(r.check == "program" and r.finding and r.comparison != "program vs tight reference" for r in result.rows)
+
+
+def program_parting(result, case, plots):
+    """In words, when the program's run leaves the exact motion in its first plot against time."""
+    item = next((item for item in plots if item["x"] == "t"), None)
+    if item is None:
+        return ""
+    listing, tight = (namespace(case, result.program[key]) for key in ("listing", "tight"))
+    t, y = (np.asarray(evaluate(item[k], listing), dtype=float) for k in ("x", "y"))
+    t_exact, y_exact = (np.asarray(evaluate(item[k], tight), dtype=float) for k in ("x", "y"))
+    apart = np.abs(y - np.interp(t, t_exact, y_exact)) > PART * np.ptp(y_exact)
+    what = plot_label(item, "y")
+    if not apart.any():
+        return f"In {what} the program stays within {PART:.0%} of the exact motion's range over its {t[-1]:g} s."
+    return (f"In {what} the program leaves the exact motion (by more than {PART:.0%} of its range) after"
+            f" {t[np.argmax(apart)]:.3g} s.")
 
 
 def book_axes(ax, item, x, y):
@@ -465,21 +565,38 @@ def scene_table(case):
 def write_case_page(result, case, tmp, animations=True):
     rows = result.rows
     name = case.name
-    coord_unit = dict(zip(case.coords, case.spec["coord_units"]))
     words = OWN_WORDS if case.one_derivation else {}
-    plots = {  # figure -> how to draw it; the coordinate plots only where there are coordinates
+    unit = lambda column: state_unit(case, column)
+    force = lambda column: reaction_unit(case, column)
+    tight = named(words, "tight reference")
+    run_of = initial_words(case)
+
+    def coordinates(path):
+        worst = figure_series(result, case, case.coords, lambda c: f"{c} [{unit(c)}]", "coordinates over time",
+                              path, words=words)
+        return (f"Each coordinate along the run of {run_of}, every source overlaid (line style, marker and"
+                f" colour per source). Largest departure from the {tight}: {departures(worst, unit, words)}.")
+
+    def errors(path):
+        worst = figure_series(result, case, state_columns(case), lambda c: f"|{c} error| [{unit(c)}]",
+                              f"error against the {tight}", path, words=words, log_error=True)
+        return (f"How far each source's run of {run_of} is from the {tight} ({result.runs['reference'].twin.attrs['method']},"
+                " a tighter tolerance), each coordinate and rate on a log scale that follows the data; exact"
+                f" agreement lies on the bottom edge. Largest: {departures(worst, unit, words)}.")
+
+    def reactions(path):
+        worst = figure_series(result, case, list(case.reaction_names), lambda c: f"{c} [{force(c)}]",
+                              "reactions over time", path, words=words)
+        return (f"Each reaction along the run of {run_of}, every source overlaid. Largest departure from the"
+                f" {tight}: {departures(worst, force, words)}.")
+
+    plots = {  # figure -> how to draw it, returning its caption; the coordinate plots only where there are coordinates
         "scene": lambda path: figure_scene(result, case, path, words=words),
-        "coordinates": lambda path: figure_series(result, state_columns(case)[::2],
-                                                  lambda c: f"{c} [{coord_unit[c]}]",
-                                                  "coordinates over time, every source overlaid", path, words=words),
-        "errors": lambda path: figure_series(result, state_columns(case), lambda c: f"|{c} error|",
-                                             "error against the tight solution" if words else
-                                             "error against the tight reference solution", path, words=words, log_error=True),
-        "energy": lambda path: figure_energy(result, path, words=words),
-        "reactions": lambda path: figure_series(result, list(case.reaction_names),
-                                                lambda c: f"{c} [{reaction_unit(case, c)}]",
-                                                "reactions over time, every source", path, words=words),
-        "pointwise": lambda path: figure_pointwise(result, path),
+        "coordinates": coordinates,
+        "errors": errors,
+        "energy": lambda path: figure_energy(result, case, path, words=words),
+        "reactions": reactions,
+        "pointwise": lambda path: figure_pointwise(result, case, path, words=words),
     }
     if "reference" not in result.sample["values"]:  # nothing to measure the deviations from
         del plots["pointwise"]
@@ -496,11 +613,11 @@ def write_case_page(result, case, tmp, animations=True):
     values = case.spec["report"].get("values") if along_runs else None
     spaces = report_namespaces(result, case) if extras or values else {}
     for key, item in extras.items():
-        plots[key] = lambda path, item=item: figure_extra(spaces, item, path)
-    figures = {}
+        plots[key] = lambda path, item=item: figure_extra(spaces, case, item, path, words=words)
+    figures, captions = {}, {}
     for kind, draw in plots.items():
         figures[kind] = f"figures/{name}_{kind}.png"
-        draw(tmp / figures[kind])
+        captions[kind] = draw(tmp / figures[kind])
 
     params = pd.DataFrame([{"parameter": p.name, "value": f"{p.value:.10g}", "unit": p.unit,
                             "allowed": p.allowed,
@@ -530,8 +647,7 @@ def write_case_page(result, case, tmp, animations=True):
         "",
         " ".join(case.prose(case.spec["summary"], "summary").split()),
         "",
-        f"![scene]({figures['scene']})" if "scene" in figures else "",
-        "",
+        *(embed(figures["scene"], "scene", captions["scene"]) if "scene" in figures else ["", ""]),
         "## Parameters",
         "",
         markdown_table(params),
@@ -592,7 +708,7 @@ def write_case_page(result, case, tmp, animations=True):
     lines += animation_lines + vibration_lines + sections + [
         "## Figures",
         "",
-        *[f"![{kind}]({path})\n" for kind, path in figures.items() if kind != "scene"],
+        *[line for kind, path in figures.items() if kind != "scene" for line in embed(path, kind, captions[kind])],
         "## Tolerances and why",
         "",
     ]
@@ -653,7 +769,7 @@ def write_timing_page(result, case, tmp):
         csv, chart = (f"data/{case.name}_work_precision_timing.csv",
                       f"figures/{case.name}_work_precision_timing.png")
         work_precision.write_csv(frame, tmp / csv, timing=True)
-        work_precision.figure(frame, case, tmp / chart, cost="wall")
+        wall_caption = work_precision.figure(frame, case, tmp / chart, cost="wall")
         files += [csv, chart]
         best = work_precision.cheapest(frame, cost="wall")
         labels = {work_precision.point_label(r): r for _, r in frame.iterrows()}
@@ -671,7 +787,7 @@ def write_timing_page(result, case, tmp):
                   " time: the integration alone, the median of repeated runs (quick runs are repeated, as the"
                   " case file's `work_precision.repeat` says), the bars from the fastest to the slowest.  "
                   + work_precision.WALL_NOTE, "",
-                  f"![work-precision, wall time]({chart})", "",
+                  *embed(chart, "work-precision, wall time", wall_caption),
                   "Which method reaches each accuracy level (relative trajectory error) in the least wall time:", "",
                   markdown_table(table), "", f"The rows behind the chart: [{csv}]({csv}).", ""]
     if studies and studies["stability"]:
@@ -710,7 +826,7 @@ def study_sections(result, case, tmp):
         frame = sweep_in_words(studies["work_precision"], case)
         csv, chart = f"data/{case.name}_work_precision.csv", f"figures/{case.name}_work_precision.png"
         work_precision.write_csv(frame, tmp / csv)
-        work_precision.figure(frame, case, tmp / chart)
+        caption = work_precision.figure(frame, case, tmp / chart)
         files += [csv, chart]
         reference = frame.attrs["reference"]
         unstable = frame[frame["status"] == "unstable"]
@@ -725,7 +841,7 @@ def study_sections(result, case, tmp):
                   f" {solution} by {reference['label']}.  Error is the largest deviation of any"
                   " coordinate or rate, relative to its largest magnitude; the rows behind the chart are in"
                   f" [{csv}]({csv}).  {work_precision.EVALUATIONS_NOTE}", "",
-                  f"![work-precision]({chart})", "",
+                  *embed(chart, "work-precision", caption),
                   "Which method is cheapest (fewest evaluations) at each accuracy level (relative trajectory"
                   f" error); in wall time on the [timing page]({timing_page_name(case)}):", "",
                   markdown_table(best.rename(columns={"runner_up": "runner-up",
@@ -748,12 +864,12 @@ def study_sections(result, case, tmp):
         lines += ["## Stability: where methods fail", ""]
         for study in studies["stability"]:
             chart = f"figures/{case.name}_{study.study}.png"
-            stability.figure(case, study, tmp / chart)
+            caption = stability.figure(case, study, tmp / chart)
             if not (tmp / chart).is_file():  # a case's own figure function that drew nothing
                 raise ValueError(f"{case.file}: stability study {study.study}: its figure function wrote no {chart}")
             files.append(chart)
             lines += [f"### {study.title}", "", *[f"- {sentence}" for sentence in study.findings], "",
-                      f"![{study.study}]({chart})", "",
+                      *embed(chart, study.study, caption),
                       f"*How:* {study.why}", "",
                       f"<details><summary>The numbers ({len(study.table)} rows)</summary>", "",
                       markdown_table(study.table), "", "</details>", ""]
@@ -842,10 +958,15 @@ def write_errata(tmp, cases):
     if programs:
         lines += ["## The book's programs: its figures redrawn", "",
                   "Each figure the book draws from a program, from a line-by-line transcription of that"
-                  " program (left) and from the corrected equations integrated tightly (right), on the"
+                  " program (left) and from the reference's equations integrated tightly (right), on the"
                   " book's axes.", ""]
-        lines += [f"### {c['section']} ([{c['case']}]({c['case']}.md))\n\n![program](figures/{c['case']}_program.png)\n"
-                  for c in programs]
+        for c in programs:
+            lines += [f"### {c['section']} ([{c['case']}]({c['case']}.md))", "",
+                      *embed(f"figures/{c['case']}_program.png", "program",
+                             f"The book's figures of {c['section']} redrawn from its program (left, red dashed) and from"
+                             " the reference's equations integrated tightly (right, black), each panel titled as the"
+                             " book's; the dashed grey frame is the book's printed axes. The case page says when the"
+                             " program leaves that motion.")]
     (tmp / "errata.md").write_text("\n".join(lines))
     return "errata.md"
 

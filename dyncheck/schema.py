@@ -72,7 +72,7 @@ SCHEMA = ("table", {
         "stop?": "str",
         "values?": ("map", ("table", {"expression": "str", "unit": "str", "about": "str"})),
         "figures?": ("map", ("table", {"x": "str", "y": "str", "title": "str", "xlabel": "str", "ylabel": "str",
-                                       "xlim?": RANGE, "ylim?": RANGE, "equal?": "bool"})),
+                                       "caption?": "str", "xlim?": RANGE, "ylim?": RANGE, "equal?": "bool"})),
     }),
     # what the case page's animation shows beside the motion (dyncheck/animation.py)
     "animation?": ("table", {"program?": ("one of", "beside", "ghost"),
@@ -97,7 +97,8 @@ SCHEMA = ("table", {
     }),
     "program?": ("table", {
         "figures?": ("map", ("table", {"expression": "str", "range": RANGE, "where": "str"})),
-        "plots?": ("list", ("table", {"x": "str", "y": "str", "title": "str", "xlim?": RANGE, "ylim?": RANGE})),
+        "plots?": ("list", ("table", {"x": "str", "y": "str", "title": "str", "xlabel?": "str", "ylabel?": "str",
+                                     "xlim?": RANGE, "ylim?": RANGE})),
         "outputs?": ("map", "str"),
     }),
     # right: {printed expression's key: the right expression}, checked against the reference (checks.right_sides)
@@ -668,6 +669,7 @@ MEANINGS = {
     "report.figures.<name>.title": "The figure's title.",
     "report.figures.<name>.xlabel": "The x axis's label.",
     "report.figures.<name>.ylabel": "The y axis's label.",
+    "report.figures.<name>.caption": "What the figure shows and what to see in it, under it on the page.  Absent: its title.",
     "report.figures.<name>.xlim": "The x axis's range.  Absent: the data's.",
     "report.figures.<name>.ylim": "The y axis's range.  Absent: the data's.",
     "report.figures.<name>.equal": "true: the same scale on both axes.",
@@ -749,6 +751,8 @@ MEANINGS = {
     "program.plots[i].x": f"The abscissa: {ALONG_RUN}.",
     "program.plots[i].y": f"The ordinate: {ALONG_RUN}.",
     "program.plots[i].title": "The plot's title.",
+    "program.plots[i].xlabel": "The x axis's label in the book's words, with its unit.  Absent: `time [s]` for t, else x.",
+    "program.plots[i].ylabel": "The y axis's label in the book's words, with its unit.  Absent: the title.",
     "program.plots[i].xlim": "The x axis's range (the book's).  Absent: the data's.",
     "program.plots[i].ylim": "The y axis's range (the book's).  Absent: the data's.",
     "findings": "Errors of the book that the checks establish: a failing check that a finding covers is "

@@ -6,20 +6,39 @@ A figure is drawn for print: at most `TEXT_WIDTH` wide (an A4 page's text width)
 byte-for-byte the same when drawn again from the same data. On a page every figure has a caption
 under it (`embed`)."""
 
+import textwrap
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+from matplotlib.text import Text  # noqa: E402
 
-# A source's curves over time: coinciding curves stay visible (the tight reference wide and pale).
+TEXT_WIDTH = 6.3  # inches: A4 (210 mm) less two 25 mm margins, 160 mm
+TEXT_HEIGHT = 9.0  # inches: A4's text height (247 mm) less room for the caption under the figure
+MIN_FONT = 8.0  # points, at TEXT_WIDTH: the smallest size a printed page keeps legible
+DPI = 200  # the PNG's resolution; 1260 pixels across at TEXT_WIDTH
+
+# Defaults that comply: a figure drawn without font sizes of its own reads at A4 width.
+plt.rcParams.update({
+    "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "figure.titlesize": 9.5,
+    "xtick.labelsize": 8, "ytick.labelsize": 8, "legend.fontsize": 8, "legend.title_fontsize": 8,
+    "figure.figsize": (TEXT_WIDTH, 3.6), "figure.constrained_layout.use": True, "savefig.dpi": DPI,
+    "axes.grid": True, "grid.alpha": 0.3, "lines.markersize": 4, "pdf.compression": 9,
+})
+
+# A source's curves over time, told apart in grey as well as in colour: a line style and a marker per
+# source (markers spaced along the line, each source's shifted so that coinciding curves show all of
+# theirs), and the tight reference wide and pale under the others.
 SOURCE_STYLE = {
-    "tight reference": dict(color="black", lw=2.6, alpha=0.35),
-    "book": dict(color="tab:red", lw=1.0, ls="--"),
-    "pinocchio": dict(color="tab:blue", lw=1.0, ls=":"),
-    "mujoco": dict(color="tab:green", lw=1.0, ls="-."),
-    "reference": dict(color="tab:orange", lw=1.0, ls=(0, (1, 3))),
+    "tight reference": dict(color="black", lw=2.6, alpha=0.35, ls="-", marker="o", mfc="none", markevery=(0.0, 0.1)),
+    "book": dict(color="tab:red", lw=1.0, ls="--", marker="x", markevery=(0.02, 0.1)),
+    "pinocchio": dict(color="tab:blue", lw=1.0, ls=":", marker="s", mfc="none", markevery=(0.04, 0.1)),
+    "mujoco": dict(color="tab:green", lw=1.0, ls="-.", marker="^", mfc="none", markevery=(0.06, 0.1)),
+    "reference": dict(color="tab:orange", lw=1.0, ls=(0, (5, 1, 1, 1, 1, 1)), marker="D", mfc="none",
+                      ms=3.5, markevery=(0.08, 0.1)),
 }
 # A source's points in a sweep (work-precision): marker and line.
 SWEEP_STYLE = {"reference": dict(marker="o", ls="-"), "derivation": dict(marker="o", ls="-"),  # a researcher's
@@ -33,18 +52,104 @@ METHOD_MARKER = {"explicit Euler": "o", "semi-implicit Euler": "s", "mujoco:Eule
                  "RK4": "^", "mujoco:RK4": "1", "RK45": "v", "DOP853": "D", "Radau": "P", "LSODA": "X"}
 
 
-TEXT_WIDTH = 6.3  # inches: A4 (210 mm) less two 25 mm margins, 160 mm
-MIN_FONT = 8.0  # points, at TEXT_WIDTH: the smallest size a printed page keeps legible
-DPI = 200  # the PNG's resolution; 1260 pixels across at TEXT_WIDTH
-
-
 def save(fig, path):
     """Write `fig` to `path` (a .png) and its vector twin `path` with .pdf, then close it. Neither file
-    carries a date, so a figure drawn again from the same data is the same bytes."""
+    carries a date, so a figure drawn again from the same data is the same bytes. A figure that would
+    not print (wider than TEXT_WIDTH, taller than TEXT_HEIGHT, a text under MIN_FONT or cut off at the
+    edge) is refused with a ValueError naming the file and what breaks the rule."""
     path = Path(path)
-    fig.savefig(path, dpi=DPI, metadata={"Software": None})
-    fig.savefig(path.with_suffix(".pdf"), metadata={"CreationDate": None, "Creator": None, "Producer": None})
-    plt.close(fig)
+    try:
+        check_size(fig, path)
+        fig.savefig(path, dpi=DPI, metadata={"Software": None})  # lays the figure out
+        fig.set_layout_engine("none")  # the check and the twin keep that layout: laid out once, the same in all
+        try:
+            check_text(fig, path)
+        except ValueError:
+            path.unlink()
+            raise
+        fig.savefig(path.with_suffix(".pdf"), metadata={"CreationDate": None, "Creator": None, "Producer": None})
+    finally:
+        plt.close(fig)
+
+
+def check_size(fig, path):
+    """ValueError unless `fig` fits the page's text width and height."""
+    width, height = fig.get_size_inches()
+    if width > TEXT_WIDTH + 1e-9:
+        raise ValueError(f"{path}: the figure is {width:g} in wide, more than the page's text width {TEXT_WIDTH:g} in")
+    if height > TEXT_HEIGHT + 1e-9:
+        raise ValueError(f"{path}: the figure is {height:g} in tall, more than the page's {TEXT_HEIGHT:g} in")
+
+
+def check_text(fig, path):
+    """ValueError unless every text of `fig`, as last drawn, is at least MIN_FONT and inside the figure."""
+    fig.draw_without_rendering()  # at the figure's own resolution, which the extents below are in
+    renderer = fig.canvas.get_renderer()
+    canvas = fig.bbox.padded(1.0)  # a pixel of slack for rounding
+    # Tick labels outside the view are not drawn: only their size counts (the list keeps them, so ids hold).
+    ticks = [label for ax in fig.axes for axis in ax._axis_map.values()
+             for tick in axis.get_major_ticks() + axis.get_minor_ticks() for label in (tick.label1, tick.label2)]
+    tick_ids = {id(label) for label in ticks}
+    for text in fig.findobj(Text):
+        if not text.get_visible() or not text.get_text().strip():
+            continue
+        if text.get_fontsize() < MIN_FONT - 1e-9:
+            raise ValueError(f"{path}: the text {text.get_text()!r} is {text.get_fontsize():g} pt, under the "
+                             f"{MIN_FONT:g} pt a printed page keeps legible")
+        box = text.get_window_extent(renderer)
+        if id(text) not in tick_ids and not (canvas.contains(box.x0, box.y0) and canvas.contains(box.x1, box.y1)):
+            raise ValueError(f"{path}: the text {text.get_text()!r} runs off the figure's edge")
+
+
+def title(name, what):
+    """A figure's title: the example it belongs to (its heading, "1.8.3 Spring-mass pendulum ..."), then
+    what the figure shows, on further lines when both would not fit the page's width."""
+    return f"{name}: {what}" if len(name) + len(what) < 80 else textwrap.fill(f"{name}:", 80) + "\n" + textwrap.fill(what, 80)
+
+
+def panels(rows=1, cols=1, height=3.6, **options):
+    """A figure of rows x cols axes at the page's text width, `height` inches tall (plt.subplots's
+    options); the axes always as a 2-D array."""
+    return plt.subplots(rows, cols, figsize=(TEXT_WIDTH, height), squeeze=False, **options)
+
+
+def legend_below(fig, handles=None, labels=None, ncol=3, **options):
+    """The figure's legend under its axes, where it covers no curve."""
+    if handles is None:
+        handles, labels = unique_handles(fig)
+    if handles:
+        fig.legend(handles, labels, loc="outside lower center", ncol=min(ncol, len(handles)), frameon=False, **options)
+
+
+def unique_handles(fig):
+    """([handle], [label]) of every labelled artist of the figure's axes, each label once, in order."""
+    found = {}
+    for ax in fig.axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            found.setdefault(label, handle)
+    return list(found.values()), list(found.keys())
+
+
+def thin(frame, most=1500):
+    """Every k-th row of `frame` (or array), at most about `most` rows, the last always kept: a dense
+    series drawn at print resolution looks the same and keeps the vector twin small."""
+    every = max(1, int(np.ceil(len(frame) / most)))
+    if every == 1:
+        return frame
+    rows = np.r_[np.arange(0, len(frame) - 1, every), len(frame) - 1]
+    return frame.iloc[rows] if hasattr(frame, "iloc") else np.asarray(frame)[rows]
+
+
+def log_range(values, decades_below=1):
+    """(low, high) of a log axis for positive `values`: from a decade below the data's floor (zeros
+    and non-finite values left out) to a bit above their top; (1e-16, 1) for no positive value.  Draw
+    the values with numpy.maximum(values, low) so that exact zeros lie on the axis's bottom edge."""
+    values = np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in values]) if len(values) else np.array([])
+    positive = values[np.isfinite(values) & (values > 0)]
+    if not len(positive):
+        return 1e-16, 1.0
+    low, high = positive.min(), positive.max()
+    return 10 ** (np.floor(np.log10(low)) - decades_below), 10 ** (np.ceil(np.log10(high)) + 0.3)
 
 
 def embed(path, alt, caption):
@@ -55,10 +160,18 @@ def embed(path, alt, caption):
             f"*Figure: {caption.strip()}* ([vector PDF]({path.with_suffix('.pdf').as_posix()}))", ""]
 
 
+def along(source, points):
+    """SOURCE_STYLE[source] for a curve of `points` points: its markers every tenth of the points (a noisy
+    curve's length would crowd markers spaced by distance), each source's shifted as in SOURCE_STYLE."""
+    start, every = SOURCE_STYLE[source]["markevery"]
+    return {**SOURCE_STYLE[source], "markevery": (int(start * points), max(1, int(every * points)))}
+
+
 def method_style(label):
     """Colour and marker of the method a label starts with ("RK4 dt = ..."), {} for none."""
     method = max((m for m in METHOD_COLOUR if label == m or label.startswith(m + " ")), key=len, default=None)
     return {} if method is None else dict(color=METHOD_COLOUR[method], marker=METHOD_MARKER[method])
 
 
-__all__ = ["plt", "TEXT_WIDTH", "MIN_FONT", "DPI", "save", "embed", "SOURCE_STYLE", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]
+__all__ = ["plt", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check_size", "check_text", "embed", "title", "panels", "legend_below",
+           "unique_handles", "thin", "log_range", "SOURCE_STYLE", "along", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]

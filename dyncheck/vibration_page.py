@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pandas as pd
 
-from dyncheck.results import OWN_WORDS
+from dyncheck.results import OWN_WORDS, heading
 from dyncheck.vibration import MATRIX_NAMES, SAFETY, match
-from dyncheck.style import SOURCE_STYLE, plt
+from dyncheck.style import SOURCE_STYLE, embed, legend_below, panels, save, title
 
 NAMES = {"reference": "reference", "mujoco": "MuJoCo", "pinocchio": "Pinocchio"}
 HATCH = {"reference": "", "mujoco": "//", "pinocchio": ".."}  # grey-safe: a source is a hatch as well as a colour
@@ -65,10 +65,10 @@ def section(result, case, tmp):
     chart = f"figures/{case.name}_modes.png"
     figure_modes(vib, case, tmp / chart)
     files.append(chart)
-    lines += [f"![mode shapes]({chart})", "",
-              "*The mode shapes*: each mode's coordinate displacements, scaled so that the largest is 1, from each "
-              "source's linearisation (bars side by side: colour and hatch per source).  Coinciding bars are "
-              "the check: the rows `mode shape` above give the largest difference.", ""]
+    lines += embed(chart, "mode shapes",
+                   "The mode shapes: each mode's coordinate displacements, scaled so that the largest is 1, from each "
+                   "source's linearisation (bars side by side: colour and hatch per source).  Coinciding bars are "
+                   "the check: the rows `mode shape` above give the largest difference.")
     lines += floquet_lines(vib, case)
     sweep = (result.studies or {}).get("vibration")
     if sweep is not None:
@@ -171,9 +171,11 @@ def figure_modes(vib, case, path):
     ref = vib.modes["reference"]
     n = len(case.coords)
     modes = ref.oscillating()
-    fig, axes = plt.subplots(1, len(modes), figsize=(max(3.2 * len(modes) + 0.6, 5.5), 3.2), squeeze=False)
+    cols = min(3, len(modes))
+    rows = -(-len(modes) // cols)
+    fig, axes = panels(rows, cols, 1.0 + 2.4 * rows, sharey=True)
     width = 0.8 / len(vib.modes)
-    for ax, (k, i) in zip(axes[0], enumerate(modes)):
+    for ax, (k, i) in zip(axes.flat, enumerate(modes)):
         lam = ref.eigenvalues[i]
         shapes = {source: modes_s.shape(match(ref, modes_s)[i], n) for source, modes_s in vib.modes.items()}
         # A gyroscopic mode moves its coordinates out of phase: its bars are magnitudes, each phase written over it.
@@ -185,29 +187,30 @@ def figure_modes(vib, case, path):
                    hatch=HATCH[source], edgecolor="black", linewidth=0.5, label=source_name(source, case))
         if complex_:
             for c, value in enumerate(shapes["reference"]):
-                ax.text(c, abs(value) + 0.03, f"{_degrees(value)}°", ha="center", fontsize=7)
+                ax.text(c, abs(value) + 0.03, f"{_degrees(value)}°", ha="center", fontsize=8)
         ax.axhline(0.0, color="black", lw=0.6)
         ax.set_xticks(range(n), case.coords)
         ax.set_ylim((0.0, 1.2) if complex_ else (-1.15, 1.15))
-        ax.set_title(f"mode {k + 1}: {lam.imag:.4g} rad/s", fontsize=9)
-        ax.set_ylabel("|displacement| (largest = 1), phase" if complex_ else "displacement (largest = 1)", fontsize=8)
-        ax.grid(axis="y", alpha=0.3)
-    axes[0][0].legend(fontsize=7, loc="lower left")
-    fig.suptitle(f"{case.title}: mode shapes about the equilibrium", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+        ax.set_title(f"mode {k + 1}: {lam.imag:.4g} rad/s")
+        ax.grid(False, axis="x")
+    for ax in axes.flat[len(modes):]:
+        ax.set_axis_off()
+    fig.supylabel("|displacement| [1] (largest = 1), phase" if complex_ else "displacement [1] (largest = 1)", fontsize=9)
+    fig.suptitle(title(heading(case.spec), "mode shapes about the equilibrium"))
+    legend_below(fig)
+    save(fig, path)
 
 
 def sweep_lines(sweep, case, chart):
     """The Campbell diagram and the stability boundary in words."""
     lines = [f"### Campbell diagram: frequencies against {sweep.parameter}", "",
              " ".join(case.prose(sweep.why, "vibration.campbell.why").split()), "",
-             f"![Campbell diagram]({chart})", "",
-             f"*The Campbell diagram*: the equilibrium's state at each {sweep.parameter} (top: how it moves with it), "
-             "each oscillating mode's frequency (middle) and the largest real part of the eigenvalues (bottom), from "
-             "the derivation (line) and both engines (markers); a positive real part is an unstable equilibrium.",
-             ""]
+             *embed(chart, "Campbell diagram",
+                    f"The Campbell diagram: the equilibrium's state at each {sweep.parameter} (top: how it moves with it), "
+                    "each oscillating mode's frequency (middle) and the largest real part of the eigenvalues (bottom), from "
+                    "the derivation (line) and both engines (markers); a positive real part is an unstable equilibrium"
+                    + (f", here beyond {sweep.parameter} = {sweep.boundary:.5g} {sweep.unit} (dashed)."
+                       if sweep.boundary is not None else "."))]
     for sentence in sweep.findings:
         lines += [f"- {sentence}"]
     return lines + [""]
@@ -216,17 +219,14 @@ def sweep_lines(sweep, case, chart):
 def figure_campbell(sweep, case, path):
     """Frequencies and the largest real part against the swept parameter, every source."""
     data = sweep.data
-    fig, (branch, top, bottom) = plt.subplots(3, 1, figsize=(6.4, 6.6), sharex=True, height_ratios=[1.6, 3, 1.4])
+    fig, axes = panels(3, 1, 6.6, sharex=True, height_ratios=[1.6, 3, 1.4])
+    branch, top, bottom = axes[:, 0]
     axes = [branch, branch.twinx()] if len(sweep.branch_units) == 2 else [branch]
     for ax, (name, unit), style in zip(axes, sweep.branch_units.items(), ("-", "--")):
         ax.plot(sweep.branch["value"], sweep.branch[name], color="black", ls=style, marker=".",
                 label=f"{name} [{unit}]")
-        ax.set_ylabel(f"{name} [{unit}]", fontsize=8)
-    branch.set_title("the equilibrium (derivation)", fontsize=8)
-    if len(axes) == 2:
-        lines = axes[0].get_lines() + axes[1].get_lines()
-        branch.legend(lines, [line.get_label() for line in lines], fontsize=7)
-    branch.grid(alpha=0.3)
+        ax.set_ylabel(f"{name} [{unit}]")
+    branch.set_title("the equilibrium (derivation)")
     markers = {"reference": None, "mujoco": "^", "pinocchio": "s"}
     for source, group in data.groupby("source", sort=False):
         style = SOURCE_STYLE[source]
@@ -244,13 +244,9 @@ def figure_campbell(sweep, case, path):
     top.set_ylabel("frequency [rad/s]")
     bottom.set_ylabel("largest Re λ [1/s]")
     bottom.set_xlabel(f"{sweep.parameter} [{sweep.unit}]")
-    top.legend(fontsize=8)
-    top.grid(alpha=0.3)
-    bottom.grid(alpha=0.3)
-    fig.suptitle(f"{case.title}: Campbell diagram", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+    fig.suptitle(title(heading(case.spec), "Campbell diagram"))
+    legend_below(fig, ncol=4)
+    save(fig, path)
 
 
 def floquet_lines(vib, case):

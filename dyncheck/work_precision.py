@@ -14,11 +14,11 @@ import pandas as pd
 
 from dyncheck import ceilings
 from dyncheck.ceilings import ROUNDING_FLOOR
-from dyncheck.results import no_number, row
+from dyncheck.results import heading, no_number, row
 from dyncheck.schema import MAX_OUTPUTS
 from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
                                energy_residual, fastest_frequency, simulate, state_columns)
-from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, plt
+from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
 
 COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "wall_min", "wall_max",
            "repeats", "evaluations", "steps", "status", "resolved", "detail"]
@@ -298,11 +298,13 @@ def cheapest(frame, cost="evaluations", levels=LEVELS):
 def figure(frame, case, path, cost="evaluations"):
     """Error against cost, log-log: trajectory error (top) and energy error (bottom) against `cost`
     (COSTS: right-hand-side evaluations, or the wall time with bars from the fastest to the slowest
-    repeat); hollow markers for points the reference cannot resolve; the unresolvable band shaded."""
+    repeat); hollow markers for points the reference cannot resolve; the unresolvable band shaded.
+    Returns the caption."""
     ref = frame.attrs.get("reference", {})
     floor = RESOLUTION * ref.get("accuracy", 0.0)
     ok = frame[frame["status"] == "ok"]
-    fig, axes = plt.subplots(2, 1, figsize=(7.5, 8.5), sharex=True)
+    fig, axes = panels(2, 1, 7.4, sharex=True)
+    axes = axes[:, 0]
     drawn = {}  # label -> errors by step or tolerance, to name a line that hides another
     for (source, method), points in ok.groupby(["source", "method"], sort=False):
         points = points.sort_values("value", ascending=False)  # along the sweep: loose to tight
@@ -322,37 +324,36 @@ def figure(frame, case, path, cost="evaluations"):
     for ax in axes:
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.grid(True, which="major", alpha=0.3)
+        ax.grid(True, which="major")
     axes[0].axhspan(1e-300, floor, color="0.85", zorder=0)
     axes[0].axhline(floor, color="0.5", lw=0.8)
-    top = max(ok["error"].max(), ok["energy_error"].max()) if len(ok) else 1.0
-    low = min(floor / 10, ok["error"].min()) if len(ok) else 1e-14
-    axes[0].set_ylim(max(low, 1e-16) / 2, min(top, 1e3) * 3)
-    axes[0].set_ylabel("trajectory error\nmax |x - x_ref| / max |x_ref|")
-    axes[1].set_ylabel("energy error\nmax |E - E(0) - W| / max(|E|, |W|)")
+    axes[0].set_ylim(*log_range([ok["error"], [floor]]))
+    if ok["energy_error"].notna().any():
+        axes[1].set_ylim(*log_range([ok["energy_error"]]))
+    axes[0].set_ylabel("trajectory error [1]\nmax |x - x_ref| / max |x_ref|")
+    axes[1].set_ylabel("energy error [1]\nmax |E - E(0) - W| / max(|E|, |W|)")
     axes[1].set_xlabel(COSTS[cost])
-    if ok["energy_error"].isna().any():
-        axes[1].text(0.02, 0.02, "the derivation defines no energy or drive power: its own methods have no energy "
-                     "error here",
-                     transform=axes[1].transAxes, fontsize=7, color="0.3")
     solution = "tight solution" if "derivation" in set(frame["source"]) else "reference solution"
-    axes[0].text(0.02, 0.02, f"shaded: within {RESOLUTION:g}x of the {solution}'s accuracy (hollow points)",
-                 transform=axes[0].transAxes, fontsize=7, color="0.3")
-    fig.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False,
-               title="colour: method; marker and line: source\n" + ", ".join(
-                   f"{GLYPHS[SWEEP_STYLE[s]['marker']]} {GLYPHS[SWEEP_STYLE[s]['ls']]} {s}"
-                   for s in SWEEP_STYLE if s in set(frame["source"])),
-               title_fontsize=8)
+    sources = ", ".join(f"{GLYPHS[SWEEP_STYLE[s]['marker']]} {GLYPHS[SWEEP_STYLE[s]['ls']]} {s}"
+                        for s in SWEEP_STYLE if s in set(frame["source"]))
+    legend_below(fig, ncol=2, title=f"colour: method; marker and line: source ({sources})")
+    fig.suptitle(title(heading(case.spec), f"error against {'wall time' if cost == 'wall' else 'cost'} over "
+                                           f"{ref.get('t_end', 0):g} s"))
+    save(fig, path)
     unstable = frame[frame["status"] == "unstable"]
     notes = "; ".join(f"{point_label(r)} ({r['detail'].split(':')[0]})" for _, r in unstable.iterrows())
-    fig.suptitle(f"{case.name}: error against {'wall time' if cost == 'wall' else 'cost'} over "
-                 f"{ref.get('t_end', 0):g} s\n{solution}: {ref.get('label', '')}", fontsize=10)
-    if notes:
-        fig.text(0.01, 0.005, "unstable (not drawn): " + notes, fontsize=7, wrap=True)
-    fig.tight_layout(rect=(0, 0.03, 1, 1))
-    fig.savefig(path, dpi=110, bbox_inches="tight")  # takes in the legend outside the panels
-    plt.close(fig)
-    return path
+    reached = cheapest(frame, cost)
+    reached = reached[reached[cost].notna()]
+    best = "" if reached.empty else (f" The cheapest to reach {reached['level'].iloc[-1]:.0e}, the tightest level any"
+                                     f" method reaches: {reached['cheapest'].iloc[-1]}.")
+    return (f"Each method's error against its {COSTS[cost].split(',')[0]}, from loose to tight settings (colour: method;"
+            f" marker and line style: source): the trajectory's relative error (top) and the energy balance's (bottom),"
+            f" against the {solution} ({ref.get('label', '')})."
+            f" Lower left is better. Hollow markers and the shaded band: within {RESOLUTION:g}x of the {solution}'s"
+            " accuracy, where the error cannot be told." + best
+            + (" The derivation defines no energy or drive power: its own methods have no energy error."
+               if ok["energy_error"].isna().any() else "")
+            + (f" Unstable (not drawn): {notes}." if notes else ""))
 
 
 # -- convergence ----------------------------------------------------------------------------------

@@ -51,7 +51,8 @@ def test_only_the_timing_files_change_when_only_wall_times_do(results, tmp_path)
     assert changed and all("timing" in name for name in changed), changed
     timing = {name for name in a if "timing" in name}
     assert timing == {"spring_pendulum_timing.md", "data/spring_pendulum_work_precision_timing.csv",
-                      "figures/spring_pendulum_work_precision_timing.png"}
+                      "figures/spring_pendulum_work_precision_timing.png",
+                      "figures/spring_pendulum_work_precision_timing.pdf"}
     page = (tmp_path / "a" / "spring_pendulum.md").read_text()
     assert "wall time [s]" not in page and "wall [s]" not in page and " took " not in page
     assert "(spring_pendulum_timing.md)" in page

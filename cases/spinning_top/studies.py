@@ -11,7 +11,7 @@ from scipy.optimize import brentq
 from dyncheck.simulate import Unstable, fastest_frequency, simulate
 from dyncheck.stability.common import EPS, Study, attempt, describe, fmt, study_result
 from dyncheck.vibration import SAFETY
-from dyncheck.style import plt
+from dyncheck.style import legend_below, panels, save, title
 
 
 def _rot_exact(angles):
@@ -408,12 +408,13 @@ def top_nutation(p, s, n0, T):
     return nutation(x_T), nutation(x_plus), t_turn
 
 
-def figure_euler_singularity(result, path):
+def figure_euler_singularity(result, path, name):
+    """The angular acceleration's error against the nutation, and runs through the near-upright; returns the caption."""
     s = result.series
     rows = s["rows"]
     passes = [p for p in s["passes"] if p.get("status") == "ok"]
-    fig, axes = plt.subplots(1, 2 if passes else 1, figsize=(12, 4.8) if passes else (6.5, 4.8))
-    axes = np.atleast_1d(axes)
+    fig, axes = panels(2 if passes else 1, 1, 8.8 if passes else 4.4)
+    axes = axes[:, 0]
     ax = axes[0]
     styles = {"reference (Euler angles)": dict(color="tab:red", marker="o", lw=1.5),
               "truth at the rounded Euler rates": dict(color="tab:orange", marker="v", lw=1, ls="--"),
@@ -429,10 +430,9 @@ def figure_euler_singularity(result, path):
     ax.set_yscale("log")
     ax.invert_xaxis()
     ax.set_xlabel("nutation [rad] (toward upright ->)")
-    ax.set_ylabel("relative error of the angular acceleration")
-    ax.set_title("same physical state, body angular acceleration\n(errors below 1e-18 drawn at 1e-18)", fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.set_ylabel("relative error of the\nangular acceleration [1]")
+    ax.set_title("the same physical state: body angular acceleration (errors below 1e-18 drawn at 1e-18)")
+    ax.grid(True, which="both")
     if passes:
         ax = axes[1]
         colors = ["tab:red", "tab:purple", "tab:brown", "tab:pink"]
@@ -443,33 +443,41 @@ def figure_euler_singularity(result, path):
                     ax.plot(p["t"], np.clip(x["error"], floor, 10), color=color, ls=ls, lw=1.1,
                             label=f"Euler angles, {label}, closest {p['closest']:.0e} rad")
                 elif x.get("fail", {}).get("t") is not None:
-                    ax.plot([x["fail"]["t"]], [1.0], marker="X", ms=11, color=color, ls="none",
+                    ax.plot([x["fail"]["t"]], [1.0], marker="X", ms=9, color=color, ls="none",
                             label=f"Euler angles, {label}, closest {p['closest']:.0e} rad: blows up "
                                   f"at t = {x['fail']['t']:.3g} s")
-        ax.plot(passes[0]["t"], np.maximum(passes[0]["error_mj"], floor), color="tab:green", lw=1.5,
+        ax.plot(passes[0]["t"], np.maximum(passes[0]["error_mj"], floor), color="tab:green", lw=1.5, ls="-.",
                 label="MuJoCo RK4 (quaternion) vs its half-step twin")
         ax2 = ax.twinx()
         closest = min(passes, key=lambda p: p["closest"])
         ax2.plot(closest["t"], closest["nutation"], color="0.55", lw=0.8)
         ax2.set_yscale("log")
-        ax2.set_ylabel("nutation [rad] of the closest passage (grey)", color="0.4")
+        ax2.set_ylabel("nutation [rad], closest\npassage (grey)", color="0.4")
         ax.set_yscale("log")
         ax.set_xlabel("t [s]")
-        ax.set_ylabel("axis direction error against MuJoCo [rad]")
-        ax.set_title("a top whose axis swings past the vertical, 3 aims", fontsize=10)
-        ax.grid(True, which="both", alpha=0.3)
+        ax.set_ylabel("axis direction error\nagainst MuJoCo [rad]")
+        ax.set_title(f"a top whose axis swings past the vertical, {len(passes)} aims")
+        ax.grid(True, which="both")
         ax.set_ylim(floor / 10, 1e9)
-        ax.legend(fontsize=7, loc="upper right", framealpha=0.92)
-    fig.suptitle("1.10 spinning top: the Euler-angle equations near zero nutation", fontsize=11)
-    fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    fig.suptitle(title(name, "the Euler-angle equations near zero nutation"))
+    legend_below(fig, ncol=1)
+    save(fig, path)
+    worst = rows[rows["source"] == rows["source"].iloc[0]].astype({"error": float}).sort_values("nutation")
+    return ("Top: the relative error of the body angular acceleration of one physical state, as the nutation goes to"
+            " zero (toward upright, to the right), from the book's Euler-angle equations and from the engines fed the"
+            f" same state as a quaternion: the Euler-angle error grows like 1/n^2, to {worst['error'].iloc[0]:.1g} at"
+            f" n = {worst['nutation'].iloc[0]:.0e} rad, the engines' stays at rounding."
+            + (" Bottom: runs through the near-upright, the axis direction against MuJoCo's: an adaptive integrator"
+               " follows the singularity by shrinking its steps, a fixed-step one blows up (X) when the axis"
+               " passes closest (grey: the nutation of the closest passage)." if passes else ""))
 
 
-def figure_sleeping_top(result, path):
+def figure_sleeping_top(result, path, name):
+    """The largest nutation against the spin, and the engines' growth rates; returns the caption."""
     s = result.series
     trail = s["trail"]
-    fig, (ax, eig) = plt.subplots(2, 1, figsize=(8.5, 8.2), height_ratios=[5.2, 3])
+    fig, axes = panels(2, 1, 8.0, height_ratios=[5.2, 3])
+    ax, eig = axes[:, 0]
     spins = np.linspace(0.985 * s["criterion"], 1.01 * s["criterion"], 160)
     reached = np.array([top_nutation(s["params"], x, s["n0"], s["horizon"])[0] for x in spins])
     ax.plot(spins, reached, color="0.35", lw=1.8,
@@ -478,7 +486,7 @@ def figure_sleeping_top(result, path):
     for stable, marker, color, label in ((True, "o", "tab:green", "MuJoCo: stays below the bound"),
                                          (False, "x", "tab:red", "MuJoCo: falls past the bound")):
         g = ran[ran["stable"] == stable]
-        ax.plot(g["spin"], g["max_nutation"], ls="none", marker=marker, color=color, ms=8, mew=2, label=label)
+        ax.plot(g["spin"], g["max_nutation"], ls="none", marker=marker, color=color, ms=6, mew=1.5, label=label)
     ax.axvline(s["criterion"], color="black", ls="--",
                label=f"criterion s_c = 2 sqrt(Ixx m g h) / Izz = {s['criterion']:.4g} rad/s")
     ax.axvline(s["finite"], color="tab:blue", ls=":", label=f"threshold for this bound and horizon: {s['finite']:.5g}")
@@ -487,11 +495,9 @@ def figure_sleeping_top(result, path):
     ax.set_xlim(spins[0], spins[-1])
     ax.set_xlabel("spin s [rad/s]")
     ax.set_ylabel("largest nutation over the run [rad]")
-    ax.set_title(f"1.10 sleeping top: started {s['n0']:g} rad from upright with only the spin, Mz = 0, "
-                 f"{s['horizon']:g} s\nMuJoCo {s['method']} at dt = {s['dt']:g} s (points outside the window not shown)",
-                 fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title(f"started {s['n0']:g} rad from upright with only the spin, Mz = 0, {s['horizon']:g} s;\n"
+                 f"MuJoCo {s['method']} at dt = {s['dt']:g} s")
+    ax.grid(True, which="both")
     growth = s["growth"]
     eig.plot(growth["spin"], growth["theory"], color="0.35", lw=1.8, label="linear theory: Izz sqrt(s_c^2 - s^2) / (2 Ixx)")
     for source, marker, color in (("mujoco", "^", "tab:green"), ("pinocchio", "s", "tab:blue")):
@@ -500,12 +506,17 @@ def figure_sleeping_top(result, path):
     eig.axvline(s["criterion"], color="black", ls="--")
     eig.set_xlabel("spin s [rad/s]")
     eig.set_ylabel("tilt growth rate [1/s]")
-    eig.set_title("The upright top linearised by each engine in its own coordinates (step 16)", fontsize=10)
-    eig.grid(True, alpha=0.3)
-    eig.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    eig.set_title("the upright top linearised by each engine in its own coordinates (step 16)")
+    fig.suptitle(title(name, "the sleeping top's least spin"))
+    legend_below(fig, ncol=1)
+    save(fig, path)
+    return (f"Top: the largest nutation a top started {s['n0']:g} rad from upright with only its spin reaches within"
+            f" {s['horizon']:g} s, against the spin: from the first integrals (exact, grey line) and MuJoCo's runs"
+            " (markers: stays up or falls). It stands above the criterion"
+            f" s_c = 2 sqrt(Ixx m g h) / Izz = {s['criterion']:.4g} rad/s (dashed); just below it the exact motion"
+            f" wobbles out slowly, so within this horizon and bound it falls only below {s['finite']:.5g} rad/s"
+            " (dotted). Bottom: the tilt's growth rate from each engine's linearisation of the upright top against the"
+            " linear theory; it turns positive below s_c.")
 
 
 STUDIES = {

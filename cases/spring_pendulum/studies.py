@@ -10,7 +10,7 @@ from scipy.optimize import fsolve
 from dyncheck.simulate import fastest_frequency, simulate
 from dyncheck.stability.common import (FAMILY, SHARP, Guarded, Study, attempt, describe, fmt, grid_step, limit_step, rms,
                                       run_fixed, study_result)
-from dyncheck.style import method_style, plt
+from dyncheck.style import legend_below, method_style, panels, save, title
 
 
 def spring_linearisation(case, k):
@@ -393,19 +393,21 @@ def _stable_step_findings(case, settings, data, crit, listing, k_crit, span):
     return out
 
 
-def figure_stable_step(result, path):
+def figure_stable_step(result, path, name):
+    """The largest stable and the smallest blow-up step against the stiffness; returns the caption."""
     s = result.series
     rows, curves = s["rows"], s["curves"]
     measured = rows[rows["status"] == "measured"]
     kmin = min(rows["k"].min(), s["k_crit"]) / 1.5
-    fig, axes = plt.subplots(1, 2, figsize=(14, 7.4), sharey=True)
+    fig, axes = panels(2, 1, 8.9, sharex=True, sharey=True)
+    axes = axes[:, 0]
     families = [("explicit Euler", "explicit Euler"), ("semi-implicit Euler", "semi-implicit Euler = MuJoCo Euler, implicitfast"),
                 ("RK4", "RK4 = MuJoCo RK4")]
     offsets = {"mujoco:Euler": 1.06, "mujoco:implicitfast": 1.12, "mujoco:RK4": 1.06}
-    panels = [(axes[0], "h_stable", "", f"largest stable step: the oscillation grows at most {s['growth']:g} x "
-                                         f"over {0.75 * s['horizon']:g} s"),
-              (axes[1], "h_blowup", " limit", "smallest blow-up step: |l| > escape bound, NaN or MuJoCo reset")]
-    for ax, column, suffix, title in panels:
+    shown = [(axes[0], "h_stable", "", f"largest stable step: the oscillation grows at most {s['growth']:g} x "
+                                        f"over {0.75 * s['horizon']:g} s"),
+             (axes[1], "h_blowup", " limit", "smallest blow-up step: |l| > escape bound, NaN or MuJoCo reset")]
+    for ax, column, suffix, heading in shown:
         for method, label in families:
             key = method + suffix
             if key in curves:
@@ -420,39 +422,41 @@ def figure_stable_step(result, path):
             st = method_style(method)
             filled = not method.startswith("mujoco")
             ax.plot(group["k"] * offsets.get(method, 1.0), group[column], ls="-" if filled else "none", lw=0.8,
-                    ms=7 if filled else 10, marker=st["marker"], color=st["color"],
+                    ms=5 if filled else 7, marker=st["marker"], color=st["color"],
                     mfc=st["color"] if filled else "none", mew=1.6, label=f"measured, {method}")
         ax.axvspan(kmin, s["k_crit"], color="0.88", zorder=0)
         ax.axvline(s["k_crit"], color="0.3", ls="--", lw=1)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlim(kmin, rows["k"].max() * 1.6)
-        ax.set_xlabel("spring stiffness k [N/m]")
-        ax.set_title(title, fontsize=10)
-        ax.grid(True, which="both", alpha=0.3)
+        ax.set_title(heading)
+        ax.set_ylabel("time step dt [s]")
+        ax.grid(True, which="both")
     finite = [np.nanmin(curves[m]) for m, _ in families if m in curves]
     top = [np.nanmax(curves[m + " limit"]) for m, _ in families if m + " limit" in curves]
     ymin, ymax = min(finite) / 3, max(top) * 4
     axes[0].set_ylim(ymin, ymax)
-    axes[0].set_ylabel("time step dt [s]")
+    axes[1].set_xlabel("spring stiffness k [N/m]")
     for ax in axes:
-        ax.text(kmin * 1.15, math.sqrt(ymin * ymax), f"physical runaway:\nk < k_crit = m Omega^2\n= {s['k_crit']:.4g} N/m;"
-                "\nthe exact solution\nescapes too,\nno step helps", ha="left", va="center", fontsize=8.5, color="0.2")
+        ax.text(kmin * 1.1, math.sqrt(ymin * ymax), f"physical\nrunaway:\nk < k_crit\n= {s['k_crit']:.4g} N/m",
+                ha="left", va="center", fontsize=8, color="0.2")
     if s.get("listing"):
         lst = s["listing"]
-        axes[0].plot([s["k_book"]], [lst["dt"]], marker="*", ms=16, color="gold", mec="black", ls="none",
+        axes[0].plot([s["k_book"]], [lst["dt"]], marker="*", ms=12, color="gold", mec="black", ls="none",
                      label=f"the book's Matlab listing: explicit Euler, dt = {lst['dt']:g} s, k = {s['k_book']:g} N/m")
-    handles = {}
-    for ax in axes:
-        for handle, label in zip(*ax.get_legend_handles_labels()):
-            handles.setdefault(label, handle)
-    fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=3, fontsize=8, frameon=False)
-    fig.suptitle(f"1.8.3 spring pendulum, from the book's initial conditions over {s['horizon']:g} s\n"
-                 "markers: bisection (filled: the book's equations; open: MuJoCo, drawn shifted right); "
-                 "wide lines: linear theory about the relative equilibrium on the disk", fontsize=10)
-    fig.tight_layout(rect=(0, 0.16, 1, 1))
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    legend_below(fig, ncol=1)
+    fig.suptitle(title(name, f"the largest stable step against the stiffness, over {s['horizon']:g} s"))
+    save(fig, path)
+    listing = s.get("listing")
+    return ("The largest time step at which each method stays stable (top) and the smallest at which it blows up"
+            " (bottom), against the spring's stiffness k, from the book's initial conditions. Markers: measured by"
+            " bisection (filled: the book's equations; open: MuJoCo, drawn shifted right); wide pale lines: the"
+            " linear theory about the relative equilibrium on the disk. Below"
+            f" k_crit = m Omega^2 = {s['k_crit']:.4g} N/m (shaded) the spring cannot hold the particle: the exact"
+            " motion runs away too and no step helps. Stiffer springs need steps falling like 1/k (explicit Euler)"
+            " or 1/sqrt(k) (the others)."
+            + (f" The star: the book's Matlab listing, explicit Euler at dt = {listing['dt']:g} s and"
+               f" k = {s['k_book']:g} N/m." if listing else ""))
 
 
 STUDIES = {"stable_step": Study(stable_step, figure_stable_step, (

@@ -9,7 +9,7 @@ a case's own studies live in the file its table names as `module`, whose `STUDIE
 largest stable step against a stiffness; the Euler-angle singularity and the sleeping top).
 
 `studies(case)` runs them and returns one dyncheck.results.StudyResult per study; `figure(case,
-result, path)` draws one.  `validate(case)` checks the table at load.  A run that blows up (NaN, a
+result, path)` draws one and returns its caption.  `validate(case)` checks the table at load.  A run that blows up (NaN, a
 state beyond its physical bound, MuJoCo resetting the simulation) is data: status "unstable" with
 time and step, never an exception out of a study and never a NaN in its table.
 
@@ -19,6 +19,7 @@ perturbations along the book's initial conditions (cheap: five trajectories over
 """
 
 from dyncheck import ceilings
+from dyncheck.results import heading
 
 from dyncheck.case import load_file
 from dyncheck.stability.common import Study, settings_of
@@ -129,6 +130,6 @@ def studies(case, progress=None):
 # -- figures ------------------------------------------------------------------------------------
 
 def figure(case, result, path):
-    """Draw a study's result to the PNG `path`."""
-    available(case)[result.study].figure(result, path)
-    return path
+    """Draw a study's result to the PNG `path` (and its PDF twin), titled with the case's heading; returns
+    the figure's caption, from the study: what it shows and what to see in it."""
+    return available(case)[result.study].figure(result, path, heading(case.spec))

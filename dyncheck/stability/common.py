@@ -180,7 +180,8 @@ def rms(x):
 @dataclass(frozen=True)
 class Study:
     """A study a case's [stability] table may name: how to run it ((case, settings, progress) ->
-    StudyResult), how to draw its result ((result, path)), and the keys its table must have besides
+    StudyResult), how to draw its result ((result, path, name) -> caption: `name` the case's heading for
+    the title, the caption what the figure shows and what to see in it), and the keys its table must have besides
     `why` (optional ones: `source`, `overrides`, `method`, `k_stiff`)."""
     run: Callable
     figure: Callable

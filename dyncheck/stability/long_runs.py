@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 from dyncheck.simulate import MUJOCO_METHODS, SCIPY_METHODS, Unstable, fastest_frequency, simulate
 from dyncheck.stability.common import EPS, fmt, study_result, settings_of, attempt, describe
-from dyncheck.style import method_style, plt
+from dyncheck.style import legend_below, method_style, panels, save, thin, title
 
 
 def _scale(case):
@@ -290,45 +290,60 @@ def energy_drift(case, settings, progress=None):
                    findings, series, start)
 
 
-def figure_lyapunov(result, path):
+LINES = ("-", "--", ":", "-.")  # one per curve of a study, with a marker: told apart in grey
+MARKERS = ("o", "s", "^", "D")
+
+
+def figure_lyapunov(result, path, name):
+    """The stretch of a small separation and the finite-time exponent, one curve per start; returns the caption."""
     s = result.series
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.6))
+    fig, axes = panels(2, 1, 5.6)
+    a1, a2 = axes[:, 0]
     colors = ["tab:blue", "tab:red", "tab:green", "tab:purple"]
-    for (label, (t, logs)), color in zip(s["curves"].items(), colors):
-        a1.plot(t, logs, color=color, label=label)
-        a2.plot(t[1:], logs[1:] / t[1:], color=color, label=label)
+    for k, (label, (t, logs)) in enumerate(s["curves"].items()):
+        style = dict(color=colors[k % 4], ls=LINES[k % 4], marker=MARKERS[k % 4], mfc="none", markevery=(0.02 * k, 0.1))
+        t, logs = thin(np.asarray(t)), thin(np.asarray(logs))
+        a1.plot(t, logs, label=label, **style)
+        a2.plot(t[1:], logs[1:] / t[1:], **style)
     rows = s["rows"]
-    for (_, r), color in zip(rows.iterrows(), colors):
+    for k, (_, r) in enumerate(rows.iterrows()):
         if r.get("status") == "chaotic":
-            a2.axhline(r["lambda"], color=color, ls=":", lw=1)
-    a1.set_xlabel("t [s]")
-    a1.set_ylabel("ln(|d(t)| / |d(0)|), accumulated")
-    a1.set_title("stretch of a small separation (Benettin)", fontsize=10)
+            a2.axhline(r["lambda"], color=colors[k % 4], ls=":", lw=1)
+    a1.set_ylabel("ln(|d(t)| / |d(0)|) [1]")
+    a1.set_title("stretch of a small separation (Benettin), accumulated")
     a2.set_xlabel("t [s]")
-    a2.set_ylabel("finite-time Lyapunov exponent lambda(t) [1/s]")
+    a2.set_ylabel("lambda(t) [1/s]")
     a2.set_xscale("log")
-    a2.set_title("convergence: flat = chaotic, falling like ln(t)/t = regular", fontsize=10)
+    a2.set_title("finite-time Lyapunov exponent: flat = chaotic, falling like ln(t)/t = regular")
     for a in (a1, a2):
-        a.grid(True, which="both", alpha=0.3)
-        a.legend(fontsize=8)
-    fig.suptitle(f"{result.case}: sensitivity to initial conditions", fontsize=11)
-    fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+        a.grid(True, which="both")
+    fig.suptitle(title(name, "sensitivity to initial conditions"))
+    legend_below(fig, ncol=2)
+    save(fig, path)
+    verdicts = "; ".join(f"{r['initial']}: {r['status']}" + (f", lambda = {r['lambda']:.3g} 1/s" if r.get("status") == "chaotic"
+                                                             else "") for _, r in rows.iterrows())
+    return ("Top: how far two neighbouring trajectories move apart from each start (ln of the separation's growth,"
+            " renormalised and accumulated); bottom: that growth over t, the finite-time exponent lambda(t), the"
+            " dotted lines the exponents measured for chaotic starts. A flat lambda(t) means chaos: errors grow"
+            f" e-fold every 1/lambda seconds; one falling like ln(t)/t a regular motion. Here: {verdicts}.")
 
 
-def figure_energy_drift(result, path):
+def figure_energy_drift(result, path, name):
+    """The energy error of each method over the long run; returns the caption."""
     s = result.series
-    fig, ax = plt.subplots(figsize=(9, 5.4))
+    fig, axes = panels(1, 1, 4.8)
+    ax = axes[0, 0]
     widths = {"mujoco:Euler": 3.5, "mujoco:implicitfast": 1.2, "mujoco:RK4": 3.5}
     dashes = {"mujoco:Euler": "-", "mujoco:implicitfast": ":", "mujoco:RK4": "-"}
     alphas = {"mujoco:Euler": 0.35, "mujoco:RK4": 0.35}
     floor = 1e-16
-    for label, (t, drift) in s["curves"].items():
+    for k, (label, (t, drift)) in enumerate(s["curves"].items()):
         key = label.split(" (")[0]
         st = method_style(label)
-        ax.plot(t[1:], np.maximum(drift[1:], floor), color=st.get("color"), lw=widths.get(key, 1.2),
-                ls=dashes.get(key, "-"), alpha=alphas.get(key, 1.0), label=label)
+        t, drift = thin(np.asarray(t)[1:]), thin(np.asarray(drift)[1:])
+        ax.plot(t, np.maximum(drift, floor), color=st.get("color"), marker=st.get("marker"), mfc="none",
+                markevery=(0.015 * k, 0.12), lw=widths.get(key, 1.2), ls=dashes.get(key, "-"),
+                alpha=alphas.get(key, 1.0), label=label)
     for _, r in s["rows"].iterrows():
         if r.get("status") == "unstable" and r.get("t_fail") is not None:
             ax.axvline(r["t_fail"], color=method_style(r["method"]).get("color", "k"), ls="--")
@@ -336,13 +351,14 @@ def figure_energy_drift(result, path):
     ax.set_yscale("log")
     ax.set_xscale("log")
     ax.set_xlabel("t [s]")
-    ax.set_ylabel("|E(t) - E(0)| / (E(0) - E_rest)")
-    ax.set_title(f"{result.case}: energy error of each method at dt = {s['dt']:g} s, "
-                 f"E(0) - E_rest = {s['swing']:.3g} J\n"
-                 "MuJoCo's Euler and implicitfast lie on semi-implicit Euler, MuJoCo's RK4 on RK4 "
-                 "(wide pale lines under the thin ones)", fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8, loc="lower right", ncol=2)
-    fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    ax.set_ylabel("|E(t) - E(0)| / (E(0) - E_rest) [1]")
+    ax.grid(True, which="both")
+    fig.suptitle(title(name, f"energy error of each method at dt = {s['dt']:g} s"))
+    legend_below(fig, ncol=3)
+    save(fig, path)
+    ends = "; ".join(f"{r['method']} {r['character']}" + (f" ({r['drift_T']:.2g} at the end)" if pd.notna(r.get("drift_T"))
+                                                          else "") for _, r in s["rows"].iterrows())
+    return (f"Each method's energy error over {s['horizon']:g} s from the book's initial conditions at dt = {s['dt']:g} s,"
+            f" relative to the swing's energy above rest (E(0) - E_rest = {s['swing']:.3g} J), on log axes (colour"
+            " and marker per method). MuJoCo's Euler and implicitfast lie on semi-implicit Euler, MuJoCo's RK4 on RK4"
+            f" (wide pale lines under the thin ones). {ends}.")

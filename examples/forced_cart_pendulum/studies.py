@@ -9,7 +9,7 @@ import pandas as pd
 
 from dyncheck.simulate import fastest_frequency, simulate
 from dyncheck.stability.common import Study, attempt, describe, fmt, study_result
-from dyncheck.style import SOURCE_STYLE, SWEEP_STYLE, plt
+from dyncheck.style import SOURCE_STYLE, SWEEP_STYLE, legend_below, panels, save, title
 
 PUSHED = "x"  # the coordinate that case.toml's [scene.applied] pushes with F0 cos(Omega t)
 SWINGING = "theta"  # the coordinate whose amplitude the neglected (cubic) terms grow with
@@ -312,15 +312,16 @@ def _findings(case, theory, data, settings):
     return out
 
 
-def figure_steady_state(result, path):
+def figure_steady_state(result, path, name):
     """Columns: the coordinates.  Rows: the linear theory's frequency response with the simulated amplitudes;
-    the steady state over the measuring window; each source's departure from the linear theory there."""
+    the steady state over the measuring window; each source's departure from the linear theory there.  Returns
+    the caption."""
     s = result.series
     coords, units, curves, traces, data = s["coords"], s["units"], s["curves"], s["traces"], s["data"]
     p = s["params"]
-    fig, axes = plt.subplots(3, len(coords), figsize=(11.5, 10.5), squeeze=False)
+    fig, axes = panels(3, len(coords), 8.4)
     labels = {"reference": "derivation", "mujoco": "MuJoCo", "pinocchio": "Pinocchio"}
-    markers = (("reference", "derivation", 9), ("mujoco", "mujoco", 7), ("pinocchio", "pinocchio", 5))
+    markers = (("reference", "derivation", 7), ("mujoco", "mujoco", 5.5), ("pinocchio", "pinocchio", 4))
     for i, (coord, unit) in enumerate(zip(coords, units)):
         scale, shown = DISPLAY[unit]
         ax = axes[0, i]
@@ -335,8 +336,7 @@ def figure_steady_state(result, path):
                     label=f"{labels[source]}, simulated")
         ax.set_xlabel("forcing frequency Omega [rad/s]")
         ax.set_ylabel(f"amplitude of {coord} [{shown}]")
-        ax.set_title(f"{coord}: frequency response (dashed: undamped natural frequencies)", fontsize=9)
-        ax.legend(fontsize=8, loc="upper right")
+        ax.set_title(f"{coord}: frequency response")
         if traces.get("t") is None:  # the derivation did not run at the case's Omega: the table says why
             for ax in axes[1:, i]:
                 ax.text(0.5, 0.5, "no run to show (see the table)", ha="center", va="center", transform=ax.transAxes)
@@ -346,25 +346,25 @@ def figure_steady_state(result, path):
         axes[1, i].plot(t, linear * scale, **SOURCE_STYLE["tight reference"], label="linear theory Re(X e^(i Omega t))")
         for source in labels:
             if source in traces:
-                axes[1, i].plot(t, traces[source][:, i] * scale, **SOURCE_STYLE[source], label=labels[source])
+                axes[1, i].plot(t, traces[source][:, i] * scale, **SOURCE_STYLE[source], label=f"{labels[source]}, run")
                 axes[2, i].plot(t, (traces[source][:, i] - linear) * scale * 1e3, **SOURCE_STYLE[source])
         axes[1, i].set_ylabel(f"{coord} [{shown}]")
-        axes[1, i].set_title(f"{coord}: the steady state over the measuring window, Omega = {p['Omega']:g} rad/s",
-                             fontsize=9)
+        axes[1, i].set_title(f"{coord}: steady state, Omega = {p['Omega']:g} rad/s")
         axes[2, i].set_ylabel(f"{coord} - linear theory [{FINE[unit]}]")
-        axes[2, i].set_title(f"{coord} minus the linear theory: the cubic terms (the sources coincide)", fontsize=9)
+        axes[2, i].set_title(f"{coord} minus the linear theory")
         for ax in axes[1:, i]:
             ax.set_xlabel("time t [s]")
-    for ax in axes.flat:
-        ax.grid(True, alpha=0.3)
-        ax.tick_params(labelsize=8)
-    handles, names = axes[1, 0].get_legend_handles_labels()
-    if names:
-        fig.legend(handles, names, loc="lower center", ncol=len(names), fontsize=8, frameon=False)
-    fig.suptitle(f"{s['title']}:\nsteady state under F0 cos(Omega t), F0 = {p['F0']:g} N, from rest", fontsize=10)
-    fig.tight_layout(rect=(0, 0.03, 1, 1))
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    fig.suptitle(title(name, f"steady state under F0 cos(Omega t), F0 = {p['F0']:g} N, from rest"))
+    legend_below(fig, ncol=2)
+    save(fig, path)
+    failing = data[data["status"] != "pass"]
+    return ("Top: each coordinate's steady amplitude against the forcing frequency, the linear theory's frequency"
+            " response (line; dashed: the undamped natural frequencies) and the simulated amplitudes of every source"
+            f" (markers). Middle: the steady state over the measuring window at Omega = {p['Omega']:g} rad/s, every"
+            " source over the linear theory (wide pale line). Bottom: each source minus the linear theory, the"
+            " cubic terms the linearisation leaves out, in which the sources coincide. "
+            + ("Every amplitude agrees with the linear theory and across the sources within its tolerance."
+               if failing.empty else f"{len(failing)} of {len(data)} amplitudes do not (see the table)."))
 
 
 STUDIES = {"steady_state": Study(steady_state, figure_steady_state, (
