@@ -11,6 +11,7 @@ from pathlib import Path
 
 import matplotlib
 import numpy as np
+from PIL import Image
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
@@ -68,6 +69,9 @@ def save(fig, path):
             path.unlink()
             raise
         fig.savefig(path.with_suffix(".pdf"), metadata={"CreationDate": None, "Creator": None, "Producer": None})
+        with Image.open(path) as image:  # a palette of 256 colours, undithered: a third of the bytes, same look
+            paletted = image.convert("RGB").quantize(256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+        paletted.save(path, optimize=True)
     finally:
         plt.close(fig)
 
@@ -140,15 +144,21 @@ def thin(frame, most=1500):
     return frame.iloc[rows] if hasattr(frame, "iloc") else np.asarray(frame)[rows]
 
 
+SERIES_POINTS = 1000  # a run's output grid has thousands of points; a sweep's points, dozens
+
+
 def log_range(values, decades_below=1):
     """(low, high) of a log axis for positive `values`: from a decade below the data's floor (zeros
-    and non-finite values left out) to a bit above their top; (1e-16, 1) for no positive value.  Draw
-    the values with numpy.maximum(values, low) so that exact zeros lie on the axis's bottom edge."""
+    and non-finite values left out) to a bit above their top; (1e-16, 1) for no positive value.  The
+    floor of a series along a run (SERIES_POINTS or more) is its 1st percentile: the run's exact start
+    and rare cancellations would otherwise stretch the axis over decades no curve lives in; draw such
+    values with numpy.maximum(values, low) so that those below lie on the axis's bottom edge."""
     values = np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in values]) if len(values) else np.array([])
     positive = values[np.isfinite(values) & (values > 0)]
     if not len(positive):
         return 1e-16, 1.0
-    low, high = positive.min(), positive.max()
+    low = np.percentile(positive, 1) if len(positive) >= SERIES_POINTS else positive.min()
+    high = positive.max()
     return 10 ** (np.floor(np.log10(low)) - decades_below), 10 ** (np.ceil(np.log10(high)) + 0.3)
 
 
