@@ -47,6 +47,7 @@ class Parameter:
     unit: str
     about: str
     bounds: tuple  # (relation, value) pairs its value must satisfy (schema.demands), e.g. ((">", 0.0),)
+    printed: str | None  # the default as the book's text extraction shows it, every 0 lost: ".558"
 
     @property
     def allowed(self):
@@ -213,7 +214,8 @@ class Case:
     def parameters(self):
         """Every parameter, in the case file's order."""
         return tuple(Parameter(name, self.params[name], self.defaults[name], self.units[name], item["about"],
-                               tuple((relation, float(bound)) for relation, bound, _ in schema.demands(item, name)))
+                               tuple((relation, float(bound)) for relation, bound, _ in schema.demands(item, name)),
+                               item.get("printed"))
                      for name, item in self.spec["params"].items())
 
     def overrides_text(self):

@@ -7,7 +7,7 @@ import xml.etree.ElementTree as ET
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-from dyncheck.messages import plural
+from dyncheck.messages import plural, statuses_in_words
 from dyncheck.results import Status, consequences, reason, status_counts
 
 CHECKOUT = Path(__file__).resolve().parent.parent  # where the package runs from, if it is a git checkout
@@ -55,7 +55,7 @@ def describe(row):
 
 def recap(results, seconds):
     """The lines that close a run: every failing row, then one summary line, e.g. `dyncheck: FAIL: 2 of 6
-    cases; 351 pass, 40 finding, 3 fail, 1 unstable, 25 not applicable (71 s)`."""
+    cases; 351 pass, 40 findings, 3 fail, 1 unstable, 25 not applicable (71 s)`."""
     rows = failing(results)
     lines = [f"failing rows ({len(rows)}):"] + [f"  {name}: {describe(r)}" for name, r in rows] if rows else []
     lines += [line for result in results for line in wrong_equations(result)]
@@ -77,8 +77,8 @@ def wrong_equations(result):
 
 
 def tally(rows):
-    """How many rows have each status, in words: "58 pass, 16 finding" (statuses with no row left out)."""
-    return ", ".join(f"{n} {status}" for status, n in status_counts(rows).items() if n)
+    """How many rows have each status, in words: "58 pass, 16 findings" (statuses with no row left out)."""
+    return statuses_in_words(status_counts(rows))
 
 
 def github_annotations(results):

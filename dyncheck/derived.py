@@ -262,7 +262,7 @@ def case_file(folder, module, scene, given):
         "reactions": reactions,
         "coord_units": units,
         "params": {p: {"value": value, "unit": param_units[p],
-                       "about": "in the applied forces ([scene.applied])" if p in forcing else
+                       "about": "in the applied forces (`scene.applied` of case.toml)" if p in forcing else
                        ABOUT[bound[p][0].get("attribute")].format(
                            name=bound[p][0]["name"], index=AXES[bound[p][0].get("index", 0)])}
                    for p, value in params.items()},  # every other parameter is bound (bindings refuses the rest)

@@ -1,4 +1,5 @@
-"""The words every message shares: a suggestion for a misspelt name, a count with its noun."""
+"""The words every message shares: a suggestion for a misspelt name, a count with its noun, counts of
+statuses."""
 
 import difflib
 
@@ -12,3 +13,12 @@ def suggest(word, choices):
 def plural(n, noun):
     """"1 case", "6 cases"."""
     return f"{n} {noun}" + ("s" if n != 1 else "")
+
+
+NOUN_STATUSES = ("finding", "runaway")  # of dyncheck.results.Status; the others read as verbs or adjectives
+
+
+def statuses_in_words(counts):
+    """{status: n} in words, those with none left out: "58 pass, 16 findings, 1 fail"."""
+    return ", ".join(plural(n, status) if status in NOUN_STATUSES else f"{n} {status}"
+                     for status, n in counts.items() if n)

@@ -26,7 +26,7 @@ import pandas as pd
 from dyncheck import animation, expressions, stability, student_page, typeset, vibration_page, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
-from dyncheck.messages import plural
+from dyncheck.messages import plural, statuses_in_words
 from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, consequences, format_rows, heading,
                               inside_or_outside, load_result, reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
@@ -490,15 +490,32 @@ def random_tried(result, case):
 
 
 def random_sentence(tried):
-    text = f"{tried['states']} random states at these parameters (seed {tried['seed']})"
+    text = f"{plural(tried['states'], 'random state')} at these parameters (seed {tried['seed']})"
     if tried["parameter_sets"]:
-        text += (f" and {tried['parameter_sets']} random parameter sets (seed {tried['parameter_seed']}) over the"
-                 f" ranges of the case file, {tried['states_per_set']} states each")
+        text += (f" and {plural(tried['parameter_sets'], 'random parameter set')} (seed {tried['parameter_seed']})"
+                 f" over the ranges of the case file, {plural(tried['states_per_set'], 'state')} each")
     return text
 
 
 def markdown_table(frame):
-    return frame.to_markdown(index=False)
+    """The frame as a Markdown table: text as written ("0.0200" stays, tabulate would print 0.02), numbers
+    as tabulate writes them (6 significant digits), nothing (an empty text, None, NaN) as "-", a | in a
+    cell escaped (it would end the cell), and the columns of numbers aligned right."""
+    cells = frame.map(lambda x: "-" if x is None or x == "" or (isinstance(x, float) and math.isnan(x)) else
+                      format(x, "g") if isinstance(x, float) else str(x).replace("|", "\\|"))
+    numeric = [any(map(is_number, cells[column])) and all(is_number(x) or x == "-" for x in cells[column])
+               for column in cells]
+    cells.columns = [str(column).replace("|", "\\|") for column in cells.columns]
+    return cells.to_markdown(index=False, disable_numparse=True,
+                             colalign=["right" if n else "left" for n in numeric] or None)
+
+
+def is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def summary_table(rows):
@@ -513,7 +530,7 @@ def summary_table(rows):
             ratios = np.where(judged["error"] > 0, judged["error"] / judged["tolerance"], 0.0)
         worst = judged.iloc[int(np.argmax(ratios))] if len(judged) else None
         out.append({"check": check, "comparison": sources, "quantities": len(group),
-                    "status": ", ".join(f"{n} {s}" for s, n in group["status"].value_counts().items()),
+                    "status": statuses_in_words(group["status"].value_counts()),
                     "worst": "-" if worst is None else f"{worst['quantity']}: " + (
                         inside_or_outside(worst["row"]) if worst["row"].yes_or_no
                         else f"{worst['error']:.2e} / {worst['tolerance']:.2e}")})
@@ -547,8 +564,7 @@ def not_checked(rows):
 def scene_table(case):
     """The joints of the engine models: what is free, what is prescribed, what is applied."""
     scene = case.scene
-    rows = [{"joint": joint, "role": f"prescribed: {angle:g} + {rate:.6g} t" + (f" + {acc / 2:g} t^2" if acc else "")}
-            for joint, (angle, rate, acc) in scene["driven"].items()]
+    rows = [{"joint": joint, "role": f"prescribed: {law_of_time(*law)}"} for joint, law in scene["driven"].items()]
     whose = "the coordinate " if case.one_derivation else "the book's "
     rows += [{"joint": joint, "role": "free: " + whose + ", ".join(case.coords[i] for i in idx)
               + (" (ball joint, in Euler angles)" if kind == "euler" else "")}
@@ -619,11 +635,6 @@ def write_case_page(result, case, tmp, animations=True):
         figures[kind] = f"figures/{name}_{kind}.png"
         captions[kind] = draw(tmp / figures[kind])
 
-    params = pd.DataFrame([{"parameter": p.name, "value": f"{p.value:.10g}", "unit": p.unit,
-                            "allowed": p.allowed,
-                            "meaning": p.about + (" (overridden)" if p.name in case.overrides else "")}
-                           for p in case.parameters])
-    q0, v0, t_end = case.initial
     counts = pd.Series([str(r.status) for r in rows]).value_counts()
     table = format_rows(rows)
     table["finding"] = [r.finding or "" for r in rows]
@@ -633,7 +644,7 @@ def write_case_page(result, case, tmp, animations=True):
     lines = [
         f"# {heading(case.spec)}",
         "",
-        f"**{result.status}**: " + ", ".join(f"{n} {s}" for s, n in counts.items())
+        f"**{result.status}**: " + statuses_in_words(counts)
         + f"; worst pointwise error among {'MuJoCo and Pinocchio' if case.one_derivation else 'reference, MuJoCo and Pinocchio'}"
         f": {worst_engine_error(rows):.1e}"
         + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md)"
@@ -650,11 +661,8 @@ def write_case_page(result, case, tmp, animations=True):
         *(embed(figures["scene"], "scene", captions["scene"]) if "scene" in figures else ["", ""]),
         "## Parameters",
         "",
-        markdown_table(params),
-        "",
-        ("Initial conditions" if case.one_derivation else "Initial conditions (the book's)")
-        + f": {_state(case.coords, q0, v0)}; "
-        f"horizon {t_end:g} s.",
+        *parameters_table(case),
+        initial_conditions(case),
         "",
         "## How each source models it",
         "",
@@ -808,8 +816,8 @@ def wrong_equations(result):
             " reaction that fails while the equations hold, fitted over the random states and parameter sets by a"
             " few terms in the derivation's own symbols:", "",
             *[f"- {loc}" for loc in result.localisations], "",
-            *([f"{len(follow)} other failing rows compare quantities computed from these equations (accelerations,"
-               " runs, energy): consequences, not further errors.", ""] if follow else [])]
+            *([f"Other failing rows, which compare quantities computed from these equations (accelerations, runs,"
+               f" energy): {len(follow)}, consequences, not further errors.", ""] if follow else [])]
 
 
 def study_sections(result, case, tmp):
@@ -849,17 +857,17 @@ def study_sections(result, case, tmp):
         if len(unstable):
             lines += ["Unstable (blew up; not drawn): " + "; ".join(
                 f"{work_precision.point_label(r)}: {r['detail']}" for _, r in unstable.iterrows()) + ".", ""]
-    lines += ["## Convergence", ""]
     if convergence:
-        lines += ["Observed order of each fixed-step method, from runs at h, h/2, h/4 (checks; tolerance from"
+        lines += ["## Convergence", "",
+                  "Observed order of each fixed-step method, from runs at h, h/2, h/4 (checks; tolerance from"
                   " the next term of the error expansion, see the case file):", "",
                   markdown_table(pd.DataFrame([{"method": r.quantity, "source": r.comparison,
                                                 "|observed - expected|": "-" if r.error is None else f"{r.error:.3f}",
                                                 "tolerance": "-" if r.tolerance is None else f"{r.tolerance:.3f}",
                                                 "status": str(r.status), "detail": r.detail} for r in convergence])),
                   ""]
-    else:
-        lines += [work_precision.NO_SWEEP if not case.coords else "No fixed-step method is checked for this case.", ""]
+    elif case.coords:  # without coordinates the speed section has said that nothing is integrated
+        lines += ["## Convergence", "", "No fixed-step method is checked for this case.", ""]
     if studies and studies["stability"]:
         lines += ["## Stability: where methods fail", ""]
         for study in studies["stability"]:
@@ -871,14 +879,55 @@ def study_sections(result, case, tmp):
             lines += [f"### {study.title}", "", *[f"- {sentence}" for sentence in study.findings], "",
                       *embed(chart, study.study, caption),
                       f"*How:* {study.why}", "",
-                      f"<details><summary>The numbers ({len(study.table)} rows)</summary>", "",
+                      f"<details><summary>The numbers ({plural(len(study.table), 'row')})</summary>", "",
                       markdown_table(study.table), "", "</details>", ""]
     return lines, files
+
+
+def parameters_table(case):
+    """The page's table of parameters, and where the book's program gives one, what the listing shows."""
+    printed = any(p.printed for p in case.parameters)
+    table = pd.DataFrame([{"parameter": p.name, "value": f"{p.value:.10g}", "unit": p.unit, "allowed": p.allowed,
+                           **({"as printed": as_printed(p)} if printed else {}),
+                           "meaning": p.about + (" (overridden)" if p.name in case.overrides else "")}
+                          for p in case.parameters])
+    # ../docs: the book's report trees are top-level folders of the checkout (reports/, reports-NAME=VALUE/)
+    return [markdown_table(table), "",
+            *(["*As printed*: the value in the book's program listing as the book's text extraction shows it.  The"
+               " extraction lost every digit 0; each value was read back by replaying the listing for every way of"
+               " restoring the zeros and keeping the one that lands inside the book's figures ([the book's"
+               " numbers](../docs/book-numbers.md), example by example).", ""] if printed else [])]
+
+
+def as_printed(parameter):
+    """A parameter's value as the book's listing shows it and as read, for the parameters table."""
+    if parameter.printed is None:
+        return "-"
+    read = f"{parameter.default:.10g}"
+    return f"printed `{parameter.printed}`" + ("" if parameter.printed == read else
+                                                f", read {read} (digits 0 lost in extraction)")
+
+
+def initial_conditions(case):
+    """The page's line on the initial state and the horizon; a scene with no free coordinate starts where its
+    prescribed motions put it, and the line gives their laws instead."""
+    q0, v0, t_end = case.initial
+    state = _state(case.coords, q0, v0) if case.coords else "none, every joint moves as prescribed: " + ", ".join(
+        f"{joint} = {law_of_time(*law)}" for joint, law in case.scene["driven"].items())
+    label = "Initial conditions" if case.one_derivation else "Initial conditions (the book's)"
+    return f"{label}: {state}; horizon {t_end:g} s."
 
 
 def _state(coords, q, v):
     return ", ".join(f"{c} = {x:.6g}" for c, x in zip(coords, q)) + ", " + \
         ", ".join(f"{c}' = {x:.6g}" for c, x in zip(coords, v))
+
+
+def law_of_time(angle, rate, acc):
+    """A prescribed motion angle + rate t + acc t^2/2 with its zero terms left out: "0.8 + 0.3 t - 0.05 t^2"."""
+    terms = [f"{coefficient:.6g}{power}" for coefficient, power in ((angle, ""), (rate, " t"), (acc / 2, " t^2"))
+             if coefficient]
+    return " + ".join(terms).replace("+ -", "- ") or "0"
 
 
 SUMMARY_KEYS = {"case", "section", "params", "checks", "findings", "title", "status", "worst_engine_error",
@@ -992,7 +1041,7 @@ def write_index(tmp, cases):
                                                                 (tmp / f"{case['case']}_student.md").is_file() else ""),
             "section": case["section"],
             "title": case["title"] + with_overrides(case),
-            "status": case["status"].upper(), "checks": ", ".join(f"{n} {s}" for s, n in counts.items()),
+            "status": case["status"].upper(), "checks": statuses_in_words(counts),
             "worst engine error": "-" if case["worst_engine_error"] is None else f"{case['worst_engine_error']:.1e}",
             "findings": ", ".join(f"{f['id']} ({size(f['error'], '.2g')})" for f in case["findings"]) or "none"})
     tried = [c["random"] for c in cases]
@@ -1010,8 +1059,9 @@ def write_index(tmp, cases):
              markdown_table(pd.DataFrame(rows)), "",
              *speed_table(cases),
              *vibration_page.index_lines(cases, book),
-             f"The last run tried {sum(t['parameter_sets'] for t in tried)} random parameter sets besides"
-             f" {'the book' if book else 'each case'}'s and {states} random states in all ({plural(len(cases), 'case')};"
+             f"The last run tried {plural(sum(t['parameter_sets'] for t in tried), 'random parameter set')} besides"
+             f" {'the book' if book else 'each case'}'s and {plural(states, 'random state')} in all"
+             f" ({plural(len(cases), 'case')};"
              f" seeds on each case page): {derivations}, MuJoCo and Pinocchio "
              + (f"disagreed in {', '.join(disagreed)}." if disagreed else
                 "agreed at every one of them within the pointwise tolerance."), ""]

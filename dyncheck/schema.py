@@ -4,7 +4,8 @@ Three checks, in the order a case is loaded (dyncheck.case.Case):
 `validate(spec, file)` the parsed file's keys, types, units and cross-references;
 `check_params(...)` the parameter values after overrides (positive masses, each parameter's bounds, the
 case's constraints);
-`check_values(...)` every number that may be an expression, evaluated at those parameters.
+`check_values(...)` every number that may be an expression, evaluated at those parameters, and each
+parameter's printed form (as the book's text shows it) against its value.
 Each raises one ValueError naming the file, the field (a dotted path such as `integration.rtol`,
 or `override m` for an override) and the value.
 docs/case-file.md, the reference of the case file, is `markdown()`.
@@ -47,8 +48,8 @@ SCHEMA = ("table", {
     "coords": ("list", "str"),
     "reactions": ("list", "str"),
     "coord_units": ("list", ("one of", "rad", "m")),
-    "params": ("map", ("table", {"value": "number", "unit": "str", "about": "str", "minimum?": "number",
-                                 "exclusive_minimum?": "number", "maximum?": "number",
+    "params": ("map", ("table", {"value": "number", "unit": "str", "about": "str", "printed?": "str",
+                                 "minimum?": "number", "exclusive_minimum?": "number", "maximum?": "number",
                                  "exclusive_maximum?": "number"})),
     "constraints?": ("list", ("table", {"expression": "str", "strict?": "bool", "why": "str"})),
     "initial": ("table", {"q": ("list", "expr"), "v": ("list", "expr"), "t_end": "expr > 0"}),
@@ -177,6 +178,11 @@ BOUNDS = {"minimum": ">=", "exclusive_minimum": ">", "maximum": "<=", "exclusive
 RELATIONS = {">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt}
 
 
+def without_zeros(value):
+    """A number as the book's text extraction, which lost every digit 0, shows it: 0.0558 -> ".558", 2000 -> "2"."""
+    return np.format_float_positional(float(value), trim="-").replace("0", "")
+
+
 RESERVED_NAMES = ("index", "errata")  # the report's own pages: <name>.md of a case would replace them
 
 
@@ -223,7 +229,13 @@ def _check_constraints(constraints, params, overrides, file):
 
 
 def check_values(spec, file, value):
-    """Every number that may be an expression, evaluated by `value(x, field)` at the case's parameters."""
+    """Every number that may be an expression, evaluated by `value(x, field)` at the case's parameters, and
+    each parameter's printed form against its value (after check_params: a value that is not physical is
+    the first thing to say)."""
+    for p, item in spec["params"].items():
+        if "printed" in item and item["printed"] != without_zeros(item["value"]):
+            raise _error(file, f"params.{p}.printed", item["printed"], f"is not params.{p}.value = {item['value']!r} "
+                         f"as the book's text shows it, every digit 0 lost ('{without_zeros(item['value'])}')")
     values = {}
     for field, x, condition in _expressions(spec, SCHEMA, ""):
         values[field] = v = value(x, field)
@@ -589,6 +601,9 @@ MEANINGS = {
     "params.<name>.value": "Its default value.",
     "params.<name>.unit": "Its unit, one of the known units (see Parameters).",
     "params.<name>.about": "What it is and where the book gives it; shown in the report.",
+    "params.<name>.printed": "The value as a program listing shows it in the book's text extraction, which lost "
+                             "every digit 0: `\".558\"` for h = 0.0558.  It must be the value with every 0 removed; "
+                             "the report shows both, and docs/book-numbers.md how each value was recovered.",
     "params.<name>.minimum": "Its value (default, override, random range) must be >= this.",
     "params.<name>.exclusive_minimum": "Its value (default, override, random range) must be > this.",
     "params.<name>.maximum": "Its value (default, override, random range) must be <= this.",

@@ -77,7 +77,7 @@ def test_a_real_run_writes_json_of_the_schema_and_junit_of_its_rows(tmp_path, ca
     json_path, junit_path = tmp_path / "piston.json", tmp_path / "piston.xml"
     assert cli.main(["run", "piston", "--json", str(json_path), "--junit", str(junit_path)]) == 0
     last = capsys.readouterr().out.splitlines()[-1]
-    assert re.fullmatch(r"dyncheck: PASS: 1 case; \d+ pass, \d+ finding \(\d+ s\)", last), last
+    assert re.fullmatch(r"dyncheck: PASS: 1 case; \d+ pass, \d+ findings \(\d+ s\)", last), last
     document = json.loads(json_path.read_text())
     validate(document)
     assert re.fullmatch(r"[0-9a-f]{40}(-dirty)?", document["tool"]["commit"])  # the tests run in the checkout
@@ -147,7 +147,7 @@ def test_a_run_ends_with_its_failing_rows_and_one_summary_line(monkeypatch, caps
         "a non-finite state",
         "  toy: pointwise F3 (reference vs mujoco): fail: registered finding 0.1-gone no longer reproduces: "
         "error 1.00e-15 <= tolerance 1.00e-09 [finding 0.1-gone]"]
-    assert re.fullmatch(r"dyncheck: FAIL: 1 of 2 cases; 2 pass, 2 finding, 2 fail, 1 inconclusive, 1 unstable, "
+    assert re.fullmatch(r"dyncheck: FAIL: 1 of 2 cases; 2 pass, 2 findings, 2 fail, 1 inconclusive, 1 unstable, "
                         r"2 not applicable \(\d+ s\)", recap[5]) and len(recap) == 6
 
 

@@ -27,7 +27,7 @@ def test_below_k_crit_every_source_runs_away_and_the_run_passes(tmp_path, capsys
     for r in runaways:  # the physical reason with its numbers, and when each source escaped
         assert "m Omega^2 = 159.9 N/m beats the spring k = 100 N/m" in r["detail"]
         assert "escaped at t = 0.35" in r["detail"] and "every source escaped (reference at 0.3518 s" in r["detail"]
-    assert "16 runaway" in capsys.readouterr().out
+    assert "16 runaways" in capsys.readouterr().out
 
 
 def test_above_k_crit_nothing_is_bounded_and_nothing_runs_away():

@@ -66,6 +66,10 @@ BAD_CASE_FILES = [
     ("spinning_top", "Ixx = { value = 0.0029393,", "Ixx = { value = 0.0018,",
      "constraints[0] = 'Ixx - m*h**2' is -1.214e-05 at Ixx = 0.0018, m = 0.582, h = 0.0558, not > 0: the top's "
      "moment of inertia about its centre of mass"),
+    ("spinning_top", 'printed = ".558"', 'printed = ".0558"', "params.h.printed = '.0558' is not params.h.value = "
+     "0.0558 as the book's text shows it, every digit 0 lost ('.558')"),
+    ("spring_pendulum", "a = { value = 0.05,", "a = { value = 0.06,", "params.a.printed = '.5' is not "
+     "params.a.value = 0.06 as the book's text shows it, every digit 0 lost ('.6')"),
     ("spring_pendulum", "rtol = 1e-10", "rtol = inf", "integration.rtol = inf is not finite"),
     ("spring_pendulum", "output_step = 1e-3", "output_step = 0.0", "integration.output_step = 0.0 must be > 0"),
     ("spring_pendulum", "output_step = 1e-3", "output_step = 1.5e-4",

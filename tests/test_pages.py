@@ -1,0 +1,114 @@
+"""Every page of both report trees, rendered from the saved results (`report --from`), reads as prose and
+tables: no Python or numpy repr, no NaN or None shown as a value, no empty field or table cell, no
+bracket reference that links nowhere, no relative link to a file the tree lacks, no "1 cases" or
+"16 finding" (issue 16).  Each failure names the page and the line."""
+
+import re
+import shutil
+from pathlib import Path
+
+import matplotlib.figure
+import pandas as pd
+import pytest
+
+from dyncheck.cli import main
+from dyncheck.messages import statuses_in_words
+from dyncheck.report import law_of_time, markdown_table
+from dyncheck.schema import UNIT_REGISTRY
+
+ROOT = Path(__file__).resolve().parent.parent
+TREES = {"reports": ROOT / "reports" / "results", "reports/examples": ROOT / "reports" / "examples" / "results"}
+
+# The nouns the pages count, singular and plural, for "1 cases" and "16 finding".
+NOUNS = "case|row|finding|check|state|set|parameter|run|edit|quantity|source|method|figure|runaway|step|mode"
+PLURALS = ("cases|rows|findings|checks|states|sets|parameters|runs|edits|quantities|sources|methods|figures|"
+           "runaways|steps|modes")
+DEFECTS = [  # (what is wrong, a pattern that shows it in a line of prose or a table row)
+    ("a Python or numpy repr", re.compile(r"\bnp\.\w+\(|\barray\(|\bdtype\b|\bobject at 0x")),
+    ("NaN or None shown as a value",
+     re.compile(r"(?<![\w'-])(?:nan|NaN)(?![\w'-])|(?:^\s*|[=:(]\s*)None\s*(?:$|[,;.)])")),
+    ("an empty field", re.compile(r"[:=]\s*[,;]|\(\s*\)|^\s*[,;]")),
+    ("a count that disagrees with its noun",
+     re.compile(rf"(?<![\d.,-])\b1 (?:{PLURALS})\b"
+                rf"|(?<![\d.,-])\b(?:0|[2-9]|\d\d+) (?:{NOUNS})\b(?![-'])")),
+]
+REFERENCE = re.compile(r"(?<![\w\]!\\])\[{1,2}([A-Za-z_][\w.]*)\]{1,2}(?![(\[])")  # [word] or [[word]], no link
+LINK = re.compile(r"\]\(([^)\s]+)\)")
+
+
+@pytest.fixture(scope="module")
+def pages(tmp_path_factory):
+    """{page: its file} of both trees rendered into tmp/reports and tmp/reports/examples beside a copy of
+    the checkout's docs, so that a page's links resolve as in the checkout.  The figures are drawn but not
+    rasterised (an empty file each, which the pages' links find): tests/test_figures.py looks at them."""
+    missing = [str(results) for results in TREES.values() if not results.is_dir()]
+    if missing:
+        pytest.skip(f"no saved results to render ({', '.join(missing)}): run `dyncheck report` first")
+    root = tmp_path_factory.mktemp("rendered")
+    shutil.copytree(ROOT / "docs", root / "docs")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(matplotlib.figure.Figure, "savefig", lambda figure, path, *args, **kwargs: Path(path).touch())
+        for tree, results in TREES.items():  # the book's tree first: it replaces the folder the examples go into
+            assert main(["report", "--from", str(results), "--out", str(root / tree)]) == 0
+    return {path.relative_to(root): path for path in sorted((root / "reports").rglob("*.md"))}
+
+
+def prose_lines(path):
+    """(number, line) of a page outside fenced code blocks, each inline code span and formula a word."""
+    fenced = False
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
+        elif not fenced:
+            yield number, re.sub(r"`[^`]*`|\$\$.*?\$\$|\$[^$]*\$", "code", line)
+
+
+def cells(line):
+    """The cells of a Markdown table row (a | escaped as \\| stays in its cell), or none for other lines."""
+    return re.split(r"(?<!\\)\|", line.strip())[1:-1] if line.lstrip().startswith("|") else []
+
+
+def test_no_page_shows_a_repr_an_empty_field_or_a_wrong_plural(pages):
+    found = []
+    for page, path in pages.items():
+        for number, line in prose_lines(path):
+            parts = cells(line) or [line]
+            found += [f"{page}:{number}: {what}: {line.strip()[:160]}" for what, pattern in DEFECTS
+                      if any(pattern.search(part) for part in parts)]
+            if any(not cell.strip() for cell in cells(line)):
+                found.append(f"{page}:{number}: an empty table cell: {line.strip()[:160]}")
+    assert not found, "\n".join(found)
+
+
+def is_unit(word):
+    try:
+        UNIT_REGISTRY.parse_units(word)
+    except Exception:  # pint's parser fails in many ways
+        return False
+    return True
+
+
+def test_every_bracket_is_a_link_and_every_link_resolves(pages):
+    found = []
+    for page, path in pages.items():
+        for number, line in prose_lines(path):
+            found += [f"{page}:{number}: [{word}] refers to nothing a reader of the page can follow"
+                      for word in REFERENCE.findall(line) if not is_unit(word) and word not in ("x", "X")]  # checkboxes
+            for target in LINK.findall(line):
+                file = target.split("#")[0]
+                if file and "://" not in file and not (path.parent / file).exists():
+                    found.append(f"{page}:{number}: the link {target} names no file")
+    assert not found, "\n".join(found)
+
+
+def test_a_table_shows_text_as_written_and_nothing_as_a_dash():
+    table = markdown_table(pd.DataFrame({"step [s]": ["0.0200"], "finding": [""], "error": [float("nan")],
+                                         "|a - b|": ["|x|"], "count": [3]}))
+    assert table.splitlines()[0].split() == ["|", "step", "[s]", "|", "finding", "|", "error", "|", "\\|a", "-",
+                                             "b\\|", "|", "count", "|"]
+    assert table.splitlines()[2].split() == ["|", "0.0200", "|", "-", "|", "-", "|", "\\|x\\|", "|", "3", "|"]
+
+
+def test_counts_agree_with_their_nouns():
+    assert statuses_in_words({"pass": 1, "finding": 16, "fail": 0, "runaway": 1}) == "1 pass, 16 findings, 1 runaway"
+    assert law_of_time(0.8, 0.3, -0.1) == "0.8 + 0.3 t - 0.05 t^2" and law_of_time(0.0, 1.5, 0.0) == "1.5 t"
