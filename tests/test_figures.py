@@ -1,36 +1,19 @@
-"""Every figure prints: rendered from the saved results of the book's cases and the examples, each PNG has
+"""Every figure prints: rendered from this session's runs of the book's cases and the examples, each PNG has
 its vector PDF twin and fits the page's text width, and every figure on every page has its caption
 (dyncheck.style.embed).  dyncheck.style.save refuses what would not print."""
 
 import re
-from dataclasses import replace
-from pathlib import Path
 
 import pytest
 
 from dyncheck import style
-from dyncheck.case import Case
-from dyncheck.report import write_reports
-from dyncheck.results import load_results
 
-ROOT = Path(__file__).resolve().parent.parent
-SAVED = {"pages": (ROOT / "reports" / "results", ROOT / "cases"),
-         "examples": (ROOT / "reports" / "examples" / "results", ROOT / "examples")}
 
 
 @pytest.fixture(scope="module")
-def pages(tmp_path_factory):
-    """The pages of the saved results (what `dyncheck report` left in reports/results and
-    reports/examples/results), rendered as `report --from` does, with this checkout's case folders: the
-    figures drawn by the code and case files under test."""
-    out = tmp_path_factory.mktemp("figures")
-    for name, (saved, cases) in SAVED.items():
-        if not saved.is_dir():
-            pytest.skip(f"no saved results in {saved}: `dyncheck report` makes them")
-        results = [replace(r, folder=str(cases / r.name), spec=Case(cases / r.name, r.overrides).spec)
-                   for r in load_results(saved)]
-        write_reports(results, out / name)
-    return out
+def pages(rendered):
+    """Both report trees, rendered from this session's runs (conftest.rendered)."""
+    return rendered / "reports"
 
 
 def test_every_figure_has_a_vector_twin_and_fits_the_page(pages):

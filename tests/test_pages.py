@@ -1,23 +1,17 @@
-"""Every page of both report trees, rendered from the saved results (`report --from`), reads as prose and
+"""Every page of both report trees, rendered from this session's runs as `dyncheck report` writes them, reads as prose and
 tables: no Python or numpy repr, no NaN or None shown as a value, no empty field or table cell, no
 bracket reference that links nowhere, no relative link to a file the tree lacks, no "1 cases" or
 "16 finding" (issue 16).  Each failure names the page and the line."""
 
 import re
-import shutil
-from pathlib import Path
 
-import matplotlib.figure
 import pandas as pd
 import pytest
 
-from dyncheck.cli import main
 from dyncheck.messages import statuses_in_words
 from dyncheck.report import law_of_time, markdown_table
 from dyncheck.schema import UNIT_REGISTRY
 
-ROOT = Path(__file__).resolve().parent.parent
-TREES = {"reports": ROOT / "reports" / "results", "reports/examples": ROOT / "reports" / "examples" / "results"}
 
 # The nouns the pages count, singular and plural, for "1 cases" and "16 finding".
 NOUNS = "case|row|finding|check|state|set|parameter|run|edit|quantity|source|method|figure|runaway|step|mode"
@@ -37,20 +31,9 @@ LINK = re.compile(r"\]\(([^)\s]+)\)")
 
 
 @pytest.fixture(scope="module")
-def pages(tmp_path_factory):
-    """{page: its file} of both trees rendered into tmp/reports and tmp/reports/examples beside a copy of
-    the checkout's docs, so that a page's links resolve as in the checkout.  The figures are drawn but not
-    rasterised (an empty file each, which the pages' links find): tests/test_figures.py looks at them."""
-    missing = [str(results) for results in TREES.values() if not results.is_dir()]
-    if missing:
-        pytest.skip(f"no saved results to render ({', '.join(missing)}): run `dyncheck report` first")
-    root = tmp_path_factory.mktemp("rendered")
-    shutil.copytree(ROOT / "docs", root / "docs")
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(matplotlib.figure.Figure, "savefig", lambda figure, path, *args, **kwargs: Path(path).touch())
-        for tree, results in TREES.items():  # the book's tree first: it replaces the folder the examples go into
-            assert main(["report", "--from", str(results), "--out", str(root / tree)]) == 0
-    return {path.relative_to(root): path for path in sorted((root / "reports").rglob("*.md"))}
+def pages(rendered):
+    """{page: its file} of both report trees, rendered from this session's runs (conftest.rendered)."""
+    return {path.relative_to(rendered): path for path in sorted((rendered / "reports").rglob("*.md"))}
 
 
 def prose_lines(path):

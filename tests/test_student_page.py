@@ -10,18 +10,15 @@ import pytest
 
 import dyncheck
 from dyncheck import student_page
-from dyncheck.report import write_reports
 
 BOOK = ("piston", "rotating_pendulum", "rotating_particle", "spring_pendulum", "double_pendulum", "spinning_top")
 JARGON = re.compile(r"\b(armature|rollout|placeholder|rows?|tolerance ceiling|ceiling)\b", re.IGNORECASE)
 
 
 @pytest.fixture(scope="module")
-def pages(results, tmp_path_factory):
-    """Every book example's student page, rendered with the validation pages from one run."""
-    out = tmp_path_factory.mktemp("report")
-    write_reports([results[name] for name in BOOK], out)
-    return out
+def pages(rendered):
+    """Every book example's student page, rendered with the validation pages (conftest.rendered)."""
+    return rendered / "reports"
 
 
 def sections(page):
@@ -79,7 +76,7 @@ def edited(tmp_path, name, old, new):
 
 
 def test_a_course_naming_an_unknown_quantity_is_refused_on_load(tmp_path):
-    folder = edited(tmp_path, "spring_pendulum", 'quantities = ["Newton Y3 (1.8.3)"]', 'quantities = ["Newton Q3"]')
+    edited(tmp_path, "spring_pendulum", 'quantities = ["Newton Y3 (1.8.3)"]', 'quantities = ["Newton Q3"]')
     with pytest.raises(ValueError, match=r"case\.toml: course\.steps\[4\]\.show\[1\]\.quantities = 'Newton Q3'"):
         dyncheck.load_case("spring_pendulum", cases_dir=tmp_path)
 
