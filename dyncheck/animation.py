@@ -11,7 +11,6 @@ A case's `[animation]` table chooses what is shown beside the motion: the book's
 ghosted over) the exact motion, a force as an arrow, a quantity's graph growing with the frames.
 """
 
-import io
 import math
 import os
 from dataclasses import dataclass
@@ -22,7 +21,7 @@ from PIL import Image
 from dyncheck import store
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.results import heading
-from dyncheck.style import MIN_FONT, plt
+from dyncheck.style import MIN_FONT, embed, plt
 
 MAX_FRAMES = 100
 MIN_INTERVAL = 0.05  # s between frames: 20 per second at most, so that the GIF plays about in real time
@@ -366,4 +365,4 @@ def section(result, case, tmp, make):
         if gl is not None:
             gl.close()
     text = caption(result, case, count, interval)
-    return lines + [f"![animation of {case.name}]({gif})", "", f"*Figure: {text.strip()}* (no vector twin: an animation)", ""], [gif]
+    return lines + embed(gif, f"animation of {case.name}", text), [gif]

@@ -216,10 +216,15 @@ def step_lines(number, step, case, result, tmp):
     if step.vibration:
         lines += vibration_lines(case, result)
     for figure, caption in step.figures:
-        path = f"figures/{case.name}_{figure}.png"
-        if not (tmp / path).is_file():
-            raise ValueError(f"{case.file}: course.steps: figure {figure!r}: the case page drew no {path}")
-        lines += style.embed(path, f"{case.title}: {figure}", caption)
+        drawn = [path for path in (f"figures/{case.name}_{figure}.png", f"figures/{case.name}_{figure}.gif")
+                 if (tmp / path).is_file()]
+        if drawn:
+            lines += style.embed(drawn[0], f"{case.title}: {figure}", caption)
+        elif figure == "animation":  # `dyncheck report --no-animations`, or results without frames
+            lines += ["(The animation is not in this report: the case page says why.)", ""]
+        else:
+            raise ValueError(f"{case.file}: course.steps: figure {figure!r}: the case page drew no "
+                             f"figures/{case.name}_{figure}.png")
     return lines
 
 

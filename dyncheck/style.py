@@ -163,11 +163,13 @@ def log_range(values, decades_below=1):
 
 
 def embed(path, alt, caption):
-    """A figure on a page: the PNG (`path` relative to the page), and under it its caption, which says
-    what the figure shows and what to see in it, with a link to the vector twin for print."""
+    """A figure on a page: the image (`path` relative to the page), and under it its caption, which says
+    what the figure shows and what to see in it, with a link to the vector twin for print (a PNG's; an
+    animation, a GIF, has none)."""
     path = Path(path)
-    return [f"![{alt}]({path.as_posix()})", "",
-            f"*Figure: {caption.strip()}* ([vector PDF]({path.with_suffix('.pdf').as_posix()}))", ""]
+    twin = ("an animation: no vector twin" if path.suffix == ".gif" else
+            f"[vector PDF]({path.with_suffix('.pdf').as_posix()})")
+    return [f"![{alt}]({path.as_posix()})", "", f"*Figure: {caption.strip()}* ({twin})", ""]
 
 
 def along(source, points):
