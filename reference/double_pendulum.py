@@ -47,34 +47,28 @@ class Reference:
     def __init__(self, params):
         self.p = dict(params)
 
-    def _solve(self, q, v):
-        """(T1, T2, theta1'', theta2'') from (1.27)-(1.28)."""
+    def _names(self, q, v):
+        """The symbols of the printed expressions but the accelerations."""
         p = self.p
-        m1, m2, l1, l2, g = p["m1"], p["m2"], p["l1"], p["l2"], p["g"]
-        t1, t2 = q
-        w1, w2 = v
-        s1, c1, s2, c2 = np.sin(t1), np.cos(t1), np.sin(t2), np.cos(t2)
-        s12, c12 = np.sin(t1 + t2), np.cos(t1 + t2)
-        matrix = np.array([
-            [0.0, s2, -m1 * l1, 0.0],
-            [1.0, -c2, 0.0, 0.0],
-            [0.0, 0.0, -m2 * (l1 * c2 + l2), -m2 * l2],
-            [0.0, 1.0, m2 * l1 * s2, 0.0],
-        ])
-        rhs = np.array([
-            m1 * g * s1,
-            m1 * g * c1 + m1 * l1 * w1**2,
-            m2 * g * s12 + m2 * l1 * w1**2 * s2,
-            m2 * g * c12 + m2 * l1 * w1**2 * c2 + m2 * l2 * (w1 + w2) ** 2,
-        ])
-        return np.linalg.solve(matrix, rhs)
+        return {"m1": p["m1"], "m2": p["m2"], "l1": p["l1"], "l2": p["l2"], "g": p["g"], "t1": q[0], "t2": q[1],
+                "d1": v[0], "d2": v[1], "sin": np.sin, "cos": np.cos, "array": np.array}
+
+    def _solve(self, q, v):
+        """(T1, T2, theta1'', theta2'') from (1.27)-(1.28) in the book's matrix form."""
+        system = printed.evaluate(self.PRINTED, self._names(q, v), ("A", "b"))
+        return np.linalg.solve(system["A"], system["b"])
 
     def accelerations(self, t, q, v):
         return self._solve(q, v)[2:]
 
     # The accelerations of the masses as 1.9.2 prints them: B1 a_B (mass 1, in B1) and B2 a_A
-    # (mass 2, in B2), with this source's own theta''.  The strings are the code (see `symbols`).
-    PRINTED = {"a_B": "array([l1*dd1, l1*d1**2, 0.0])",
+    # (mass 2, in B2), with this source's own theta''; and (1.27)-(1.28) in the book's matrix form (p. 66),
+    # A (T1, T2, theta1'', theta2'') = b, which `_solve` solves.  The strings are the code (see `symbols`).
+    PRINTED = {"A": "array([[0.0, sin(t2), -m1*l1, 0.0], [1.0, -cos(t2), 0.0, 0.0],"
+                    " [0.0, 0.0, -m2*(l1*cos(t2) + l2), -m2*l2], [0.0, 1.0, m2*l1*sin(t2), 0.0]])",
+               "b": "array([m1*g*sin(t1), m1*g*cos(t1) + m1*l1*d1**2, m2*g*sin(t1 + t2) + m2*l1*d1**2*sin(t2),"
+                    " m2*g*cos(t1 + t2) + m2*l1*d1**2*cos(t2) + m2*l2*(d1 + d2)**2])",
+               "a_B": "array([l1*dd1, l1*d1**2, 0.0])",
                "a_A": "array([l1*(dd1*cos(t2) + d1**2*sin(t2)) + l2*(dd1 + dd2),"
                       " l1*(-dd1*sin(t2) + d1**2*cos(t2)) + l2*(d1 + d2)**2, 0.0])"}
     # The printed symbols' LaTeX (dyncheck.typeset), where its defaults do not know them.
@@ -83,8 +77,7 @@ class Reference:
 
     def symbols(self, t, q, v):
         dd1, dd2 = self.accelerations(t, q, v)
-        return {"l1": self.p["l1"], "l2": self.p["l2"], "t2": q[1], "d1": v[0], "d2": v[1], "dd1": dd1,
-                "dd2": dd2, "sin": np.sin, "cos": np.cos, "array": np.array}
+        return {**self._names(q, v), "dd1": dd1, "dd2": dd2}
 
     def point_accelerations(self, t, q, v):
         return printed.evaluate(self.PRINTED, self.symbols(t, q, v), ("a_B", "a_A"))
@@ -112,35 +105,32 @@ class Reference:
 class Book(Reference):
     """(1.29)-(1.32), transcribed from the Pascal listing (Tr1, Tr2, ddt1, ddt2)."""
 
+    # Cramer's rule on the matrix form: (1.29) T1, (1.30) T2, (1.31) theta1'', (1.32) theta2'', each over the
+    # common denominator, signs from the listing.  The strings are the code that `_solve` evaluates.
+    PRINTED = {**Reference.PRINTED,
+               "T1": "(-(d1**2*l1**2*l2*m1**2*m2) - g*l1*l2*m1**2*m2*cos(t1) - d1**2*l1*l2**2*m1*m2**2*cos(t2)"
+                     " - 2*d1*d2*l1*l2**2*m1*m2**2*cos(t2) - d2**2*l1*l2**2*m1*m2**2*cos(t2)"
+                     " - d1**2*l1**2*l2*m1*m2**2*cos(t2)**2 - g*l1*l2*m1*m2**2*cos(t2)*cos(t1 + t2)"
+                     " - g*l1*l2*m1*m2**2*cos(t2)*sin(t1)*sin(t2) - d1**2*l1**2*l2*m1*m2**2*sin(t2)**2"
+                     " - g*l1*l2*m1*m2**2*cos(t1)*sin(t2)**2)/(-(l1*l2*m1*m2) - l1*l2*m2**2*sin(t2)**2)",
+               "T2": "(-(d1**2*l1*l2**2*m1*m2**2) - 2*d1*d2*l1*l2**2*m1*m2**2 - d2**2*l1*l2**2*m1*m2**2"
+                     " - d1**2*l1**2*l2*m1*m2**2*cos(t2) - g*l1*l2*m1*m2**2*cos(t1 + t2)"
+                     " - g*l1*l2*m1*m2**2*sin(t1)*sin(t2))/(-(l1*l2*m1*m2) - l1*l2*m2**2*sin(t2)**2)",
+               "theta1_acc": "(g*l2*m1*m2*sin(t1) - d1**2*l2**2*m2**2*sin(t2) - 2*d1*d2*l2**2*m2**2*sin(t2)"
+                             " - d2**2*l2**2*m2**2*sin(t2) - d1**2*l1*l2*m2**2*cos(t2)*sin(t2)"
+                             " - g*l2*m2**2*cos(t1 + t2)*sin(t2))/(-(l1*l2*m1*m2) - l1*l2*m2**2*sin(t2)**2)",
+               "theta2_acc": "(-(g*l2*m1*m2*sin(t1)) - g*l1*m1*m2*cos(t2)*sin(t1) + d1**2*l1**2*m1*m2*sin(t2)"
+                             " + d1**2*l2**2*m2**2*sin(t2) + 2*d1*d2*l2**2*m2**2*sin(t2) + d2**2*l2**2*m2**2*sin(t2)"
+                             " + 2*d1**2*l1*l2*m2**2*cos(t2)*sin(t2) + 2*d1*d2*l1*l2*m2**2*cos(t2)*sin(t2)"
+                             " + d2**2*l1*l2*m2**2*cos(t2)*sin(t2) + d1**2*l1**2*m2**2*cos(t2)**2*sin(t2)"
+                             " + g*l2*m2**2*cos(t1 + t2)*sin(t2) + g*l1*m2**2*cos(t2)*cos(t1 + t2)*sin(t2)"
+                             " + d1**2*l1**2*m2**2*sin(t2)**3 + g*l1*m1*m2*sin(t1 + t2)"
+                             " + g*l1*m2**2*sin(t2)**2*sin(t1 + t2))/(-(l1*l2*m1*m2) - l1*l2*m2**2*sin(t2)**2)"}
+    CLOSED_FORMS = ("T1", "T2", "theta1_acc", "theta2_acc")
+
     def _solve(self, q, v):
-        p = self.p
-        m1, m2, l1, l2, g = p["m1"], p["m2"], p["l1"], p["l2"], p["g"]
-        t1, t2 = q
-        dt1, dt2 = v
-        s1, c1, s2, c2 = np.sin(t1), np.cos(t1), np.sin(t2), np.cos(t2)
-        s12, c12 = np.sin(t1 + t2), np.cos(t1 + t2)
-        den = -(l1 * l2 * m1 * m2) - l1 * l2 * m2**2 * s2**2
-        ddt1 = (g * l2 * m1 * m2 * s1 - dt1**2 * l2**2 * m2**2 * s2
-                - 2 * dt1 * dt2 * l2**2 * m2**2 * s2 - dt2**2 * l2**2 * m2**2 * s2
-                - dt1**2 * l1 * l2 * m2**2 * c2 * s2 - g * l2 * m2**2 * c12 * s2) / den
-        ddt2 = (-(g * l2 * m1 * m2 * s1) - g * l1 * m1 * m2 * c2 * s1
-                + dt1**2 * l1**2 * m1 * m2 * s2 + dt1**2 * l2**2 * m2**2 * s2
-                + 2 * dt1 * dt2 * l2**2 * m2**2 * s2 + dt2**2 * l2**2 * m2**2 * s2
-                + 2 * dt1**2 * l1 * l2 * m2**2 * c2 * s2 + 2 * dt1 * dt2 * l1 * l2 * m2**2 * c2 * s2
-                + dt2**2 * l1 * l2 * m2**2 * c2 * s2 + dt1**2 * l1**2 * m2**2 * c2**2 * s2
-                + g * l2 * m2**2 * c12 * s2 + g * l1 * m2**2 * c2 * c12 * s2
-                + dt1**2 * l1**2 * m2**2 * s2**3 + g * l1 * m1 * m2 * s12
-                + g * l1 * m2**2 * s2**2 * s12) / den
-        tr1 = (-(dt1**2 * l1**2 * l2 * m1**2 * m2) - g * l1 * l2 * m1**2 * m2 * c1
-               - dt1**2 * l1 * l2**2 * m1 * m2**2 * c2 - 2 * dt1 * dt2 * l1 * l2**2 * m1 * m2**2 * c2
-               - dt2**2 * l1 * l2**2 * m1 * m2**2 * c2 - dt1**2 * l1**2 * l2 * m1 * m2**2 * c2**2
-               - g * l1 * l2 * m1 * m2**2 * c2 * c12 - g * l1 * l2 * m1 * m2**2 * c2 * s1 * s2
-               - dt1**2 * l1**2 * l2 * m1 * m2**2 * s2**2
-               - g * l1 * l2 * m1 * m2**2 * c1 * s2**2) / den
-        tr2 = (-(dt1**2 * l1 * l2**2 * m1 * m2**2) - 2 * dt1 * dt2 * l1 * l2**2 * m1 * m2**2
-               - dt2**2 * l1 * l2**2 * m1 * m2**2 - dt1**2 * l1**2 * l2 * m1 * m2**2 * c2
-               - g * l1 * l2 * m1 * m2**2 * c12 - g * l1 * l2 * m1 * m2**2 * s1 * s2) / den
-        return np.array([tr1, tr2, ddt1, ddt2])
+        found = printed.evaluate(self.PRINTED, self._names(q, v), self.CLOSED_FORMS)
+        return np.array([found[key] for key in self.CLOSED_FORMS])
 
     def printed_rows(self, t, q, v, acc, reactions):
         """Newton's law for each mass as printed before it is solved, left side minus right side: in I,

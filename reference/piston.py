@@ -102,14 +102,12 @@ import numpy as np
 
 from reference import printed
 
+# The book's T_z, B1 s = T_z(theta) I s (solution (b)), the matrix every section uses: FRAMES holds it as the
+# expression that T_z evaluates and the student's page typesets.
+from reference.spinning_base import FRAMES, T_z
+
 COORDS = ()
 REACTIONS = ("F1", "F2", "F3")
-
-
-def t_z(angle):
-    """The book's T_z: B1 s = T_z(theta) I s."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 class Book:
@@ -133,27 +131,39 @@ class Book:
     # -- kinematics, inertial components ----------------------------------------
     def _velocity_inertial(self, t):
         """(1.13) = (1.15) = (1.18)."""
-        th, w, _, L, Ld, _ = self._motion(t)
-        s, c = np.sin(th), np.cos(th)
-        return np.array([Ld * c - L * w * s, Ld * s + L * w * c, 0.0])
+        return printed.evaluate(self.PRINTED, self.symbols(t), ("v_B",))["v_B"]
 
-    # The two accelerations as printed, in the inertial frame, turned into B1 by T_z(theta); the
-    # strings are the code (evaluated with `symbols`), so that dyncheck can search edits of them.
+    # The book's intermediate results and the two accelerations as printed, the accelerations in the inertial
+    # frame turned into B1 by T_z(theta); the strings are the code (evaluated with `symbols`), so that dyncheck
+    # can search edits of them and the student's page typesets what runs.
     PRINTED = {
+        # (c) the frame's angular velocity and acceleration, in I
+        "omega": "array([0.0, 0.0, w])",
+        "omega_dot": "array([0.0, 0.0, wd])",
+        # (d) the mass's position, (1.17) its relative velocity and (1.22) relative acceleration: B1's vectors
+        # (L, 0, 0), (L', 0, 0), (L'', 0, 0) turned into I
+        "r": "Tz(th).T @ array([L, 0.0, 0.0])",
+        "v_rel": "Tz(th).T @ array([Ld, 0.0, 0.0])",
+        "a_rel": "Tz(th).T @ array([Ldd, 0.0, 0.0])",
+        # (1.13) = (1.15), the absolute velocity in I
+        "v_B": "array([Ld*cos(th) - L*w*sin(th), Ld*sin(th) + L*w*cos(th), 0.0])",
         # (1.20) collected = (1.23)
         "a_d2dt2": "Tz(th) @ array([Ldd*cos(th) - 2*Ld*w*sin(th) - L*wd*sin(th) - L*w**2*cos(th),"
                    " Ldd*sin(th) + 2*Ld*w*cos(th) + L*wd*cos(th) - L*w**2*sin(th), 0.0])",
         # (1.24) as printed: the Y row's Coriolis part reads 2 L' theta' sin(theta)
         "a_eq110": "Tz(th) @ array([Ldd*cos(th) - 2*Ld*w*sin(th) - L*wd*sin(th) - L*w**2*cos(th),"
                    " Ldd*sin(th) + 2*Ld*w*sin(th) + L*wd*cos(th) - L*w**2*sin(th), 0.0])",
+        # the arm's force on the mass in B1, m a = F + m g with g = (0, 0, -g): this project's (1.7 computes no
+        # force), `a` the acceleration of `_reaction_route`
+        "F": "m*a + array([0.0, 0.0, m*g])",
     }
     # The printed symbols' LaTeX (dyncheck.typeset), where its defaults do not know them.
     LATEX = {"th": r"\theta", "w": r"\dot{\theta}", "wd": r"\ddot{\theta}", "Ld": r"\dot{L}", "Ldd": r"\ddot{L}"}
 
     def symbols(self, t, q=(), v=()):
         th, w, wd, L, Ld, Ldd = self._motion(t)
-        return {"th": th, "w": w, "wd": wd, "L": L, "Ld": Ld, "Ldd": Ldd, "sin": np.sin, "cos": np.cos,
-                "array": np.array, "Tz": t_z}
+        return {"th": th, "w": w, "wd": wd, "L": L, "Ld": Ld, "Ldd": Ldd, "m": self.p["m"], "g": self.p["g"],
+                "sin": np.sin, "cos": np.cos, "array": np.array, "Tz": T_z}
 
     # -- model interface -----------------------------------------------------------
     def accelerations(self, t, q, v):
@@ -161,13 +171,12 @@ class Book:
 
     def point_accelerations(self, t, q, v):
         """Absolute acceleration of the mass, components in B1, by the book's two routes."""
-        return printed.evaluate(self.PRINTED, self.symbols(t))
+        return printed.evaluate(self.PRINTED, self.symbols(t), ("a_d2dt2", "a_eq110"))
 
     def _force(self, t):
         """Force of the arm on the mass in B1: m a - m g, gravity (0, 0, -g)."""
-        p = self.p
         a = self.point_accelerations(t, (), ())[self._reaction_route]
-        return p["m"] * a + np.array([0.0, 0.0, p["m"] * p["g"]])
+        return printed.evaluate(self.PRINTED, {**self.symbols(t), "a": a}, ("F",))["F"]
 
     def reactions(self, t, q, v):
         F = self._force(t)
@@ -182,7 +191,7 @@ class Book:
 
     def drive_power(self, t, q, v):
         """Power of the arm on the mass, F . v (F from B1 to I by T^T)."""
-        T = t_z(self._motion(t)[0])
+        T = T_z(self._motion(t)[0])
         return float((T.T @ self._force(t)) @ self._velocity_inertial(t))
 
     def printed_rows(self, t, q, v, acc, reactions):
@@ -211,15 +220,12 @@ class Reference(Book):
     """Right: (1.24) replaced by the vector sum of the five terms of (1.10); the rest is the book's."""
 
     def point_accelerations(self, t, q, v):
-        """I a_B = I a_A + I omega' x I L + I omega x (I omega x I L) + 2 I omega x I v_Rel + I a_Rel."""
-        th, w, wd, L, Ld, Ldd = self._motion(t)
-        Tt = t_z(th).T
+        """I a_B = I a_A + I omega' x I L + I omega x (I omega x I L) + 2 I omega x I v_Rel + I a_Rel, with the
+        book's vectors (c), (d), (1.17), (1.22) (PRINTED)."""
+        names = self.symbols(t)
+        book = printed.evaluate(self.PRINTED, names, ("omega", "omega_dot", "r", "v_rel", "a_rel"))
+        omega, r = book["omega"], book["r"]
         a_A = np.zeros(3)                     # origin fixed
-        omega = np.array([0.0, 0.0, w])       # (c)
-        omega_dot = np.array([0.0, 0.0, wd])  # (c)
-        r = Tt @ np.array([L, 0.0, 0.0])      # (d)
-        v_rel = Tt @ np.array([Ld, 0.0, 0.0])   # (1.17)
-        a_rel = Tt @ np.array([Ldd, 0.0, 0.0])  # (1.22)
-        five_terms = (a_A + np.cross(omega_dot, r) + np.cross(omega, np.cross(omega, r))
-                      + 2 * np.cross(omega, v_rel) + a_rel)
-        return {**super().point_accelerations(t, q, v), "a_eq110": t_z(th) @ five_terms}
+        five_terms = (a_A + np.cross(book["omega_dot"], r) + np.cross(omega, np.cross(omega, r))
+                      + 2 * np.cross(omega, book["v_rel"]) + book["a_rel"])
+        return {**super().point_accelerations(t, q, v), "a_eq110": T_z(names["th"]) @ five_terms}

@@ -248,8 +248,13 @@ import numpy as np
 
 from reference import printed
 
+# The book's T_z and T_x (1.10 (1)-(2)); FRAMES holds them as the expressions T_z and T_x evaluate, for the student's
+# page.
+from reference.spinning_base import FRAMES, T_x, T_z
+
 COORDS = ("precession", "nutation", "spin")
 REACTIONS = ("Rx", "Ry", "Rz")
+COORD_ACCS = ("precession_acc", "nutation_acc", "spin_acc")
 
 
 class Book:
@@ -270,28 +275,18 @@ class Book:
 
     # -- model interface -------------------------------------------------------
     def accelerations(self, t, q, v):
-        p = self.p
-        _, n = q[0], q[1]
-        dp, dn, ds = v
-        cxx, cyy, czz = self._cm_inertias()
-        mh2 = p["m"] * p["h"] ** 2
-        sn, cn = np.sin(n), np.cos(n)
-        p_acc = dn / (sn * (cxx + mh2)) * (ds * czz + dp * cn * (czz - cxx - cyy - 2 * mh2))
-        n_acc = sn / (cxx + mh2) * (p["m"] * p["g"] * p["h"]
-                                    + dp * (-czz * ds + dp * cn * (cyy - czz + mh2)))
-        s_acc = (dn / (np.tan(n) * (cyy + mh2)) * (-czz * ds + dp * cn * (cxx + cyy - czz + 2 * mh2))
-                 + (p["Mz"] + dp * dn * sn * (cxx - cyy + czz)) / czz)
-        return np.array([p_acc, n_acc, s_acc])
+        found = printed.evaluate(self.PRINTED, self._names(q, v), COORD_ACCS)
+        return np.array([found[key] for key in COORD_ACCS])
 
+    # The transposes of the book's frames (spinning_base.FRAMES), T_z(a)^T and T_x(a)^T, laid out by rows as
+    # a matrix built by rows is: numpy's product with a transposed view rounds differently.
     @staticmethod
     def _tz_t(a):
-        c, s = np.cos(a), np.sin(a)
-        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # T_z(a)^T
+        return T_z(a).T.copy()
 
     @staticmethod
     def _tx_t(a):
-        c, s = np.cos(a), np.sin(a)
-        return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])  # T_x(a)^T
+        return T_x(a).T.copy()
 
     # The printed reaction: the rows are those of T_x(n)^T T_z(p)^T F, F = m a - B2 P in B2 with the
     # top's omega_z = p' cos n + s' in the transport term.  The string is the code (evaluated with
@@ -311,12 +306,16 @@ class Book:
     PRINTED["omega_dot"] = ("TzT(p) @ TxT(n) @ array([ddn + dp*ds*sin(n), ddp*sin(n) + dp*dn*cos(n) - dn*ds,"
                             " ddp*cos(n) - dp*dn*sin(n) + dds])")
 
-    def symbols(self, t, q, v):
+    def _names(self, q, v):
+        """The symbols of the printed expressions but the accelerations."""
         p = self.p
+        return {"m": p["m"], "g": p["g"], "h": p["h"], "Mz": p["Mz"], "p": q[0], "n": q[1], "dp": v[0], "dn": v[1],
+                "ds": v[2], "sin": np.sin, "cos": np.cos, "tan": np.tan, "array": np.array, "TxT": self._tx_t,
+                "TzT": self._tz_t, **dict(zip(("CM_Ixx", "CM_Iyy", "CM_Izz"), self._cm_inertias()))}
+
+    def symbols(self, t, q, v):
         ddp, ddn, dds = self.accelerations(t, q, v)
-        return {"m": p["m"], "g": p["g"], "h": p["h"], "p": q[0], "n": q[1], "dp": v[0], "dn": v[1],
-                "ds": v[2], "ddp": ddp, "ddn": ddn, "dds": dds, "sin": np.sin, "cos": np.cos, "array": np.array,
-                "TxT": self._tx_t, "TzT": self._tz_t, **dict(zip(("CM_Ixx", "CM_Iyy", "CM_Izz"), self._cm_inertias()))}
+        return {**self._names(q, v), "ddp": ddp, "ddn": ddn, "dds": dds}
 
     # (7), the acceleration of the centre of mass in B2 (lost signs restored from Newton's rows (10)).
     PRINTED["a_CM"] = ("TzT(p) @ TxT(n) @ array([h*(2*dn*dp*cos(n) + ddp*sin(n)), h*(dp**2*cos(n)*sin(n) - ddn),"
@@ -326,6 +325,16 @@ class Book:
     # rate p' in the first term (finding 1.10-euler-Y2; printed_rows has it term by term).
     PRINTED["Euler Y2 (1.10)"] = ("-dn*dp*CM_Izz + dn*dp*cos(n)*(CM_Ixx - CM_Izz + CM_Iyy + 2*m*h**2)"
                                   " + ddp*sin(n)*(CM_Iyy + m*h**2)")
+
+    # The equations of motion as printed (p. 81), solved for the precession, nutation and spin accelerations, lost
+    # signs restored (module docstring); `accelerations` evaluates them.
+    PRINTED["precession_acc"] = ("dn/(sin(n)*(CM_Ixx + m*h**2))"
+                                 "*(ds*CM_Izz + dp*cos(n)*(CM_Izz - CM_Ixx - CM_Iyy - 2*m*h**2))")
+    PRINTED["nutation_acc"] = ("sin(n)/(CM_Ixx + m*h**2)"
+                               "*(m*g*h + dp*(-CM_Izz*ds + dp*cos(n)*(CM_Iyy - CM_Izz + m*h**2)))")
+    PRINTED["spin_acc"] = ("dn/(tan(n)*(CM_Iyy + m*h**2))"
+                           "*(-CM_Izz*ds + dp*cos(n)*(CM_Ixx + CM_Iyy - CM_Izz + 2*m*h**2))"
+                           " + (Mz + dp*dn*sin(n)*(CM_Ixx - CM_Iyy + CM_Izz))/CM_Izz")
 
     def point_accelerations(self, t, q, v):
         names = self.symbols(t, np.asarray(q, float), np.asarray(v, float))
