@@ -210,7 +210,7 @@ def figure_scene(result, case, path, *, words):
     legend_below(fig)
     save(fig, path)
     moving = ", ".join(case.scene["paths"])
-    return (f"The bodies and joints at t = 0 (grey lines, the dots their origins)"
+    return ("The bodies and joints at t = 0 (grey lines, the dots their origins)"
             + (f" and the path of {moving} over 0-{tight.index[-1]:g} s"
                f" ({named(words, 'tight reference')}); axes in metres, {'the plane of motion' if planar else 'in space'}."
                if moving else "; axes in metres."))
