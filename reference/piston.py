@@ -104,7 +104,7 @@ from reference import printed
 
 # The book's T_z, B1 s = T_z(theta) I s (solution (b)), the matrix every section uses: FRAMES holds it as the
 # expression that T_z evaluates and the student's page typesets.
-from reference.spinning_base import FRAMES, T_z
+from reference.spinning_base import FRAMES, T_z  # noqa: F401  (FRAMES: the student page shows them)
 
 COORDS = ()
 REACTIONS = ("F1", "F2", "F3")

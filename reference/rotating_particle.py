@@ -36,7 +36,7 @@ import numpy as np
 
 from reference import printed, rotating_pendulum
 from reference.rotating_pendulum import book_energy
-from reference.spinning_base import FRAMES, base_terms, book_velocities, chain, particle_motion
+from reference.spinning_base import FRAMES, base_terms, book_velocities, chain, particle_motion  # noqa: F401  (FRAMES: the student page shows them)
 
 COORDS = ()
 REACTIONS = ("R1", "R2", "T")

@@ -56,7 +56,7 @@ import numpy as np
 
 from reference import printed
 
-from reference.spinning_base import FRAMES, base_terms, book_height, book_velocities, chain, last_state, particle_motion
+from reference.spinning_base import FRAMES, base_terms, book_height, book_velocities, chain, last_state, particle_motion  # noqa: F401  (FRAMES: the student page shows them)
 
 COORDS = ("psi",)
 REACTIONS = ("R", "T")

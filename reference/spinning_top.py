@@ -250,7 +250,7 @@ from reference import printed
 
 # The book's T_z and T_x (1.10 (1)-(2)); FRAMES holds them as the expressions T_z and T_x evaluate, for the student's
 # page.
-from reference.spinning_base import FRAMES, T_x, T_z
+from reference.spinning_base import FRAMES, T_x, T_z  # noqa: F401  (FRAMES: the student page shows them)
 
 COORDS = ("precession", "nutation", "spin")
 REACTIONS = ("Rx", "Ry", "Rz")

@@ -43,7 +43,7 @@ import numpy as np
 
 from reference import printed
 
-from reference.spinning_base import FRAMES, T_z, base_terms, book_height, book_velocities, chain, last_state, particle_motion
+from reference.spinning_base import FRAMES, T_z, base_terms, book_height, book_velocities, chain, last_state, particle_motion  # noqa: F401  (FRAMES: the student page shows them)
 
 COORDS = ("psi", "l")
 REACTIONS = ("R",)
