@@ -18,9 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
-from dyncheck import store
 from dyncheck.expressions import evaluate, namespace
-from dyncheck.results import heading
+from dyncheck.results import Frames, heading
 from dyncheck.style import MIN_FONT, embed, plt
 
 MAX_FRAMES = 100
@@ -31,17 +30,6 @@ DPI = 100
 COLOURS = 64  # the GIF's palette: the figure's few colours and their antialiased edges
 GL_BACKENDS = ("egl", "osmesa")  # MUJOCO_GL values under which MuJoCo's renderer draws
 VIEW = dict(elev=22.0, azim=-55.0)  # matplotlib's 3-D camera, degrees
-
-
-@store.register
-@dataclass(frozen=True)
-class Frames:
-    """One run's skeleton at the animation's frame times (engines.render.skeleton), world coordinates in m."""
-    times: np.ndarray  # (frame,) s
-    segments: np.ndarray  # (frame, segment, 2, 3)
-    dots: np.ndarray  # (frame, dot, 3): the massive bodies' centres of mass
-    masses: np.ndarray  # (dot,) kg
-    rims: np.ndarray  # (frame, rim, points, 3)
 
 
 def frame_rows(run):

@@ -9,6 +9,7 @@ import enum
 import math
 from dataclasses import asdict, dataclass, field, replace
 
+import numpy as np
 import pandas as pd
 
 from dyncheck import store
@@ -160,6 +161,18 @@ class Finding:
     effect: str
     localised: str
     pairs: tuple = ()  # of Pair: the book's expressions or values and the right ones
+
+
+
+@store.register
+@dataclass(frozen=True)
+class Frames:
+    """One run's skeleton at the animation's frame times (engines.render.skeleton), world coordinates in m."""
+    times: np.ndarray  # (frame,) s
+    segments: np.ndarray  # (frame, segment, 2, 3)
+    dots: np.ndarray  # (frame, dot, 3): the massive bodies' centres of mass
+    masses: np.ndarray  # (dot,) kg
+    rims: np.ndarray  # (frame, rim, points, 3)
 
 
 @store.register

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from dyncheck import style, typeset
 from dyncheck.results import Status, heading
-from dyncheck.vibration_page import VERDICT_WORDS
+from dyncheck.vibration_page import VERDICT_WORDS, equilibrium_value
 
 ENGINE_WORDS = {"mujoco": "MuJoCo", "pinocchio": "Pinocchio"}
 SUBJECT_WORDS = {"book": "The book's version", "program": "The listing's version", "reference": "It",
@@ -240,8 +240,14 @@ def vibration_lines(case, result):
         return ["This example has no vibration analysis here" + (f": {vib.failure}" if vib is not None else "")
                 + ".", ""]
     units = dict(zip(case.coords, case.spec["coord_units"]))
+    symbols = symbol_table(case, "book:", {})
+    eq = vib.equilibrium
+    moving = [(c, x) for c, x in zip(case.coords, eq.v) if equilibrium_value(x) != "0"]  # a steady motion's rates
     lines = ["The equilibrium the computer finds (Newton-Raphson): " + ", ".join(
-        f"${typeset.latex(c)} = {x:.6g}$ {units[c]}" for c, x in zip(case.coords, vib.equilibrium.q)) + ".", ""]
+        f"${typeset.latex(c, symbols)} = {equilibrium_value(x)}$ {units[c]}" for c, x in zip(case.coords, eq.q))
+        + ("" if not moving else ", its angles turning steadily at " + ", ".join(
+            f"${typeset.latex(c + '_rate', symbols)} = {equilibrium_value(x)}$ {units[c]}/s" for c, x in moving))
+        + ".", ""]
     ref = vib.modes["reference"]
     table = ["| mode | frequency [rad/s] | [Hz] | agrees with |", "|---|---|---|---|"]
     for k, i in enumerate(ref.oscillating()):

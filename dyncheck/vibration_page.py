@@ -57,8 +57,8 @@ def section(result, case, tmp):
     coords = case.coords
     lines += [f"**Equilibrium** (Newton-Raphson, {eq.iterations} iterations, accelerations left "
               f"{eq.residual:.1e} of the balancing terms): "
-              + ", ".join(f"{c} = {_value(x)}" for c, x in zip(coords, eq.q)) + "; "
-              + ", ".join(f"{c}' = {_value(x)}" for c, x in zip(coords, eq.v)) + ".", ""]
+              + ", ".join(f"{c} = {equilibrium_value(x)}" for c, x in zip(coords, eq.q)) + "; "
+              + ", ".join(f"{c}' = {equilibrium_value(x)}" for c, x in zip(coords, eq.v)) + ".", ""]
     lines += linear_equations(vib, case)
     lines += frequency_lines(vib, case)
     files = []
@@ -152,7 +152,7 @@ VERDICT_WORDS = {
 }
 
 
-def _value(x):
+def equilibrium_value(x):
     """A state variable of the equilibrium: zero where Newton-Raphson left it within rounding of zero."""
     return "0" if abs(x) < 1e-12 else f"{x:.10g}"
 
@@ -268,8 +268,8 @@ def floquet_lines(vib, case):
               f"periodic orbit**, by shooting Newton-Raphson on the {source_name('reference', case)} "
               f"({floquet.iterations} iterations, |x(T) - x(0)| left {floquet.residual:.1e} of the state's scale, "
               f"within the run's own error estimate {floquet.residual_error:.1e}), starts at "
-              + ", ".join(f"{c} = {_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, :n])) + "; "
-              + ", ".join(f"{c}' = {_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, n:]))
+              + ", ".join(f"{c} = {equilibrium_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, :n])) + "; "
+              + ", ".join(f"{c}' = {equilibrium_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, n:]))
               + "; its amplitude (the largest |q - mean| over the period): "
               + ", ".join(f"{c} {x:.4g} {units[c]}" for c, x in zip(case.coords, amplitude)) + ".", ""]
     reference = floquet.monodromy["reference"]

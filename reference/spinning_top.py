@@ -298,7 +298,10 @@ class Book:
     # The printed symbols' LaTeX (dyncheck.typeset): the book's varphi, theta, phi; {} takes the argument.
     LATEX = {"p": r"\varphi", "n": r"\theta", "dp": r"\dot{\varphi}", "dn": r"\dot{\theta}", "ds": r"\dot{\phi}",
              "ddp": r"\ddot{\varphi}", "ddn": r"\ddot{\theta}", "dds": r"\ddot{\phi}", "TxT": "T_x({})^T",
-             "TzT": "T_z({})^T", "CM_Ixx": "I^{CM}_{xx}", "CM_Iyy": "I^{CM}_{yy}", "CM_Izz": "I^{CM}_{zz}"}
+             "TzT": "T_z({})^T", "CM_Ixx": "I^{CM}_{xx}", "CM_Iyy": "I^{CM}_{yy}", "CM_Izz": "I^{CM}_{zz}",
+             # the case's coordinates by the same letters
+             "precession": r"\varphi", "nutation": r"\theta", "spin": r"\phi", "precession_rate": r"\dot{\varphi}",
+             "nutation_rate": r"\dot{\theta}", "spin_rate": r"\dot{\phi}"}
 
     # The top's angular velocity (4) and acceleration (5) as printed in B2, turned into the inertial
     # frame by T_z(p)^T T_x(n)^T to meet the engines (whose body frame spins with the top).
