@@ -126,8 +126,8 @@ def test_a_failed_report_leaves_the_previous_one_intact(canned, monkeypatch, tmp
     assert cli.main(["report", "double_pendulum", "--out", str(tmp_path)]) == 0
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
 
-    def broken(result, path, **_):
-        path.write_text("half a figure")
+    def broken(*args, **_):
+        args[-1].write_text("half a figure")
         raise RuntimeError("disk full")
     monkeypatch.setattr(report, "figure_energy", broken)
     with pytest.raises(RuntimeError, match="disk full"):

@@ -13,9 +13,10 @@ from dyncheck import case as case_module
 from dyncheck import cli, report
 from dyncheck.case import Case
 
-PISTON_FILES = {"piston.md", "piston_timing.md", "index.md", "errata.md", "data/piston.json", "figures/piston_scene.png",
-                "figures/piston_energy.png", "figures/piston_reactions.png", "figures/piston_pointwise.png",
-                "results/piston/value.json", "results/piston/arrays.npz"}
+PISTON_FILES = {"piston.md", "piston_timing.md", "piston_student.md", "index.md", "errata.md", "data/piston.json",
+                *(f"figures/piston_{kind}.{suffix}" for kind in ("scene", "energy", "reactions", "pointwise")
+                  for suffix in ("png", "pdf")),
+                "figures/piston_animation.gif", "results/piston/value.json", "results/piston/arrays.npz"}
 
 
 @pytest.fixture
@@ -27,8 +28,13 @@ def canned(monkeypatch, results):
 @pytest.fixture
 def quick_figures(monkeypatch):
     """Figures as a few bytes: these tests are about which files land where, not what they draw."""
-    for name in ("figure_scene", "figure_series", "figure_energy", "figure_pointwise"):
-        monkeypatch.setattr(report, name, lambda *args, **kwargs: args[-1].write_bytes(b"figure"))
+    def quick(*args, **kwargs):
+        path = args[-1]  # a PNG and its PDF twin, as dyncheck.style.save writes them
+        path.write_bytes(b"figure")
+        path.with_suffix(".pdf").write_bytes(b"figure")
+    for name in ("figure_scene", "figure_energy", "figure_pointwise"):
+        monkeypatch.setattr(report, name, lambda *args, **kwargs: quick(*args) or "A caption.")
+    monkeypatch.setattr(report, "figure_series", lambda *args, **kwargs: quick(*args) or {})  # no departures
 
 
 def result(results, name):
