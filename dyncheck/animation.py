@@ -159,7 +159,7 @@ class Animator:
         self.low, self.high, self.used = bounds(self.panels)
         self.gl = gl
         count = len(self.panels) + bool(graph)
-        self.fig = plt.figure(figsize=(WIDTH * count / DPI, HEIGHT / DPI), dpi=DPI)
+        self.fig = plt.figure(figsize=(WIDTH * count / DPI, HEIGHT / DPI), dpi=DPI, layout="none")  # axes placed by add_axes
         self.title = heading(case.spec)
         self.heading = self.fig.suptitle("", fontsize=MIN_FONT + 1)
         self.updates = []  # functions of the frame's index that move the artists
