@@ -13,7 +13,7 @@ from dyncheck.case import SOURCES
 from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.expressions import evaluate as evaluate_expression
 from dyncheck.expressions import namespace, of_parameters
-from dyncheck.localise import localise
+from dyncheck.localise import localise, values_at
 from dyncheck.messages import suggest
 from dyncheck.results import OWN_WORDS, CaseResult, Finding, Outcome, Pair, Status, no_number, row
 from dyncheck.simulate import (ERROR_EXPONENT, Escape, Unstable, energy_residual, fastest_frequency, simulate,
@@ -801,11 +801,7 @@ def right_sides(case, sample):
             reference = sample["values"]["reference"]
             names = components(key, reference)
             namespaces = [model.symbols(t, q, v) for t, q, v in sample["states"]]
-            with np.errstate(all="ignore"):
-                right = np.array([np.asarray(eval(compile(expression, "<right>", "eval"), {"__builtins__": {}}, n),
-                                             dtype=float) for n in namespaces])
-                book = np.array([np.asarray(eval(compile(printed[key], "<printed>", "eval"), {"__builtins__": {}},
-                                                 n), dtype=float) for n in namespaces])
+            right, book = values_at(expression, namespaces), values_at(printed[key], namespaces)
             of_reference = all(n in reference for n in names)
             target = (np.column_stack([reference[n] for n in names]).reshape(right.shape) if of_reference
                       else np.zeros_like(right))

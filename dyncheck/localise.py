@@ -109,13 +109,18 @@ def edits(expression):
     return out
 
 
+def values_at(expression, namespaces):
+    """A printed expression (or an edit of it: the book module's own code) at each of `namespaces`, as
+    one array; no builtins reach it."""
+    code = compile(expression, "<printed>", "eval")
+    with np.errstate(all="ignore"):
+        return np.array([np.asarray(eval(code, {"__builtins__": {}}, names), dtype=float) for names in namespaces])
+
+
 def _error(expression, namespaces, target, tolerance):
     """Largest deviation from the target relative to the target's largest magnitude."""
-    code = compile(expression, "<edit>", "eval")
     try:
-        with np.errstate(all="ignore"):
-            values = np.array([np.asarray(eval(code, {"__builtins__": {}}, names), dtype=float)
-                               for names in namespaces])
+        values = values_at(expression, namespaces)
     except (ArithmeticError, TypeError, ValueError):
         return np.inf
     scale = np.max(np.abs(target)) or 1.0
