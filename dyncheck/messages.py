@@ -1,7 +1,9 @@
 """The words every message shares: a suggestion for a misspelt name, a count with its noun, counts of
-statuses."""
+statuses, the engines by name."""
 
 import difflib
+
+ENGINE_NAMES = {"mujoco": "MuJoCo", "pinocchio": "Pinocchio"}  # as the pages write the sources mujoco, pinocchio
 
 
 def suggest(word, choices):

@@ -26,7 +26,7 @@ import pandas as pd
 from dyncheck import animation, expressions, stability, student_page, typeset, vibration_page, work_precision
 from dyncheck.case import Case
 from dyncheck.expressions import evaluate, namespace
-from dyncheck.messages import plural, statuses_in_words
+from dyncheck.messages import ENGINE_NAMES, plural, statuses_in_words
 from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, consequences, format_rows, heading,
                               inside_or_outside, load_result, reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
@@ -174,7 +174,7 @@ def titled(case, what):
 
 def named(words, source):
     """A source as the case's pages name it (OWN_WORDS for a case of one derivation; the engines by name)."""
-    return words.get(source, {"mujoco": "MuJoCo", "pinocchio": "Pinocchio"}.get(source, source))
+    return words.get(source, ENGINE_NAMES.get(source, source))
 
 
 def figure_scene(result, case, path, *, words):

@@ -14,10 +14,10 @@ import re
 from dataclasses import dataclass
 
 from dyncheck import style, typeset
+from dyncheck.messages import ENGINE_NAMES
 from dyncheck.results import Status, heading
 from dyncheck.vibration_page import VERDICT_WORDS, equilibrium_value
 
-ENGINE_WORDS = {"mujoco": "MuJoCo", "pinocchio": "Pinocchio"}
 SUBJECT_WORDS = {"book": "The book's version", "program": "The listing's version", "reference": "It",
                  "mujoco": "MuJoCo's run", "pinocchio": "Pinocchio's run"}
 OTHER_WORDS = {"tight reference": "the exact motion", "reference": "the right equations",
@@ -135,7 +135,7 @@ def where_sampled(rows):
 def other_side(row):
     """Whom a row compares with, in words: "MuJoCo", "the exact motion", ..."""
     other = row.sources[1]
-    return next((w for e, w in ENGINE_WORDS.items() if other.startswith(e)), OTHER_WORDS.get(other, other))
+    return next((w for e, w in ENGINE_NAMES.items() if other.startswith(e)), OTHER_WORDS.get(other, other))
 
 
 def agreement(rows):
@@ -159,7 +159,7 @@ def check_sentence(shown, rows):
     names = components(shown.quantities, rows)
     judged = [r for r in rows if r.quantity in names and r.error is not None and len(r.sources) == 2
               and r.check != "figure"]
-    mine = [r for r in judged if r.sources[0] == shown.source and (r.sources[1].startswith(tuple(ENGINE_WORDS))
+    mine = [r for r in judged if r.sources[0] == shown.source and (r.sources[1].startswith(tuple(ENGINE_NAMES))
                                                                    or r.sources[1] in OTHER_WORDS)]
     if not mine:
         return None
@@ -170,7 +170,7 @@ def check_sentence(shown, rows):
         return _sentence(head, subject, f"agrees with {agreement(mine)}", where_sampled(mine))
     ids = sorted({r.finding for r in wrong})
     worst = max(wrong, key=lambda r: r.error)
-    right = [r for r in judged if r.sources[0] == "reference" and r.sources[1].startswith(tuple(ENGINE_WORDS))]
+    right = [r for r in judged if r.sources[0] == "reference" and r.sources[1].startswith(tuple(ENGINE_NAMES))]
     return _sentence(head, subject, f"is off by {_percent(worst.error)} of its largest value against",
                      other_side(worst), where_sampled([worst]),
                      "(" + ", ".join(f"finding [{i}](errata.md#{i.replace('.', '').lower()})" for i in ids) + ")"
@@ -254,7 +254,7 @@ def vibration_lines(case, result):
         rows = [r for r in vib.rows if r.quantity == f"frequency mode {k + 1}" and r.sources[0] == "reference"]
         omega = ref.eigenvalues[i].imag
         table.append(f"| {k + 1} | {omega:.6g} | {omega / (2 * math.pi):.4g} | {agreement(rows) or '-'} |")
-    engines = {ENGINE_WORDS[s]: m.verdict for s, m in vib.modes.items() if s in ENGINE_WORDS}
+    engines = {ENGINE_NAMES[s]: m.verdict for s, m in vib.modes.items() if s in ENGINE_NAMES}
     lines += ["Natural frequencies of small motions about it:", "", *table, "",
               f"Stability: **{ref.verdict}**" + (", and MuJoCo and Pinocchio find the same" if
                                                  set(engines.values()) == {ref.verdict} else

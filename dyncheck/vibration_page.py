@@ -7,11 +7,12 @@ import math
 import numpy as np
 import pandas as pd
 
+from dyncheck.messages import ENGINE_NAMES
 from dyncheck.results import OWN_WORDS, heading
 from dyncheck.vibration import MATRIX_NAMES, SAFETY, match
 from dyncheck.style import SOURCE_STYLE, embed, legend_below, panels, save, title
 
-NAMES = {"reference": "reference", "mujoco": "MuJoCo", "pinocchio": "Pinocchio"}
+NAMES = {"reference": "reference", **ENGINE_NAMES}
 HATCH = {"reference": "", "mujoco": "//", "pinocchio": ".."}  # grey-safe: a source is a hatch as well as a colour
 
 
