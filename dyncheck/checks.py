@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dyncheck import animation, ceilings, residuals, schema, vibration
+from dyncheck import animation, cache, ceilings, residuals, schema, vibration
 from dyncheck.case import SOURCES
 from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.expressions import evaluate as evaluate_expression
@@ -241,12 +241,13 @@ def run_sources(case, bound=None):
     out_step = setting["output_step"]
     runs = {}
     for source in INTEGRATED:
-        dop853 = lambda rtol, max_step=np.inf: simulate(case.model(source), (q0, v0), t_end, "DOP853", rtol=rtol,
-                                                        output_step=out_step, work=case.driven, max_step=max_step,
-                                                        omega=fastest_frequency(case), bound=bound)
+        options = dict(output_step=out_step, work=case.driven, omega=fastest_frequency(case), bound=bound)
         try:
-            runs[source] = Outcome(dop853(setting["rtol"]),
-                                   dop853(setting["tight_rtol"], tight_step(case) if source == "reference" else np.inf))
+            runs[source] = Outcome(simulate(case.model(source), (q0, v0), t_end, "DOP853", rtol=setting["rtol"],
+                                            **options),
+                                   cache.solution(case, source, (q0, v0), t_end, "DOP853", rtol=setting["tight_rtol"],
+                                                  max_step=tight_step(case) if source == "reference" else np.inf,
+                                                  **options))
         except Unstable as failure:
             runs[source] = Outcome(failure=failure.failure)
     dt = setting["mujoco_step"]
@@ -617,7 +618,6 @@ def program_run_checks(case, program):
     """The program's run against the book's equations run the same way, the tight reference solution,
     the book's figures and MuJoCo at its own states (see program_checks)."""
     rows = []
-    reference = case.model("reference")
     q0, v0, _ = case.initial
     every = max(1, int(round(case.integration["output_step"] / program.dt)))
     listing = with_paths(case, program.run(q0, v0).iloc[::every])
@@ -628,8 +628,9 @@ def program_run_checks(case, program):
     twin_runs = {"same": same(q0, program.dt), "half": same(q0, program.dt / 2)}
     # Rounding: the same run from a start moved by a few ulps shows how the motion amplifies them.
     twin_runs["nudged"] = same(q0 + 4 * EPS * np.maximum(np.abs(q0), 1.0), program.dt)
-    tight = with_paths(case, simulate(reference, (q0, v0), t_end, "DOP853", rtol=case.integration["tight_rtol"],
-                                      output_step=every * program.dt, work=False, omega=fastest_frequency(case)))
+    tight = with_paths(case, cache.solution(case, "reference", (q0, v0), t_end, "DOP853",
+                                            rtol=case.integration["tight_rtol"], output_step=every * program.dt,
+                                            work=False, omega=fastest_frequency(case)))
     safety = case.tolerance["trajectory"]["safety"]
     label = f"{program.integrator}, dt = {program.dt:.4g} s, {t_end:.4g} s"
     for column in state_columns(case):

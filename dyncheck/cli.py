@@ -7,7 +7,9 @@ alone, without the engines."""
 
 import argparse
 import json
+import multiprocessing
 import os
+import signal
 import sys
 import tempfile
 import textwrap
@@ -132,14 +134,46 @@ def error_exit(error):
 
 
 def run_cases(cases, localise=True):
-    """The results of the cases, and the name of the case that Ctrl-C stopped (None if none did)."""
+    """The results of the cases, and the name of the case that Ctrl-C stopped (None if none did).
+    The cases run in parallel, one process per core (forked: each inherits its Case, whose engine models
+    cannot be pickled); the results come back in the cases' order, and on Ctrl-C the ones before the
+    first unfinished case are kept."""
+    global _INHERITED
+    workers = min(len(cases), os.cpu_count() or 1)
     results = []
+    bar = tqdm(total=len(cases), desc="checks", unit="case", disable=None, leave=False)
     try:
-        for case in tqdm(cases, desc="checks", unit="case", disable=None, leave=False):
-            results.append(run_case(case, localise))
+        if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+            for case in cases:
+                results.append(run_case(case, localise))
+                bar.update()
+            return results, None
+        _INHERITED = (cases, localise)
+        # The workers ignore Ctrl-C: the terminal sends it to them too, and this process ends them.
+        with multiprocessing.get_context("fork").Pool(workers, signal.signal, (signal.SIGINT, signal.SIG_IGN)) as pool:
+            for result in pool.imap(_run_inherited, range(len(cases))):
+                if result is None:  # the case's run_case was interrupted
+                    raise KeyboardInterrupt
+                results.append(result)
+                bar.update()
     except KeyboardInterrupt:
         return results, cases[len(results)].name
+    finally:
+        bar.close()
+        _INHERITED = None
     return results, None
+
+
+_INHERITED = None  # (cases, localise) of run_cases, for its forked workers
+
+
+def _run_inherited(index):
+    """A worker's case: its result, or None if run_case was interrupted."""
+    cases, localise = _INHERITED
+    try:
+        return run_case(cases[index], localise)
+    except KeyboardInterrupt:
+        return None
 
 
 def make_report(results, cases, out, no_studies, animations=True):

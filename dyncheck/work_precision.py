@@ -12,7 +12,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from dyncheck import ceilings
+from dyncheck import cache, ceilings
 from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.results import heading, no_number, row
 from dyncheck.schema import MAX_OUTPUTS
@@ -140,8 +140,8 @@ def _dop853(case, t_end, output_step, rtol, max_step):
     """`reference` by DOP853 at rtol = atol with its step capped at `max_step`.  The cap matters:
     uncapped, DOP853 at 1e-13 takes a few long steps whose error its estimate misses (measured 1e-12
     to 3e-11 against Radau at 1e-13; capped at about half its mean step, 5e-14 to 1e-12)."""
-    return simulate(case.model("reference"), case.initial[:2], t_end, "DOP853", rtol=rtol, max_step=max_step,
-                    output_step=output_step, work=case.driven, omega=fastest_frequency(case))
+    return cache.solution(case, "reference", case.initial[:2], t_end, "DOP853", rtol=rtol, max_step=max_step,
+                          output_step=output_step, work=case.driven, omega=fastest_frequency(case))
 
 
 def trajectory_error(run, reference, columns):

@@ -1,0 +1,110 @@
+"""Tight solutions kept across runs: a reference solution at rtol 1e-12 costs seconds and, with nothing
+changed, comes out the same bit for bit, so a run takes it from here when one before it computed it.
+
+An entry's key is a hash of everything the solution depends on: the sources of dyncheck, reference/ and
+engines/, the versions of Python, numpy, scipy, pandas, MuJoCo and Pinocchio and the machine's
+architecture (`code_version`); every file of the case's folder and its parameters' values; and the
+simulate call (source, initial state, span, method and options).  A change in any of them makes a new
+key, so a stale entry is never read; it is deleted with its code version (PRUNE_AFTER).
+
+The folder: $DYNCHECK_CACHE, else $XDG_CACHE_HOME/dyncheck, else ~/.cache/dyncheck.  `--no-cache`
+(`enabled = False`) computes everything and neither reads nor writes it.
+"""
+
+import functools
+import hashlib
+import os
+import pickle
+import platform
+import sys
+import tempfile
+from importlib.metadata import version
+from pathlib import Path
+
+import numpy as np
+
+from dyncheck.simulate import simulate
+
+enabled = True
+KEPT_VERSIONS = 5  # code versions whose entries stay; older ones (other checkouts, earlier edits) go
+LIBRARIES = ("numpy", "scipy", "pandas", "mujoco", "pin")
+
+
+def folder():
+    root = os.environ.get("DYNCHECK_CACHE") or Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "dyncheck"
+    return Path(root)
+
+
+@functools.cache
+def code_version():
+    """A hash of the code that computes a solution and of the libraries it runs on."""
+    digest = hashlib.sha256()
+    for package in ("dyncheck", "reference", "engines"):
+        root = Path(sys.modules[package].__file__).parent
+        for path in sorted(root.rglob("*.py")):
+            digest.update(path.relative_to(root.parent).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    digest.update(repr((sys.version, platform.machine(), [version(name) for name in LIBRARIES])).encode())
+    return digest.hexdigest()[:16]
+
+
+def _case_key(case):
+    """The case's folder (every file: case file, scenes, studies, a researcher's equations) and its
+    parameters' values."""
+    digest = hashlib.sha256()
+    for path in sorted(p for p in case.folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts):
+        digest.update(path.relative_to(case.folder).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    digest.update(repr(sorted((name, float(value).hex()) for name, value in case.params.items())).encode())
+    return digest.hexdigest()
+
+
+def _exact(value):
+    """`value` as text that tells every float apart (repr of an array rounds)."""
+    if isinstance(value, np.ndarray):
+        return [_exact(x) for x in value.tolist()]
+    if isinstance(value, (tuple, list)):
+        return [_exact(x) for x in value]
+    if isinstance(value, float):
+        return value.hex()
+    return repr(value)
+
+
+def solution(case, source, ic, t_end, method, **options):
+    """simulate(case.model(source), ic, t_end, method, **options), from the cache when a run with the same
+    key computed it.  A run that raises (Unstable) is not kept: it raises again, as computed."""
+    if not enabled:
+        return simulate(case.model(source), ic, t_end, method, **options)
+    call = _exact((source, [np.asarray(x, dtype=float) for x in ic], float(t_end), method,
+                   sorted((name, value) for name, value in options.items())))
+    key = hashlib.sha256(repr((_case_key(case), call)).encode()).hexdigest()
+    path = folder() / code_version() / f"{key}.pkl"
+    try:
+        with open(path, "rb") as file:
+            return pickle.load(file)
+    except (OSError, pickle.UnpicklingError, EOFError, AttributeError, ImportError):  # none yet, or a torn file
+        pass
+    run = simulate(case.model(source), ic, t_end, method, **options)
+    _write(path, run)
+    return run
+
+
+def _write(path, run):
+    """Write atomically (another process may be writing the same entry); a cache that cannot be written
+    (a read-only home) only costs time."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _prune(path.parent.parent, keep=path.parent.name)
+        with tempfile.NamedTemporaryFile(dir=path.parent, delete=False, suffix=".tmp") as file:
+            pickle.dump(run, file, protocol=pickle.HIGHEST_PROTOCOL)
+        os.replace(file.name, path)
+    except OSError:
+        pass
+
+
+def _prune(root, keep):
+    """Delete the entries of all but the KEPT_VERSIONS most recently written code versions."""
+    versions = sorted((p for p in root.iterdir() if p.is_dir() and p.name != keep),
+                      key=lambda p: p.stat().st_mtime, reverse=True)
+    for old in versions[KEPT_VERSIONS - 1:]:
+        for entry in old.iterdir():
+            entry.unlink(missing_ok=True)
+        old.rmdir()
