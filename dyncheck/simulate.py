@@ -197,26 +197,39 @@ def _arithmetic(method, t, step, call, *args):
 
 def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
     """scipy's solver stepped here rather than by solve_ivp (the same steps and outputs), so that the
-    budget is checked at every step and right-hand side."""
+    budget is checked at every step and right-hand side.  A model whose `native` is not None is integrated
+    in the engine's own coordinates (`native.state`, `native.rates`) and answered in the book's
+    (`native.book`): a ball joint's quaternion and angular velocity have no Euler-angle singularity and
+    cost the engine no conversion at each evaluation.  atol = rtol holds for every component as ever: on a
+    quaternion's components (at most 1) it bounds a step's rotation error to about 2 atol, where on an Euler
+    angle it is atol + rtol |angle|.  The run's error then differs (the book's top at rtol 1e-10: 13 times
+    the Euler-angle run's, in a quarter fewer evaluations); its twin at tight_rtol measures it alike."""
     n = len(q0)
     evaluations = steps = 0
+    native = getattr(model, "native", None)
 
-    def derivative(t, q, v):
-        acc = model.accelerations(t, q, v)
-        if not finite(acc):  # at once: a solver shrinks its step on NaN until the budget ends
-            raise ArithmeticError(f"accelerations {acc} are not finite")
+    def derivative(t, y):  # and the work's rate, the drive power
+        if native is not None:
+            rates, power = native.rates(t, y, work)
+            return np.concatenate([_finite(rates, "rates"), [power]])
+        q, v = y[:n], y[n:]
+        acc = _finite(model.accelerations(t, q, v), "accelerations")
         return np.concatenate([v, acc, [model.drive_power(t, q, v) if work else 0.0]])
 
     def rhs(t, y):
         nonlocal evaluations
         evaluations += 1
         budget.check(t, steps)
-        return _arithmetic(method, t, steps, derivative, t, y[:n], y[n:2 * n])
+        return _arithmetic(method, t, steps, derivative, t, y[:-1])
 
+    if native is None:
+        y0, book = np.concatenate([q0, v0]), lambda y, start: (y[..., :n], y[..., n:])
+    else:  # book(y, start): the book's coordinates and rates of states y, the angles continuous from `start`
+        y0, book = native.state(q0, v0), native.book
     start = time.perf_counter()
     outputs, done = [], 0  # the states at grid[:done]
     with np.errstate(all="ignore"):
-        solver = SCIPY_SOLVERS[method](rhs, grid[0], np.concatenate([q0, v0, [0.0]]), grid[-1], rtol=rtol, atol=rtol,
+        solver = SCIPY_SOLVERS[method](rhs, grid[0], np.append(y0, 0.0), grid[-1], rtol=rtol, atol=rtol,
                                        max_step=max_step)
         while solver.status == "running":
             message = solver.step()
@@ -225,25 +238,38 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
                 raise Unstable(method, solver.t, steps, message)
             if not finite(solver.y):
                 raise Unstable(method, solver.t, steps, "state is not finite")
-            if bound is not None and abs(solver.y[bound[1]]) > bound[2]:
-                _escape_within_step(solver, bound, method, steps)
+            if bound is not None:  # a native state's angles taken within half a turn of q0's: bound no winding angle
+                coordinates = lambda y: book(y[None, :-1], q0)[0][0]
+                if abs(coordinates(solver.y)[bound[1]]) > bound[2]:
+                    _escape_within_step(solver, bound, method, steps, coordinates)
             budget.check(solver.t, steps)
             reached = np.searchsorted(grid, solver.t, side="right")
             if reached > done:
-                outputs.append(solver.dense_output()(grid[done:reached]))
+                outputs.append(solver.dense_output()(grid[done:reached]).T)
                 done = reached
+        y = np.vstack(outputs)
+        q, v = book(y[:, :-1], q0)
     wall = time.perf_counter() - start
-    y = np.hstack(outputs).T
-    return grid, y[:, :n], y[:, n:2 * n], y[:, -1], {"wall": wall, "evaluations": evaluations, "steps": steps}
+    return grid, q, v, y[:, -1], {"wall": wall, "evaluations": evaluations, "steps": steps}
 
 
-def _escape_within_step(solver, bound, method, step):
+def _finite(values, what):
+    """`values`, raising ArithmeticError at once where one is not finite: a solver shrinks its step on NaN
+    until the budget ends."""
+    if not finite(values):
+        raise ArithmeticError(f"{what} {values} are not finite")
+    return values
+
+
+def _escape_within_step(solver, bound, method, step, coordinates):
     """Raise Escaped at the time the coordinate crossed the bound within the solver's last step, found on
     its dense output: an adaptive step is long (DOP853 at 1e-10 takes 10 ms steps where l runs away),
-    and the step's end would put different sources' escapes that far apart."""
+    and the step's end would put different sources' escapes that far apart.  coordinates(y): the book's
+    coordinates of the solver's state."""
     name, index, limit = bound
     dense = solver.dense_output()
-    t = brentq(lambda s: abs(dense(s)[index]) - limit, solver.t_old, solver.t)  # inside at t_old, beyond at t
+    # inside at t_old, beyond at t
+    t = brentq(lambda s: abs(coordinates(dense(s))[index]) - limit, solver.t_old, solver.t)
     raise Escaped(method, t, step, f"|{name}| reached {limit:g} (by the step's dense output)")
 
 

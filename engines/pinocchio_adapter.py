@@ -10,7 +10,7 @@ algorithms model no spring and no damper: their forces -k (q - springref) - d q'
 generalised forces here.
 """
 
-import functools
+import math
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -110,6 +110,19 @@ class PinocchioModel:
         for (_, _, iv), (_, _, acc) in self._driven_joints:
             self._driven_acc[iv] = acc
         self.neutral = pin.neutral(self.m)
+        # What engine_state and engine_dynamics do at every call, decided once: Python lists of the
+        # joints' indices (one state's scalars cost least as Python floats), the branch engine_dynamics takes.
+        self._neutral_list, self._nq, self._nv = self.neutral.tolist(), self.m.nq, self.m.nv
+        self._scalars = [(nq, iq, iv, idx[0]) for kind, (nq, iq, iv), idx in self._coord_joints if kind == "scalar"]
+        self._balls = [(iq, iv, idx) for kind, (_, iq, iv), idx in self._coord_joints if kind == "euler"]
+        self._all_free = len(self.free) == self.m.nv
+        self._coord_dofs = np.zeros(len(self.coords), dtype=int)  # each coordinate's dof, for scalar joints
+        for nq, iq, iv, i in self._scalars:
+            self._coord_dofs[i] = iv
+        self._last = None, None  # the last state asked and its engine pass (`_dynamics`)
+        # A lone ball joint under constant forces is integrated in Pinocchio's own coordinates (dyncheck.simulate)
+        lone_ball = [kind for kind, _, _ in self.layout] == ["euler"] and not self.driven
+        self.native = BallJointCoordinates(self) if lone_ball and not self.varying else None
         # CRBA fills the upper triangle of M: M[i, j] for i > j is read at [j, i].
         every = np.arange(self.m.nv)
         self._whole = np.minimum.outer(every, every), np.maximum.outer(every, every)
@@ -232,28 +245,38 @@ class PinocchioModel:
 
     # -- state -------------------------------------------------------------
     def engine_state(self, t, q, v):
-        """Pinocchio's configuration and velocity at the book's state (t, q, v).  A loop over the few
-        joints: on one state, scalar writes cost less than index arrays."""
-        config, velocity = self.neutral.copy(), np.zeros(self.m.nv)
-        one_dof = [(joint, q[idx[0]], v[idx[0]]) for kind, joint, idx in self._coord_joints if kind == "scalar"]
-        one_dof += [(joint, q0 + rate * t + 0.5 * acc * t**2, rate + acc * t)
-                    for joint, (q0, rate, acc) in self._driven_joints]
-        for (nq, iq, iv), position, rate in one_dof:
-            if nq == 2:  # continuous joint: (cos, sin)
-                config[iq], config[iq + 1] = np.cos(position), np.sin(position)
-            else:
-                config[iq] = position
-            velocity[iv] = rate
-        for kind, (_, iq, iv), idx in self._coord_joints:
-            if kind == "euler":  # spherical: quaternion (x, y, z, w), the body's angular velocity
-                config[iq:iq + 4] = euler.quaternion(q[idx])[[1, 2, 3, 0]]
-                velocity[iv:iv + 3] = euler.angular_velocity(q[idx], v[idx])
+        """Pinocchio's configuration and velocity at the book's state (t, q, v)."""
+        return self._engine_state(t, np.asarray(q, dtype=float).tolist(), np.asarray(v, dtype=float).tolist())
+
+    def _engine_state(self, t, q, v):
+        """`engine_state` of q and v as lists of floats: on one state of a few joints, writes of Python floats
+        into one list, made an array once, cost less than numpy's writes and index arrays."""
+        state = self._neutral_list + [0.0] * self._nv  # the configuration, then the velocity
+        for nq, iq, iv, i in self._scalars:
+            self._write_dof(state, nq, iq, iv, q[i], v[i])
+        for (nq, iq, iv), (q0, rate, acc) in self._driven_joints:
+            self._write_dof(state, nq, iq, iv, q0 + rate * t + 0.5 * acc * t**2, rate + acc * t)
+        for iq, iv, idx in self._balls:  # spherical: quaternion (x, y, z, w), the body's angular velocity
+            angles, rates = [q[i] for i in idx], [v[i] for i in idx]
+            w, x, y, z = euler.quaternion(angles).tolist()
+            state[iq:iq + 4] = x, y, z, w
+            iv += self._nq
+            state[iv:iv + 3] = euler.angular_velocity(angles, rates).tolist()
         if self.loops.loops:  # the dependent joints closing the loops, from the last closing (its branch)
             positions = {self.m.names[j]: q[idx[0]] for kind, j, idx in self._independent}
             rates = {self.m.names[j]: v[idx[0]] for kind, j, idx in self._independent}
-            config, velocity = self.loops.close(positions, rates, self._closed)
-            self._closed = config
-        return config, velocity
+            self._closed, velocity = self.loops.close(positions, rates, self._closed)
+            return self._closed, velocity
+        state = np.array(state)
+        return state[:self._nq], state[self._nq:]
+
+    def _write_dof(self, state, nq, iq, iv, position, rate):
+        """A one-dof joint's position and rate into `_engine_state`'s list."""
+        if nq == 2:  # continuous joint: (cos, sin)
+            state[iq], state[iq + 1] = math.cos(position), math.sin(position)
+        else:
+            state[iq] = position
+        state[self._nq + iv] = rate
 
     @property
     def algorithm(self):
@@ -268,12 +291,12 @@ class PinocchioModel:
         """Pinocchio alone, on its own configuration and velocity under the applied generalized forces
         `applied` (nv,): every dof's acceleration, and the inverse-dynamics forces M acc + nle that give it
         (`algorithm` names the branch it takes)."""
-        force = applied.copy()
+        force = applied.copy() if self.passive else applied  # read, never written, by the callers
         for iq, iv, k, rest, damping in self.passive:
             force[iv] -= k * (config[iq] - rest) + damping * velocity[iv]
         if self.loops.loops:  # constraintDynamics (no prescribed joints: refused by MuJoCo's adapter)
             return self.loops.constrained(config, velocity, force)[0], force
-        if len(self.free) == self.m.nv:  # nothing prescribed: Pinocchio's ABA solves it directly
+        if self._all_free:  # nothing prescribed: Pinocchio's ABA solves it directly
             return pin.aba(self.m, self.d, config, velocity, force).copy(), force
         acc = self._driven_acc.copy()
         tau = pin.rnea(self.m, self.d, config, velocity, acc).copy()  # the free joints' bias
@@ -284,25 +307,27 @@ class PinocchioModel:
         return acc, tau
 
     def _dynamics(self, t, q, v):
-        """Configuration, velocity, acceleration and inverse-dynamics forces at the book's state."""
-        return self._dynamics_at(t, tuple(q), tuple(v))
-
-    @functools.lru_cache(maxsize=1)  # an integrator asks for the accelerations, then the drive power, of one state
-    def _dynamics_at(self, t, q, v):
-        q, v = np.array(q), np.array(v)
-        config, velocity = self.engine_state(t, q, v)
-        applied = self._applied_at(t, q, v) if self.varying else self.applied
-        return (config, velocity, *self.engine_dynamics(config, velocity, applied))
+        """Configuration, velocity, acceleration and inverse-dynamics forces at the book's state; the last
+        state's are remembered: an integrator asks for the accelerations, then the drive power, of one state,
+        and a trajectory's outputs for the reactions, then the energy."""
+        state = t, np.asarray(q, dtype=float).tolist(), np.asarray(v, dtype=float).tolist()
+        if state != self._last[0]:
+            config, velocity = self._engine_state(*state)
+            applied = self._applied_at(t, np.array(state[1]), np.array(state[2])) if self.varying else self.applied
+            self._last = state, (config, velocity, *self.engine_dynamics(config, velocity, applied))
+        return self._last[1]
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
         acc = self._dynamics(t, q, v)[2]
+        if not self._balls:  # the case's coordinates are one-dof joints' positions
+            return acc[self._coord_dofs]
         out = np.zeros(len(self.coords))
         for kind, (_, _, iv), idx in self._coord_joints:
             if kind == "scalar":
                 out[idx[0]] = acc[iv]
             else:
-                out[idx] = euler.euler_accelerations(q[idx], v[idx], acc[iv:iv + 3])
+                out[idx] = euler.euler_accelerations(np.asarray(q)[idx], np.asarray(v)[idx], acc[iv:iv + 3])
         return out
 
     def reactions(self, t, q, v):
@@ -447,6 +472,40 @@ class PinocchioModel:
         dampers = -sum(damping * velocity[iv] ** 2 for _, iv, _, _, damping in self.passive)
         applied = self._applied_at(t, q, v) if self.varying else self.applied
         return float(driven + applied @ velocity + dampers)
+
+
+class BallJointCoordinates:
+    """A lone ball joint's state in Pinocchio's own coordinates, for an integrator (dyncheck.simulate's
+    `native`): its quaternion (x, y, z, w) and the body's angular velocity w.  The rates q' = q (w, 0) / 2
+    and ABA's w' take no Euler angle: no conversion at each evaluation, and no singularity at zero
+    nutation; the book's Euler angles and rates come back at the outputs only (`book`)."""
+
+    def __init__(self, model):
+        self.model = model
+        self.angles = model.layout[0][2]  # the Euler angles' places among the case's coordinates
+
+    def state(self, q, v):
+        """The state at the book's (q, v)."""
+        return np.concatenate(self.model.engine_state(0.0, q, v))
+
+    def rates(self, t, y, work):
+        """The state's rates, and the drive power (the applied moments' work; 0 if not `work`)."""
+        config, w = y[:4], y[4:]
+        qx, qy, qz, qw, wx, wy, wz = y.tolist()
+        acc = self.model.engine_dynamics(config, w, self.model.applied)[0]
+        rates = np.array([0.5 * (qw * wx + qy * wz - qz * wy), 0.5 * (qw * wy + qz * wx - qx * wz),
+                          0.5 * (qw * wz + qx * wy - qy * wx), -0.5 * (qx * wx + qy * wy + qz * wz), *acc.tolist()])
+        return rates, float(self.model.applied @ w) if work else 0.0
+
+    def book(self, y, start):
+        """The book's coordinates and rates of states y (N, 7), the angles continuous from those at `start`."""
+        quaternions = y[:, [3, 0, 1, 2]]  # (w, x, y, z)
+        # the orientation of a quaternion off unit norm by the integration's error (the top's: 8e-11 after
+        # 2.5 s at rtol 1e-10, 8e-13 at 1e-12; DOP853 needs no renormalisation between steps)
+        angles = euler.angles(quaternions / np.linalg.norm(quaternions, axis=1)[:, None], np.asarray(start)[self.angles])
+        q, v = np.empty((len(y), len(self.model.coords))), np.empty((len(y), len(self.model.coords)))
+        q[:, self.angles], v[:, self.angles] = angles, euler.euler_rates(angles, y[:, 4:])
+        return q, v
 
 
 def _is_mjcf(path):

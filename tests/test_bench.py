@@ -75,8 +75,10 @@ def test_the_bare_pinocchio_loops_do_the_harness_work(name):
 def test_the_bench_table_names_each_rows_bare_loop():
     table = bench_case(dyncheck.load_case("piston"), steps=80, repeat=1)
     assert list(table.columns) == ["case", "source", "what", "count", "median s", "per second", "ratio to bare",
-                                   "against"]
+                                   "bound", "mark", "against"]
     compared = table[table["against"] != ""]
+    assert set(compared["bound"]) == {"1.5"} and set(table[table["against"] == ""]["bound"]) == {""}
+    assert all((mark == "EXCEEDED") == (ratio > 1.5) for mark, ratio in zip(compared["mark"], compared["ratio to bare"]))
     assert set(compared["source"]) == {"mujoco", "pinocchio"}
     assert np.all(np.isfinite(compared["ratio to bare"])) and np.all(table["median s"] > 0)
     for source, against in zip(compared["source"], compared["against"]):
