@@ -127,8 +127,9 @@ def draw_map(case, spec, xlabel, ylabel, cells, path):
                               shading="flat", norm=norm if np.isfinite(data).any() else None, cmap="viridis")
         fig.colorbar(shown, ax=ax, label=label, shrink=0.9)
         if spec.boundary is not None:
-            dense = np.geomspace(xs[0], xs[-1], 200) if spec.log[0] else np.linspace(xs[0], xs[-1], 200)
-            ax.plot(dense, spec.boundary(case, dense), color="white", lw=1.5, ls="--")
+            ends = edges(xs, spec.log[0])[[0, -1]]
+            dense = np.geomspace(*ends, 200) if spec.log[0] else np.linspace(*ends, 200)
+            ax.plot(dense, spec.boundary(case, dense), color="red", lw=1.5, ls="--")  # seen on blank and dark
             ax.set_ylim(edges(ys, spec.log[1])[[0, -1]])
         ax.set_xscale("log" if spec.log[0] else "linear")
         ax.set_yscale("log" if spec.log[1] else "linear")
@@ -139,7 +140,7 @@ def draw_map(case, spec, xlabel, ylabel, cells, path):
     save(fig, path)
     return (f"{spec.title}: left the {spec.value} measured at each cell of the grid (blank: none, the table says "
             f"why), right the measured value over the closed form, the {spec.theory}"
-            + (" (dashed: the closed-form boundary beyond which the physics runs away)." if spec.boundary else "."))
+            + (" (red dashed: the closed-form boundary beyond which the physics runs away)." if spec.boundary else "."))
 
 
 def edges(centres, log):
