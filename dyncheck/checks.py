@@ -168,17 +168,19 @@ ranges with the same test as loading (schema.check_params).  A set is given up o
 fail, which for a physical part of 5 % of the ranges happens with probability 0.95^100 = 0.6 %."""
 
 
-def parameter_sets(case):
+def parameter_sets(case, count=None):
     """Seeded random parameter sets over [sample.params.ranges], physical with the user's overrides,
-    which stay fixed: (sets, how many could not be drawn).  A set holds the random values only."""
+    which stay fixed: (sets, how many could not be drawn).  A set holds the random values only.
+    `count` sets instead of the case file's `sets` (a campaign's): the first ones are the same."""
     spec = case.spec["sample"].get("params")
     if not spec:
         return [], 0
+    count = spec["sets"] if count is None else count
     rng = np.random.default_rng(spec["seed"])
     ranges = {name: (case.value(lo), case.value(hi)) for name, (lo, hi) in spec["ranges"].items()
               if name not in case.overrides}
     sets = []
-    for _ in range(spec["sets"]):
+    for _ in range(count):
         for _ in range(DRAWS):
             drawn = {name: float(rng.uniform(lo, hi)) for name, (lo, hi) in ranges.items()}
             try:
@@ -187,7 +189,7 @@ def parameter_sets(case):
                 continue
             sets.append(drawn)
             break
-    return sets, spec["sets"] - len(sets)
+    return sets, count - len(sets)
 
 
 def random_parameters(case):
@@ -591,7 +593,18 @@ def program_checks(case, sample):
     if not case.has_program:
         return [], {}
     program = case.model("program")
-    states, right = sample["states"], sample["values"].get("reference")  # the pointwise check's
+    rows = program_pointwise(case, sample)
+    try:
+        run_rows, runs = program_run_checks(case, program)
+    except (Unstable, ArithmeticError) as failure:  # the listing's integrator, or its twins, blew up
+        return rows + [no_number("program", column, ("program run",), failure) for column in state_columns(case)], {}
+    return rows + run_rows, runs
+
+
+def program_pointwise(case, sample):
+    """The program's formulas at the pointwise check's random states (`sample`), against the reference."""
+    program = case.model("program")
+    states, right = sample["states"], sample["values"].get("reference")
     tolerance = case.tolerance["pointwise"]["value"]
     rows = []
     try:
@@ -607,11 +620,7 @@ def program_checks(case, sample):
                             tolerance, f"{len(states)} random states", ceiling=ceilings.POINTWISE))
     except ArithmeticError as failure:  # an overflow in the program's or the reference's float arithmetic
         rows = [no_number("program", "every quantity", ("program", "reference"), failure, Status.FAIL)]
-    try:
-        run_rows, runs = program_run_checks(case, program)
-    except (Unstable, ArithmeticError) as failure:  # the listing's integrator, or its twins, blew up
-        return rows + [no_number("program", column, ("program run",), failure) for column in state_columns(case)], {}
-    return rows + run_rows, runs
+    return rows
 
 
 def program_run_checks(case, program):

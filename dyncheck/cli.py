@@ -1,4 +1,4 @@
-"""Command line: `dyncheck list | run | report | bench`.  Exit codes: 0 all pass, 1 a check failed,
+"""Command line: `dyncheck list | run | report | bench | campaign | new`.  Exit codes: 0 all pass, 1 a check failed,
 2 bad input, 130 interrupted (Ctrl-C) (docs/statuses.md).
 
 `run` and the studies produce results (dyncheck.results); `report` saves them beside the pages and
@@ -36,6 +36,20 @@ def main(argv=None):
     run = commands.add_parser("run", help="run the checks and print a table")
     report = commands.add_parser("report", help="run the checks and write Markdown reports with figures")
     bench = commands.add_parser("bench", help="throughput of each source and the harness's overhead")
+    campaign = commands.add_parser("campaign", help="every source at many random parameter sets, and the stability "
+                                                    "maps, on Dask (docs/campaign.md)")
+    campaign.add_argument("case", metavar="CASE", help="the case")
+    campaign.add_argument("--sets", required=True, metavar="N", help="random parameter sets")
+    campaign.add_argument("--states", default="10", metavar="M", help="random states per set (default: 10)")
+    campaign.add_argument("--workers", metavar="K", help="local Dask workers (default: the cores)")
+    campaign.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask cluster's scheduler, instead")
+    campaign.add_argument("--out", type=Path, metavar="DIR",
+                          help="its chunks, page and maps (default: reports/campaigns/CASE)")
+    campaign.add_argument("--chunk", default="100", metavar="SETS", help="sets per task (default: 100)")
+    campaign.add_argument("--grid", default="8", metavar="N",
+                          help="the stability maps' cells per axis (default: 8; 0: no maps)")
+    campaign.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                          help="fix a parameter at a value (it is then not drawn)")
     new = commands.add_parser("new", help="start a case of your own from an MJCF scene (docs/own-case.md)")
     new.add_argument("name", metavar="NAME", help="the case's name, and its folder's")
     new.add_argument("--scene", type=Path, required=True, metavar="PATH", help="the scene, MJCF")
@@ -50,7 +64,7 @@ def main(argv=None):
                          help="override a parameter in every selected case that has it")
         sub.add_argument("--junit", type=Path, metavar="PATH",
                          help="also write the rows as JUnit XML (a test suite per case, a test case per row)")
-    for sub in (listing, run, report, bench):
+    for sub in (listing, run, report, bench, campaign):
         sub.add_argument("--cases", type=Path, default=CASES_DIR, metavar="DIR", dest="cases_dir",
                          help="the folder of case folders (default: the checkout's cases/)")
     run.add_argument("--json", type=Path, metavar="PATH", help="also write the results as JSON")
@@ -74,6 +88,8 @@ def main(argv=None):
             return list_cases(args.cases, args.cases_dir)
         if args.command == "new":
             return new_case(args.name, args.scene, args.cases_dir)
+        if args.command == "campaign":
+            return campaign_command(args)
         if args.command in ("run", "report") and args.junit:
             check_file_path("--junit", args.junit)
         if args.command == "report":
@@ -223,6 +239,38 @@ def study_case(case):
             bar.update()
         return {"work_precision": work_precision.sweep(case, progress),
                 "stability": stability.studies(case, progress), "vibration": vibration.sweep(case, progress)}
+
+
+def campaign_command(args):
+    """`dyncheck campaign`: its input checked before any cluster starts (ValueError: exit 2), then the campaign."""
+    from dyncheck import campaign
+    sets, states, chunk, grid = (whole_number(option, value, least) for option, value, least in
+                                 (("--sets", args.sets, 1), ("--states", args.states, 1), ("--chunk", args.chunk, 1),
+                                  ("--grid", args.grid, 0)))
+    workers = whole_number("--workers", args.workers, 1) if args.workers is not None else os.cpu_count() or 1
+    case = load_case(args.case, args.cases_dir, **parse_overrides(args.set))
+    out = args.out or Path("reports") / "campaigns" / case.name
+    check_writable("--out", out.resolve(), [out.resolve()])
+    if not case.spec["sample"].get("params"):
+        raise ValueError(f"{case.file}: no [sample.params]: the case draws no random parameter sets")
+    plan = campaign.plan(case, sets, states, chunk, out)
+    try:
+        return campaign.command(case, plan, grid, workers, args.scheduler)
+    except KeyboardInterrupt:
+        print(f"dyncheck: interrupted; the finished chunks are in {plan.folder}/, a restart computes the others",
+              file=sys.stderr)
+        return 130
+
+
+def whole_number(option, text, least):
+    """`text` as an integer >= least, or ValueError naming the option."""
+    try:
+        number = int(text.strip())
+    except ValueError:
+        raise ValueError(f"{option} {text}: not a whole number") from None
+    if number < least:
+        raise ValueError(f"{option} {text}: must be at least {least}")
+    return number
 
 
 def list_cases(names, cases_dir):

@@ -9,7 +9,7 @@ import pandas as pd
 from scipy.optimize import brentq
 
 from dyncheck.simulate import Unstable, fastest_frequency, simulate
-from dyncheck.stability.common import EPS, Study, attempt, describe, fmt, study_result
+from dyncheck.stability.common import EPS, Map, Study, attempt, describe, fmt, settings_of, study_result
 from dyncheck.vibration import SAFETY
 from dyncheck.style import legend_below, panels, save, title
 
@@ -259,16 +259,17 @@ def _passages(case, settings, progress):
     return out
 
 
-def sleeping_top(case, settings, progress=None):
-    """The least spin of a stable upright top, by bisection with MuJoCo (quaternions: no singularity upright)."""
-    start = time.perf_counter()
-    variant = case.with_params(**settings.get("overrides", {}))
-    p = variant.params
-    criterion = 2 * math.sqrt(p["Ixx"] * p["m"] * p["g"] * p["h"]) / p["Izz"]
+def maxwell_klein(p):
+    """The least spin of a stable upright top, s_c = 2 sqrt(Ixx m g h) / Izz (Ixx about the tip)."""
+    return 2 * math.sqrt(p["Ixx"] * p["m"] * p["g"] * p["h"]) / p["Izz"]
+
+
+def upright_run(case, settings, trail):
+    """stays_up(s): whether MuJoCo's top, started `start_nutation` from upright with only the spin s, keeps its
+    nutation within `bound` for `horizon` seconds; each run is added to `trail`."""
     n0, bound, T = settings["start_nutation"], settings["bound"], settings["horizon"]
     dt, method = settings["mujoco_step"], settings.get("method", "mujoco:RK4")
-    model = variant.model("mujoco")
-    trail = []
+    model = case.model("mujoco")
 
     def stays_up(s):
         run, fail = attempt(lambda: simulate(model, (np.array([0.0, n0, 0.0]), np.array([0.0, 0.0, s])), T, method,
@@ -281,9 +282,12 @@ def sleeping_top(case, settings, progress=None):
         trail.append({"spin": s, "stable": top <= bound, "max_nutation": top, "status": "ran",
                       "t_fall": float(run.index[over[0]]) if over.size else None})
         return top <= bound
+    return stays_up
 
-    if progress:
-        progress("sleeping top")
+
+def least_spin(stays_up, criterion, settings):
+    """Bisection on the spin between `bracket` times the criterion, to `resolution` of it: (falls at, stays up
+    at, whether the bracket held)."""
     lo, hi = settings["bracket"][0] * criterion, settings["bracket"][1] * criterion
     bracket_ok = not stays_up(lo) and stays_up(hi)
     while bracket_ok and hi - lo > settings["resolution"] * criterion:
@@ -292,6 +296,22 @@ def sleeping_top(case, settings, progress=None):
             hi = mid
         else:
             lo = mid
+    return lo, hi, bracket_ok
+
+
+def sleeping_top(case, settings, progress=None):
+    """The least spin of a stable upright top, by bisection with MuJoCo (quaternions: no singularity upright)."""
+    start = time.perf_counter()
+    variant = case.with_params(**settings.get("overrides", {}))
+    p = variant.params
+    criterion = maxwell_klein(p)
+    n0, bound, T = settings["start_nutation"], settings["bound"], settings["horizon"]
+    dt, method = settings["mujoco_step"], settings.get("method", "mujoco:RK4")
+    trail = []
+    stays_up = upright_run(variant, settings, trail)
+    if progress:
+        progress("sleeping top")
+    lo, hi, bracket_ok = least_spin(stays_up, criterion, settings)
     # The exact motion's first integrals at this bound and horizon (`top_nutation`): the spin the bisection
     # should find.  Below it the top reaches the bound within T.
     falls = lambda s: top_nutation(p, s, n0, T)[0] >= bound
@@ -526,3 +546,31 @@ STUDIES = {
     "sleeping_top": Study(sleeping_top, figure_sleeping_top, (
         "start_nutation", "bound", "horizon", "mujoco_step", "bracket", "resolution")),
 }
+
+
+# -- the campaign's map: the sleeping top's least spin over the inertia ratio and the height -------------------------
+
+MAP_RATIO = (0.3, 0.75)  # Izz / Ixx, Ixx at the case's: every cell realisable up to h = 0.055 m (A + B >= C)
+MAP_HEIGHT = (0.02, 0.055)  # h, m
+
+
+def map_grid(case, n):
+    return "Izz / Ixx", np.linspace(*MAP_RATIO, n), "h [m]", np.linspace(*MAP_HEIGHT, n)
+
+
+def map_cell(case, ratio, h):
+    """The least spin at which MuJoCo's upright top stays up (`least_spin`, the sleeping_top study's settings), against
+    the Maxwell-Klein criterion; none where the inertias are no rigid body's or the bracket fails."""
+    settings = settings_of(case, "sleeping_top")
+    try:
+        variant = case.with_params(**settings.get("overrides", {}), Izz=ratio * case.params["Ixx"], h=h)
+    except ValueError as error:  # inertias that no rigid body has
+        return {"value": math.nan, "theory": math.nan, "status": f"not physical: {error}"}
+    criterion = maxwell_klein(variant.params)
+    lo, hi, bracket_ok = least_spin(upright_run(variant, settings, []), criterion, settings)
+    return {"value": 0.5 * (lo + hi) if bracket_ok else math.nan, "theory": criterion,
+            "status": "measured" if bracket_ok else "bracket failed"}
+
+
+MAPS = {"sleeping_top": Map("the sleeping top's least spin over the inertia ratio and the height", map_grid, map_cell,
+                            "least spin [rad/s]", "Maxwell-Klein 2 sqrt(Ixx m g h) / Izz")}

@@ -8,8 +8,8 @@ import pandas as pd
 from scipy.optimize import fsolve
 
 from dyncheck.simulate import fastest_frequency, simulate
-from dyncheck.stability.common import (FAMILY, SHARP, Guarded, Study, attempt, describe, fmt, grid_step, limit_step, rms,
-                                      run_fixed, study_result)
+from dyncheck.stability.common import (FAMILY, SHARP, Guarded, Map, Study, attempt, describe, fmt, grid_step, limit_step,
+                                      rms, run_fixed, settings_of, study_result)
 from dyncheck.style import legend_below, method_style, panels, save, title
 
 
@@ -92,6 +92,92 @@ def _search(trial, start, resolution, down=1.5, up=1.5, tries=12):
     return lo, hi
 
 
+def stable_steps_at(case, settings, k, methods, trail):
+    """`stable_step`'s rows at stiffness k at the case's spin: the exact solution's (bounded or a physical
+    runaway), then each method's largest stable and smallest blow-up step; each trial run is added to `trail`."""
+    p = case.params
+    m, omega_base = p["m"], p["alpha_rate"] + p["beta_rate"]
+    T, G, resolution = settings["horizon"], settings["growth"], settings["resolution"]
+    escape = settings["escape"]
+    source = settings.get("source", "reference")
+    span = 0.75 * T  # the growth is measured from the first quarter of the horizon to the last
+    runaway_T = case.initial[2]
+    rows = []
+    variant = case.with_params(k=k)
+    lin = spring_linearisation(case, k)
+    # The exact solution from the book's initial conditions: bounded, or a physical runaway?
+    exact_model = Guarded(variant.model(source), 1, escape, "DOP853", 1)
+    exact_long, fail = attempt(lambda: simulate(exact_model, variant.initial[:2], runaway_T, "DOP853",
+                                                rtol=settings["rtol"], output_step=1e-3, work=False,
+                                                omega=fastest_frequency(variant)))
+    base = {"k": k, "omega_fast": lin[3] if lin else None, "omega_slow": lin[2] if lin else None,
+            "psi_eq": lin[0] if lin else None, "l_eq": lin[1] if lin else None}
+    if fail is not None:
+        rows.append({**base, "method": "exact (DOP853)", "status": "physical runaway",
+                     "t_fail": fail["t"], "why": fail["why"]})
+        growth_rate = math.sqrt(max(omega_base**2 - k / m, 0.0))
+        for method in methods:
+            # The method at a step far inside its limits: it runs away too, with the exact solution.
+            dt = 0.05 / omega_base if method != "explicit Euler" else 2e-4
+            _, mfail = attempt(lambda: run_fixed(variant, source, method, dt, runaway_T, bound=escape, index=1))
+            mfail = mfail or {"t": None, "step": None, "why": "stayed within the bound"}
+            rows.append({**base, "method": method, "status": "physical runaway", "dt": dt,
+                         "t_fail": mfail["t"], "t_exact": fail["t"], "step_fail": mfail.get("step"),
+                         "why": f"exact solution escapes too (|l| > {escape:g} m at t = {fail['t']:.3g} s; "
+                                f"linear growth rate sqrt(Omega^2 - k/m) = {growth_rate:.3g} 1/s)"})
+        return rows
+    exact = exact_long.loc[:T + 1e-12]
+    rows.append({**base, "method": "exact (DOP853)", "status": "bounded",
+                 "l_max": float(exact_long["l"].abs().max())})
+    judge = variant.model(source)
+    exact_ratios = _window_ratios(exact, T, judge)
+    for method in methods:
+        h_theory = limit_step(method, lin[3], span, G) if lin else None
+        h_limit = SHARP[method] / lin[3] if lin and method in SHARP else None
+        guess = h_theory or 2.0 / math.sqrt(k / m)
+        if method == "explicit Euler" and T / guess > settings["max_steps"]:
+            rows.append({**base, "method": method, "status": "not measured", "h_theory": h_theory,
+                         "why": f"a trial would take {T / guess:.3g} steps (more than {settings['max_steps']:g})"})
+            continue
+        verdicts = {}
+
+        def trial(h):
+            h = grid_step(h, T)[0]
+            key = round(T / h)
+            if key not in verdicts:
+                out, fail = attempt(lambda: run_fixed(variant, source, method, h, T, bound=escape, index=1,
+                                                      max_out=settings["output_rows"]))
+                if fail is not None:
+                    verdicts[key] = {"blowup": True, "stable": False, "growth": None, **fail}
+                else:
+                    g = _growth(out[0], exact_ratios, T, judge)
+                    verdicts[key] = {"blowup": False, "stable": bool(g <= G), "growth": g,
+                                     "status": "stable" if g <= G else "grew", "t": None, "step": None,
+                                     "why": f"the oscillation grew {g:.3g} times"}
+                trail.append({"k": k, "method": method, "dt": h, **verdicts[key]})
+            return h, verdicts[key]
+
+        lo, hi = _search(lambda h: (lambda r: (r[0], r[1]["stable"]))(trial(h)),
+                         guess / (1.5 if method == "explicit Euler" else 4.0), resolution)
+        # Blow-up: the sharp methods' linear limit.  Explicit Euler has none (it grows at every step,
+        # and when it leaves the bound depends on the amplitude): not searched.
+        b_lo, b_hi = (_search(lambda h: (lambda r: (r[0], not r[1]["blowup"]))(trial(h)), h_limit, resolution)
+                      if h_limit else (None, None))
+        hi_v = verdicts.get(round(T / hi)) if hi else None
+        b_v = verdicts.get(round(T / b_hi)) if b_hi else None
+        rows.append({**base, "method": method, "status": "measured" if lo and hi else "bracket failed",
+                     "h_stable": lo, "h_unstable": hi, "h_theory": h_theory,
+                     "ratio": lo / h_theory if lo and h_theory else None,
+                     "fail_status": hi_v["status"] if hi_v else None,
+                     "growth_above": hi_v["growth"] if hi_v else None,
+                     "why": describe(hi_v) if hi_v else None,
+                     "h_blowup": b_hi, "h_no_blowup": b_lo, "h_limit": h_limit,
+                     "blowup_ratio": b_hi / h_limit if b_hi and h_limit else None,
+                     "t_fail": b_v.get("t") if b_v else None, "step_fail": b_v.get("step") if b_v else None,
+                     "blowup_why": describe(b_v) if b_v else None, "trials": len(verdicts)})
+    return rows
+
+
 def stable_step(case, settings, progress=None):
     """Largest stable step of each method against the spring stiffness, from the book's initial conditions.
 
@@ -106,7 +192,7 @@ def stable_step(case, settings, progress=None):
     p = case.params
     m, omega_base = p["m"], p["alpha_rate"] + p["beta_rate"]
     k_crit = m * omega_base**2
-    T, G, resolution = settings["horizon"], settings["growth"], settings["resolution"]
+    T, G = settings["horizon"], settings["growth"]
     escape = settings["escape"]
     methods, source = settings["methods"], settings.get("source", "reference")
     span = 0.75 * T  # the growth is measured from the first quarter of the horizon to the last
@@ -114,80 +200,9 @@ def stable_step(case, settings, progress=None):
     rows, trail = [], []
 
     for k in settings["k"]:
-        variant = case.with_params(k=k)
         if progress:
             progress(f"stable step, k = {k:g} N/m")
-        lin = spring_linearisation(case, k)
-        # The exact solution from the book's initial conditions: bounded, or a physical runaway?
-        exact_model = Guarded(variant.model(source), 1, escape, "DOP853", 1)
-        exact_long, fail = attempt(lambda: simulate(exact_model, variant.initial[:2], runaway_T, "DOP853",
-                                                    rtol=settings["rtol"], output_step=1e-3, work=False,
-                                                    omega=fastest_frequency(variant)))
-        base = {"k": k, "omega_fast": lin[3] if lin else None, "omega_slow": lin[2] if lin else None,
-                "psi_eq": lin[0] if lin else None, "l_eq": lin[1] if lin else None}
-        if fail is not None:
-            rows.append({**base, "method": "exact (DOP853)", "status": "physical runaway",
-                         "t_fail": fail["t"], "why": fail["why"]})
-            growth_rate = math.sqrt(max(omega_base**2 - k / m, 0.0))
-            for method in methods:
-                # The method at a step far inside its limits: it runs away too, with the exact solution.
-                dt = 0.05 / omega_base if method != "explicit Euler" else 2e-4
-                _, mfail = attempt(lambda: run_fixed(variant, source, method, dt, runaway_T, bound=escape, index=1))
-                mfail = mfail or {"t": None, "step": None, "why": "stayed within the bound"}
-                rows.append({**base, "method": method, "status": "physical runaway", "dt": dt,
-                             "t_fail": mfail["t"], "t_exact": fail["t"], "step_fail": mfail.get("step"),
-                             "why": f"exact solution escapes too (|l| > {escape:g} m at t = {fail['t']:.3g} s; "
-                                    f"linear growth rate sqrt(Omega^2 - k/m) = {growth_rate:.3g} 1/s)"})
-            continue
-        exact = exact_long.loc[:T + 1e-12]
-        rows.append({**base, "method": "exact (DOP853)", "status": "bounded",
-                     "l_max": float(exact_long["l"].abs().max())})
-        judge = variant.model(source)
-        exact_ratios = _window_ratios(exact, T, judge)
-        for method in methods:
-            h_theory = limit_step(method, lin[3], span, G) if lin else None
-            h_limit = SHARP[method] / lin[3] if lin and method in SHARP else None
-            guess = h_theory or 2.0 / math.sqrt(k / m)
-            if method == "explicit Euler" and T / guess > settings["max_steps"]:
-                rows.append({**base, "method": method, "status": "not measured", "h_theory": h_theory,
-                             "why": f"a trial would take {T / guess:.3g} steps (more than {settings['max_steps']:g})"})
-                continue
-            verdicts = {}
-
-            def trial(h):
-                h = grid_step(h, T)[0]
-                key = round(T / h)
-                if key not in verdicts:
-                    out, fail = attempt(lambda: run_fixed(variant, source, method, h, T, bound=escape, index=1,
-                                                          max_out=settings["output_rows"]))
-                    if fail is not None:
-                        verdicts[key] = {"blowup": True, "stable": False, "growth": None, **fail}
-                    else:
-                        g = _growth(out[0], exact_ratios, T, judge)
-                        verdicts[key] = {"blowup": False, "stable": bool(g <= G), "growth": g,
-                                         "status": "stable" if g <= G else "grew", "t": None, "step": None,
-                                         "why": f"the oscillation grew {g:.3g} times"}
-                    trail.append({"k": k, "method": method, "dt": h, **verdicts[key]})
-                return h, verdicts[key]
-
-            lo, hi = _search(lambda h: (lambda r: (r[0], r[1]["stable"]))(trial(h)),
-                             guess / (1.5 if method == "explicit Euler" else 4.0), resolution)
-            # Blow-up: the sharp methods' linear limit.  Explicit Euler has none (it grows at every step,
-            # and when it leaves the bound depends on the amplitude): not searched.
-            b_lo, b_hi = (_search(lambda h: (lambda r: (r[0], not r[1]["blowup"]))(trial(h)), h_limit, resolution)
-                          if h_limit else (None, None))
-            hi_v = verdicts.get(round(T / hi)) if hi else None
-            b_v = verdicts.get(round(T / b_hi)) if b_hi else None
-            rows.append({**base, "method": method, "status": "measured" if lo and hi else "bracket failed",
-                         "h_stable": lo, "h_unstable": hi, "h_theory": h_theory,
-                         "ratio": lo / h_theory if lo and h_theory else None,
-                         "fail_status": hi_v["status"] if hi_v else None,
-                         "growth_above": hi_v["growth"] if hi_v else None,
-                         "why": describe(hi_v) if hi_v else None,
-                         "h_blowup": b_hi, "h_no_blowup": b_lo, "h_limit": h_limit,
-                         "blowup_ratio": b_hi / h_limit if b_hi and h_limit else None,
-                         "t_fail": b_v.get("t") if b_v else None, "step_fail": b_v.get("step") if b_v else None,
-                         "blowup_why": describe(b_v) if b_v else None, "trials": len(verdicts)})
+        rows += stable_steps_at(case, settings, k, methods, trail)
 
     data = pd.DataFrame(rows)
     # k_crit confirmed with the exact solution: bisection on k between a runaway and a bounded k.
@@ -461,3 +476,37 @@ def figure_stable_step(result, path, name):
 
 STUDIES = {"stable_step": Study(stable_step, figure_stable_step, (
     "k", "methods", "horizon", "growth", "resolution", "escape", "max_steps", "rtol", "k_resolution", "output_rows"))}
+
+
+# -- the campaign's map: the largest stable step over stiffness and spin --------------------------------------------
+
+MAP_METHOD = "RK4"  # one method per map: the classical scheme, with a closed-form limit
+MAP_K = (50.0, 2e4)  # N/m, logarithmically: through k_crit = m Omega^2 at every spin of the grid
+MAP_SPIN = (10.0, 40.0)  # rad/s, Omega = alpha' + beta' (the arm's rate kept, the disk's changed)
+
+
+def map_grid(case, n):
+    return ("spring stiffness k [N/m]", np.geomspace(*MAP_K, n),
+            "spin Omega = alpha' + beta' [rad/s]", np.linspace(*MAP_SPIN, n))
+
+
+def map_cell(case, k, spin):
+    """RK4's largest stable step at stiffness k and spin Omega (`stable_steps_at`, the study's settings), against the
+    linear theory's; a physical runaway (the exact solution leaves the bound) has none."""
+    variant = case.with_params(beta_rate=spin - case.params["alpha_rate"])
+    rows = stable_steps_at(variant, settings_of(case, "stable_step"), k, [MAP_METHOD], [])
+    measured = next(r for r in rows if r["method"] == MAP_METHOD)
+    value = measured.get("h_stable") if measured["status"] == "measured" else None
+    theory = measured.get("h_theory")
+    return {"value": math.nan if value is None else value, "theory": math.nan if theory is None else theory,
+            "status": measured["status"]}
+
+
+def map_runaway(case, ks):
+    """The spin at which the spring lets go, k = m Omega^2."""
+    return np.sqrt(np.asarray(ks) / case.params["m"])
+
+
+MAPS = {"stable_step": Map(f"{MAP_METHOD}'s largest stable step over stiffness and spin", map_grid, map_cell,
+                           "largest stable step [s]", "linear theory about the relative equilibrium",
+                           boundary=map_runaway, log=(True, False))}

@@ -186,3 +186,20 @@ class Study:
     run: Callable
     figure: Callable
     keys: tuple
+
+
+@dataclass(frozen=True)
+class Map:
+    """A 2-D stability map a case's study module offers `dyncheck campaign` (its `MAPS`, by name): a grid of two
+    parameters, each cell a task on its own.  `grid(case, n)` -> (x label, xs, y label, ys), n values each;
+    `cell(case, x, y)` -> {"value", "theory", "status"}: what is measured there (NaN where nothing is, `status`
+    saying why) and its closed form (NaN where there is none); `boundary(case, xs)` -> ys, a closed-form curve
+    drawn over the map (e.g. where the physics runs away), or None.  `value` and `theory` say what the numbers
+    are, with units; `log` whether the axes are logarithmic (x, y)."""
+    title: str
+    grid: Callable
+    cell: Callable
+    value: str
+    theory: str
+    boundary: Callable | None = None
+    log: tuple = (False, False)
