@@ -27,6 +27,7 @@ from dyncheck.simulate import simulate
 
 enabled = True
 KEPT_VERSIONS = 5  # code versions whose entries stay; older ones (other checkouts, earlier edits) go
+CODE = ("dyncheck", "reference", "engines")  # the packages whose sources a result depends on
 LIBRARIES = ("numpy", "scipy", "pandas", "mujoco", "pin")
 
 
@@ -35,26 +36,27 @@ def folder():
     return Path(root)
 
 
+def _digest(paths, root, digest):
+    """`digest` updated with the files' names (relative to `root`) and contents."""
+    for path in sorted(paths):
+        digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest
+
+
 @functools.cache
 def code_version():
-    """A hash of the code that computes a solution and of the libraries it runs on."""
-    digest = hashlib.sha256()
-    for package in ("dyncheck", "reference", "engines"):
-        root = Path(sys.modules[package].__file__).parent
-        for path in sorted(root.rglob("*.py")):
-            digest.update(path.relative_to(root.parent).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    """A hash of the code that computes a solution (the harness, the derivations, the engine adapters) and of
+    the libraries it runs on."""
+    root = Path(sys.modules["dyncheck"].__file__).parent.parent
+    digest = _digest([p for package in CODE for p in (root / package).rglob("*.py")], root, hashlib.sha256())
     digest.update(repr((sys.version, platform.machine(), [version(name) for name in LIBRARIES])).encode())
     return digest.hexdigest()[:16]
 
 
-def _case_key(case):
-    """The case's folder (every file: case file, scenes, studies, a researcher's equations) and its
-    parameters' values."""
-    digest = hashlib.sha256()
-    for path in sorted(p for p in case.folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts):
-        digest.update(path.relative_to(case.folder).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
-    digest.update(repr(sorted((name, float(value).hex()) for name, value in case.params.items())).encode())
-    return digest.hexdigest()
+def case_version(case):
+    """A hash of every file of the case's folder: case file, scenes, studies, a researcher's equations."""
+    files = [p for p in case.folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts]
+    return _digest(files, case.folder, hashlib.sha256()).hexdigest()
 
 
 def _exact(value):
@@ -75,7 +77,8 @@ def solution(case, source, ic, t_end, method, **options):
         return simulate(case.model(source), ic, t_end, method, **options)
     call = _exact((source, [np.asarray(x, dtype=float) for x in ic], float(t_end), method,
                    sorted((name, value) for name, value in options.items())))
-    key = hashlib.sha256(repr((_case_key(case), call)).encode()).hexdigest()
+    parameters = sorted((name, float(value).hex()) for name, value in case.params.items())
+    key = hashlib.sha256(repr((case_version(case), parameters, call)).encode()).hexdigest()
     path = folder() / code_version() / f"{key}.pkl"
     try:
         with open(path, "rb") as file:

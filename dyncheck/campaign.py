@@ -19,11 +19,10 @@ import numpy as np
 import pandas as pd
 
 from dyncheck import checks, residuals, stability
+from dyncheck.cache import case_version, code_version
 from dyncheck.case import Case, load_case
 from dyncheck.results import Status
 
-CODE = ("dyncheck", "reference", "engines")  # the packages whose sources a chunk's results depend on
-ROOT = Path(__file__).resolve().parent.parent
 # The columns of a chunk's table besides the case's parameters (one per parameter, its value at the set) and the
 # state where a comparison of two sources differs most (state_t, state_<coordinate>, state_<coordinate>_rate).
 COLUMNS = ("set", "check", "comparison", "quantity", "error", "tolerance", "status", "finding", "reason", "state",
@@ -62,24 +61,6 @@ class Plan:
     def todo(self):
         """The chunks without their file: those a restart computes."""
         return [chunk for chunk in self.chunks if not (self.folder / chunk.file).is_file()]
-
-
-def digest(paths, root):
-    """sha256 of the files' names (relative to `root`) and contents."""
-    h = hashlib.sha256()
-    for path in sorted(paths):
-        h.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes() + b"\0")
-    return h.hexdigest()
-
-
-def code_version():
-    """A hash of every Python source of the harness, the derivations and the engine adapters."""
-    return digest([p for package in CODE for p in (ROOT / package).rglob("*.py")], ROOT)
-
-
-def case_version(case):
-    """A hash of every file of the case's folder (its case file, scenes, derivation, studies)."""
-    return digest([p for p in case.folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts], case.folder)
 
 
 def plan(case, sets, states, chunk, out):
