@@ -20,7 +20,7 @@ from pathlib import Path
 import pandas as pd
 from tqdm import tqdm
 
-from dyncheck import ci
+from dyncheck import cache, ci
 from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
 from dyncheck.checks import run_case
 from dyncheck.messages import suggest
@@ -64,6 +64,8 @@ def main(argv=None):
                          help="override a parameter in every selected case that has it")
         sub.add_argument("--junit", type=Path, metavar="PATH",
                          help="also write the rows as JUnit XML (a test suite per case, a test case per row)")
+        sub.add_argument("--no-cache", action="store_true",
+                         help="compute the tight solutions anew rather than take them from the cache of earlier runs")
     for sub in (listing, run, report, bench, campaign):
         sub.add_argument("--cases", type=Path, default=CASES_DIR, metavar="DIR", dest="cases_dir",
                          help="the folder of case folders (default: the checkout's cases/)")
@@ -97,6 +99,7 @@ def main(argv=None):
             if args.saved:
                 return report_saved(args, start)
         cases = select_cases(args.cases, args.set, args.cases_dir)
+        cache.enabled = not getattr(args, "no_cache", False)
         if args.command == "run" and args.json:
             check_file_path("--json", args.json)
         if args.command == "run" and args.results:

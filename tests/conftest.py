@@ -4,23 +4,38 @@ from pathlib import Path
 import pytest
 
 import dyncheck
-from dyncheck.checks import run_case
+from dyncheck.cli import run_cases
 from dyncheck.report import write_reports
 
 ROOT = Path(__file__).resolve().parent.parent
+WHOLE_RUNS = {"results", "example_results", "rendered"}  # the session fixtures that run every case
+
+
+def pytest_collection_modifyitems(items):
+    """A test that takes a whole run of every case is `full`: the default run leaves it to `pytest -m full`."""
+    for item in items:
+        if WHOLE_RUNS & set(item.fixturenames):
+            item.add_marker(pytest.mark.full)
 
 
 @pytest.fixture(scope="session")
 def results():
-    """Every check of every case with default parameters, run once for the whole session."""
-    return {name: run_case(dyncheck.load_case(name)) for name in dyncheck.case_names()}
+    """Every check of every case with default parameters, run once for the whole session (in parallel, as
+    `dyncheck run` runs them)."""
+    return whole_run(ROOT / "cases")
 
 
 @pytest.fixture(scope="session")
 def example_results():
     """Every check of every case in examples/, run once for the whole session."""
-    examples = ROOT / "examples"
-    return {name: run_case(dyncheck.load_case(name, examples)) for name in dyncheck.case_names(examples)}
+    return whole_run(ROOT / "examples")
+
+
+def whole_run(folder):
+    cases = [dyncheck.load_case(name, folder) for name in dyncheck.case_names(folder)]
+    results, interrupted = run_cases(cases)
+    assert interrupted is None
+    return {result.name: result for result in results}
 
 
 @pytest.fixture(scope="session")
