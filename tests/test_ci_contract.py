@@ -95,14 +95,14 @@ def properties(testcase):
     return {p.name: p.value for group in testcase.iterchildren(junitparser.Properties) for p in group}
 
 
-def canned(monkeypatch, *results):
-    """`dyncheck run piston` answering with `results` (one per call), without running anything."""
-    answers = iter(results)
-    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: next(answers))
+def canned(monkeypatch, **results):
+    """`dyncheck run CASE ...` answering each case with results[CASE], without running anything (by name: the
+    cases run in parallel processes)."""
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: results[case.name])
 
 
 def test_junit_has_a_failure_per_failing_row_and_skips_the_not_applicable(monkeypatch, tmp_path):
-    canned(monkeypatch, toy())
+    canned(monkeypatch, piston=toy())
     path = tmp_path / "out.xml"
     assert cli.main(["run", "piston", "--junit", str(path)]) == 1
     suite, = junitparser.JUnitXml.fromfile(str(path))
@@ -133,7 +133,7 @@ def test_a_junit_path_that_cannot_be_written_exits_2_before_any_work(where, why,
 
 
 def test_a_run_ends_with_its_failing_rows_and_one_summary_line(monkeypatch, capsys):
-    canned(monkeypatch, toy(), toy("calm", failing=False))
+    canned(monkeypatch, piston=toy(), double_pendulum=toy("calm", failing=False))
     monkeypatch.delenv("GITHUB_ACTIONS", raising=False)
     assert cli.main(["run", "piston", "double_pendulum"]) == 1
     out = capsys.readouterr().out.splitlines()
@@ -152,7 +152,7 @@ def test_a_run_ends_with_its_failing_rows_and_one_summary_line(monkeypatch, caps
 
 
 def test_on_github_actions_each_failing_row_is_an_error_annotation(monkeypatch, capsys):
-    canned(monkeypatch, toy("a:b,c"))
+    canned(monkeypatch, piston=toy("a:b,c"))
     monkeypatch.setenv("GITHUB_ACTIONS", "true")
     assert cli.main(["run", "piston"]) == 1
     annotations = [line for line in capsys.readouterr().out.splitlines() if line.startswith("::")]
