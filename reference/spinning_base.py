@@ -48,12 +48,15 @@ FRAMES = {"T_z": "array([[cos(a), sin(a), 0.0], [-sin(a), cos(a), 0.0], [0.0, 0.
           "T_x": "array([[1.0, 0.0, 0.0], [0.0, cos(a), sin(a)], [0.0, -sin(a), cos(a)]])"}
 
 
+_MATRICES = printed.Functions(FRAMES, ("a",), {"sin": np.sin, "cos": np.cos, "array": np.array})
+
+
 def T_z(angle):
-    return printed.evaluate(FRAMES, {"a": angle, "sin": np.sin, "cos": np.cos, "array": np.array}, ("T_z",))["T_z"]
+    return _MATRICES["T_z"](angle)
 
 
 def T_x(angle):
-    return printed.evaluate(FRAMES, {"a": angle, "sin": np.sin, "cos": np.cos, "array": np.array}, ("T_x",))["T_x"]
+    return _MATRICES["T_x"](angle)
 
 
 # The same expressions for the chain, rows as tuples: on one state with math's sin and cos (numpy's cost more

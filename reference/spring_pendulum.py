@@ -48,6 +48,7 @@ from reference.spinning_base import FRAMES, ParticleOnBase, T_z, add, base_terms
 COORDS = ("psi", "l")
 REACTIONS = ("R",)
 COORD_ACCS = ("psi_acc", "l_acc")
+STATE = ("beta", "K", "L", "l", "psi", "psi_rate", "l_rate")  # the printed symbols that change with the state
 
 
 class Book:
@@ -58,10 +59,13 @@ class Book:
 
     def __init__(self, params):
         self.p = dict(params)
+        # The printed expressions as functions of the state's symbols, the rest bound once, with math's sin and
+        # cos (on one number numpy's cost more and give the same values): an integrator evaluates them at every step.
+        self._evaluate = printed.Functions(self.PRINTED, STATE, {**self._constants(), "sin": math.sin, "cos": math.cos})
 
     def accelerations(self, t, q, v):
-        found = printed.evaluate(self.PRINTED, self._names(t, q, v), COORD_ACCS)
-        return np.array([found["psi_acc"], found["l_acc"]])
+        state = self._floats(t, q, v)
+        return np.array([self._evaluate[key](*state) for key in COORD_ACCS])
 
     # R = m a_E,x with the printed a_E,x (one L psi' Omega cos(psi) term).  The string is the code
     # (evaluated with `symbols`), so that dyncheck can search edits of it.
@@ -81,13 +85,25 @@ class Book:
                "psi_acc": "-g/L*sin(psi) + K/L*cos(psi) + Omega**2*sin(psi)*cos(psi) - 2*l_rate*psi_rate/L",
                "l_acc": "-k/m*l + g*cos(psi) + K*sin(psi) + L*(psi_rate**2 + Omega**2*sin(psi)**2)"}
 
+    def _constants(self):
+        """The symbols of the printed expressions that stay constant."""
+        p = self.p
+        return {"m": p["m"], "k": p["k"], "g": p["g"], "b": p["b"], "alpha_rate": p["alpha_rate"],
+                "Omega": p["alpha_rate"] + p["beta_rate"], "array": np.array}
+
+    def _state(self, t, q, v):
+        """The values of the symbols STATE at (t, q, v)."""
+        beta, _, base = base_terms(self.p, t)
+        return beta, base, self.p["l0"] + q[1], q[1], q[0], v[0], v[1]
+
+    def _floats(self, t, q, v):
+        """`_state` as floats, for `_evaluate` (`_names` keeps numpy's scalars: an edit that divides by zero gives
+        inf there, as numpy does, where floats would raise)."""
+        return [float(x) for x in self._state(t, q, v)]
+
     def _names(self, t, q, v):
         """The symbols of the printed expressions but psi'' and l''."""
-        p = self.p
-        beta, omega, base = base_terms(p, t)
-        return {"m": p["m"], "k": p["k"], "g": p["g"], "b": p["b"], "alpha_rate": p["alpha_rate"], "beta": beta,
-                "Omega": omega, "K": base, "L": p["l0"] + q[1], "l": q[1], "psi": q[0], "psi_rate": v[0],
-                "l_rate": v[1], "sin": np.sin, "cos": np.cos, "array": np.array}
+        return {**self._constants(), **dict(zip(STATE, self._state(t, q, v))), "sin": np.sin, "cos": np.cos}
 
     def symbols(self, t, q, v):
         names = self._names(t, q, v)
@@ -98,7 +114,7 @@ class Book:
         return printed.evaluate(self.PRINTED, names, ("omega1", "omega2", "a_C", "omega3", "omega3_dot", "a_D", "a_E"))
 
     def reactions(self, t, q, v):
-        return printed.evaluate(self.PRINTED, self.symbols(t, q, v), ("R",))
+        return {"R": self._evaluate["R"](*self._floats(t, q, v))}
 
     def energy(self, t, q, v):
         p = self.p
