@@ -374,7 +374,8 @@ class MujocoModel:
             applied = self._applied_many(t, q, v)
             rows = []
             for i in range(len(t)):
-                self.d.qpos[:], self.d.qvel[:], self.d.qfrc_applied[:], self.d.qacc[:] = qpos[i], qvel[i], applied[i], qacc[i]
+                self.d.qpos[:], self.d.qvel[:], self.d.qfrc_applied[:] = qpos[i], qvel[i], applied[i]
+                self.d.qacc[:] = qacc[i]
                 mujoco.mj_inverse(self.m, self.d)
                 rows.append(self._sensed_reactions())
         return {name: np.array([row[name] for row in rows]) for name in self.reaction_names}

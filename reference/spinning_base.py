@@ -101,16 +101,11 @@ def _apply(matrix, *vectors):
             for x0, x1, x2 in vectors]
 
 
-def stacked(vector):
-    """A vector of components at many states (arrays, or floats where constant) as an (N, 3) array."""
-    return np.stack(np.broadcast_arrays(*vector), axis=-1)
-
-
 def particle_motion(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0):
     """I r_OE, B3 v_E, B3 a_E and gravity per unit mass in B3 (see `chain`) as components: at one state
     (floats) or at many (t and the rest arrays of shape (N,), or floats where constant)."""
-    many = isinstance(t, np.ndarray) or isinstance(psi, np.ndarray)
-    return _chain(p, t, psi, psi_rate, psi_acc, length, length_rate, length_acc, _TURNS_MANY if many else _TURNS)[:4]
+    turns = _TURNS_MANY if isinstance(t, np.ndarray) or isinstance(psi, np.ndarray) else _TURNS
+    return _chain(p, t, psi, psi_rate, psi_acc, length, length_rate, length_acc, turns)[:4]
 
 
 def chain(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0):
