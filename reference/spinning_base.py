@@ -94,11 +94,11 @@ def dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def _apply(matrix, *vectors):
-    """[matrix @ x for x in vectors], the matrix given by rows."""
+def _apply(matrix, x):
+    """matrix @ x, the matrix given by rows."""
     (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = matrix
-    return [(m00 * x0 + m01 * x1 + m02 * x2, m10 * x0 + m11 * x1 + m12 * x2, m20 * x0 + m21 * x1 + m22 * x2)
-            for x0, x1, x2 in vectors]
+    x0, x1, x2 = x
+    return m00 * x0 + m01 * x1 + m02 * x2, m10 * x0 + m11 * x1 + m12 * x2, m20 * x0 + m21 * x1 + m22 * x2
 
 
 def particle_motion(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0):
@@ -141,14 +141,15 @@ def _chain(p, t, psi, psi_rate, psi_acc, length, length_rate, length_acc, turns)
     v = a = w = w_dot = ZERO
     for turn, rate, acc, axis, r, r_rate, r_acc in chain:
         # the parent's vectors in the child frame; (I from child) = (I from parent) turn^T
-        w_in, w_dot_in, v_in, a_in, *to_inertial = _apply(turn, w, w_dot, v, a, *to_inertial)
+        w_in, w_dot_in, v_in, a_in = _apply(turn, w), _apply(turn, w_dot), _apply(turn, v), _apply(turn, a)
+        to_inertial = _apply(turn, to_inertial[0]), _apply(turn, to_inertial[1]), _apply(turn, to_inertial[2])
         spin = scale(rate, axis)
         w = add(w_in, spin)
         w_dot = add(w_dot_in, cross(w_in, spin), scale(acc, axis))
         v_rel, a_rel, w_r = scale(-r_rate, K3), scale(-r_acc, K3), cross(w, r)
         v = add(v_in, w_r, v_rel)
         a = add(a_in, cross(w, w_r), cross(w_dot, r), scale(2, cross(w, v_rel)), a_rel)
-        position = add(position, _apply(to_inertial, r)[0])
+        position = add(position, _apply(to_inertial, r))
     gravity = scale(-p["g"], to_inertial[2])  # (0, 0, -g) in the last frame: -g times its components of K
     return position, v, a, gravity, w, w_dot
 
