@@ -18,6 +18,7 @@ from xml.etree import ElementTree
 import mujoco
 import mujoco.rollout
 import numpy as np
+from scipy.linalg import lapack
 
 from engines import euler, scene as scene_rules
 from engines.loops import MujocoLoops
@@ -273,7 +274,7 @@ class MujocoModel:
         q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
         states = q.shape[:-1]
         if not self.varying:
-            return np.broadcast_to(self.applied, states + (self.m.nv,))
+            return np.broadcast_to(self.applied, states + (self.m.nv,)) if states else self.applied
         t = np.broadcast_to(t, states)
         out = np.empty(states + (self.m.nv,))
         for i in np.ndindex(states):
@@ -300,7 +301,7 @@ class MujocoModel:
         if len(self.free) and not self.loops.loops:
             force = smooth - (mass @ qacc[..., None])[..., 0]
             free_block = mass[..., self.free[:, None], self.free]
-            qacc[..., self.free] = np.linalg.solve(free_block, force[..., self.free, None])[..., 0]
+            qacc[..., self.free] = _linear_solution(free_block, force[..., self.free])
         return qvel, mass, smooth, qacc
 
     def _inverse(self, t, q, v):
@@ -345,6 +346,10 @@ class MujocoModel:
 
     def reactions(self, t, q, v):
         self._inverse(t, q, v)
+        return self._sensed_reactions()
+
+    def _sensed_reactions(self):
+        """The reactions that self.d's sensors (or loop forces) hold."""
         out = {}
         for name, ((adr, site), axis, frame) in self.reaction_specs.items():
             if adr == "loop":  # world axes: the force on the <connect>'s body1 at its anchor
@@ -355,6 +360,25 @@ class MujocoModel:
                 force = self.d.site_xmat[site].reshape(3, 3) @ force
             out[name] = float(force[axis])
         return out
+
+    def reactions_many(self, t, q, v):
+        """`reactions` at many states, the same numbers: t of shape (N,), q and v (N, n) -> {name: (N,)}.  The
+        accelerations of all states solved at once (`_solve`), then mj_inverse state by state; with loops, state
+        by state as `reactions` (each closed from the assembly)."""
+        t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
+        if self.loops.loops:
+            rows = [self.reactions(*state) for state in zip(t, q, v)]
+        else:
+            qpos, _ = self._engine_states(t, q, v)
+            qvel, _, _, qacc = self._solve(t, q, v)
+            applied = self._applied_many(t, q, v)
+            rows = []
+            for i in range(len(t)):
+                self.d.qpos[:], self.d.qvel[:], self.d.qfrc_applied[:] = qpos[i], qvel[i], applied[i]
+                self.d.qacc[:] = qacc[i]
+                mujoco.mj_inverse(self.m, self.d)
+                rows.append(self._sensed_reactions())
+        return {name: np.array([row[name] for row in rows]) for name in self.reaction_names}
 
     def point_accelerations(self, t, q, v):
         """The named bodies' kinematics, in their own or the world frame: the absolute acceleration
@@ -394,10 +418,28 @@ class MujocoModel:
 
     def energy(self, t, q, v):
         self._set_state(t, q, v)
-        mujoco.mj_forward(self.m, self.d)
+        return self._energy()
+
+    def _energy(self):
+        """The energy of self.d's qpos and qvel: what it takes of the forward dynamics is the positions' stage
+        (the kinematics and the mass matrix)."""
+        mujoco.mj_fwdPosition(self.m, self.d)
         mujoco.mj_energyPos(self.m, self.d)
         mujoco.mj_energyVel(self.m, self.d)
         return float(self.d.energy[0] + self.d.energy[1])
+
+    def energy_many(self, t, q, v):
+        """`energy` at many states, the same numbers: t of shape (N,), q and v (N, n) -> (N,); with loops, state by
+        state as `energy` (each closed from the assembly)."""
+        t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
+        if self.loops.loops:
+            return np.array([self.energy(*state) for state in zip(t, q, v)])
+        qpos, qvel = self._engine_states(t, q, v)
+        out = np.empty(len(t))
+        for i in range(len(t)):
+            self.d.qpos[:], self.d.qvel[:] = qpos[i], qvel[i]
+            out[i] = self._energy()
+        return out
 
     def drive_power(self, t, q, v):
         """Power of the prescribed motions (inverse-dynamics forces), of the applied forces and of the joints'
@@ -505,6 +547,20 @@ class MujocoModel:
         mujoco.mj_kinematics(self.m, self.d)
         return self.d.xipos[self.paths].copy(), self.d.xpos[1:].copy(), self.m.body_parentid[1:].copy()
 
+    def paths_many(self, t, q):
+        """The traced bodies' centres of mass (`points`' first) at many states, the same numbers: t of shape (N,),
+        q (N, n) -> (N, bodies, 3); with loops, state by state as `points` (each closed from the assembly)."""
+        t, q = np.asarray(t, dtype=float), np.asarray(q, dtype=float)
+        if self.loops.loops:
+            return np.array([self.points(*state)[0] for state in zip(t, q)]).reshape(len(t), len(self.paths), 3)
+        qpos, _ = self._engine_states(t, q, np.zeros_like(q))
+        out = np.empty((len(t), len(self.paths), 3))
+        for i in range(len(t)):
+            self.d.qpos[:] = qpos[i]
+            mujoco.mj_kinematics(self.m, self.d)
+            out[i] = self.d.xipos[self.paths]
+        return out
+
     # -- time stepping with MuJoCo's own integrators -------------------------
     def stepping(self, q0, v0, dt, integrator):
         """The scene as MuJoCo steps it from (q0, v0): the model with its armature back and `integrator`
@@ -598,6 +654,18 @@ class MujocoModel:
                 q[:, idx] = euler.angles(qpos[:, qadr:qadr + 4], q0[idx])
                 v[:, idx] = euler.euler_rates(q[:, idx], qvel[:, dof:dof + 3])
         return q, v
+
+
+def _linear_solution(matrix, rhs):
+    """x of matrix x = rhs, one system (n, n) or many stacked (..., n, n): one by LAPACK's dgesv itself, the
+    routine np.linalg.solve calls, without numpy's checks around it, which cost more than the solve of a few
+    dofs (the same numbers)."""
+    if matrix.ndim > 2:
+        return np.linalg.solve(matrix, rhs[..., None])[..., 0]
+    _, _, x, info = lapack.dgesv(matrix, rhs)
+    if info > 0:
+        raise np.linalg.LinAlgError("Singular matrix")
+    return x
 
 
 def _name(m, kind, i):

@@ -33,11 +33,24 @@ import math
 import time
 
 import numpy as np
+from scipy.linalg import lapack
 
 from reference import printed
 
 COORDS = ("theta1", "theta2")
 REACTIONS = ("T1", "T2")
+
+
+STATE = ("t1", "t2", "d1", "d2")  # the symbols of the state in the printed expressions
+
+
+def _linear_solution(a, b):
+    """np.linalg.solve(a, b) by the LAPACK routine it calls (dgesv), without numpy's checks around it,
+    which cost more than the solve of a 4 x 4 system."""
+    _, _, x, info = lapack.dgesv(a, b)
+    if info > 0:
+        raise np.linalg.LinAlgError("Singular matrix")
+    return x
 
 
 class Reference:
@@ -46,17 +59,23 @@ class Reference:
 
     def __init__(self, params):
         self.p = dict(params)
+        # The printed expressions as functions of the state, the parameters bound once and math's sin and cos
+        # (on one number numpy's cost more and give the same values): an integrator evaluates them at every step.
+        self._evaluate = printed.Functions(self.PRINTED, STATE, {**self._constants(), "sin": math.sin, "cos": math.cos})
+
+    def _constants(self):
+        """The symbols of the printed expressions but the state and the accelerations."""
+        p = self.p
+        return {"m1": p["m1"], "m2": p["m2"], "l1": p["l1"], "l2": p["l2"], "g": p["g"], "array": np.array}
 
     def _names(self, q, v):
         """The symbols of the printed expressions but the accelerations."""
-        p = self.p
-        return {"m1": p["m1"], "m2": p["m2"], "l1": p["l1"], "l2": p["l2"], "g": p["g"], "t1": q[0], "t2": q[1],
-                "d1": v[0], "d2": v[1], "sin": np.sin, "cos": np.cos, "array": np.array}
+        return {**self._constants(), **dict(zip(STATE, (q[0], q[1], v[0], v[1]))), "sin": np.sin, "cos": np.cos}
 
     def _solve(self, q, v):
         """(T1, T2, theta1'', theta2'') from (1.27)-(1.28) in the book's matrix form."""
-        system = printed.evaluate(self.PRINTED, self._names(q, v), ("A", "b"))
-        return np.linalg.solve(system["A"], system["b"])
+        state = [float(x) for x in (*q, *v)]
+        return _linear_solution(self._evaluate["A"](*state), self._evaluate["b"](*state))
 
     def accelerations(self, t, q, v):
         return self._solve(q, v)[2:]
@@ -128,9 +147,12 @@ class Book(Reference):
                              " + g*l1*m2**2*sin(t2)**2*sin(t1 + t2))/(-(l1*l2*m1*m2) - l1*l2*m2**2*sin(t2)**2)"}
     CLOSED_FORMS = ("T1", "T2", "theta1_acc", "theta2_acc")
 
-    def _solve(self, q, v):
-        found = printed.evaluate(self.PRINTED, self._names(q, v), self.CLOSED_FORMS)
-        return np.array([found[key] for key in self.CLOSED_FORMS])
+    def _solve(self, q, v, keys=CLOSED_FORMS):
+        state = [float(x) for x in (*q, *v)]
+        return np.array([self._evaluate[key](*state) for key in keys])
+
+    def accelerations(self, t, q, v):
+        return self._solve(q, v, self.CLOSED_FORMS[2:])  # (1.31)-(1.32): the tensions would cost as much again
 
     def printed_rows(self, t, q, v, acc, reactions):
         """Newton's law for each mass as printed before it is solved, left side minus right side: in I,
@@ -253,7 +275,7 @@ class Program:
 
     def accelerations(self, t, q, v):
         """(ddt1, ddt2) of the listing: Book's (1.31)-(1.32)."""
-        return self._listing._solve(q, v)[2:]
+        return self._listing.accelerations(t, q, v)
 
     def reactions(self, t, q, v):
         """Tr1, Tr2 of the listing: Book's (1.29)-(1.30)."""

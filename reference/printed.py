@@ -13,3 +13,25 @@ def _compiled(expression):
 def evaluate(printed, names, keys=None):
     """{key: value} of the printed expressions `keys` (default: all) with the symbols `names`."""
     return {key: eval(_compiled(printed[key]), {"__builtins__": {}}, names) for key in (keys or printed)}
+
+
+def function(expression, arguments, names):
+    """The printed expression as a Python function of the symbols `arguments`, its other symbols bound
+    to `names`: where a model evaluates it at every step, rebuilding the names costs more than it."""
+    return eval(f"lambda {', '.join(arguments)}: {expression}", {"__builtins__": {}, **names})
+
+
+class Functions:
+    """The expressions of a table of printed ones as `function`s of `arguments`, the other symbols bound to
+    `names`: compiled once per expression, and looked up in the table at each use, so that the table stays
+    the code that runs (an edit of it takes effect)."""
+
+    def __init__(self, table, arguments, names):
+        self.table, self.arguments, self.names = table, tuple(arguments), names
+        self._made = {}
+
+    def __getitem__(self, key):
+        expression = self.table[key]
+        if expression not in self._made:
+            self._made[expression] = function(expression, self.arguments, self.names)
+        return self._made[expression]

@@ -36,7 +36,7 @@ import numpy as np
 
 from reference import printed, rotating_pendulum
 from reference.rotating_pendulum import book_energy
-from reference.spinning_base import FRAMES, base_terms, book_velocities, chain, particle_motion  # noqa: F401  (FRAMES: the student page shows them)
+from reference.spinning_base import FRAMES, ParticleOnBase, base_terms, book_velocities, chain, particle_motion, scale, sub  # noqa: F401  (FRAMES: the student page shows them)
 
 COORDS = ()
 REACTIONS = ("R1", "R2", "T")
@@ -124,27 +124,24 @@ class Book(_FixedParticle):
                 "Newton Z3 (1.8.2)": [-m * g * c, reactions["T"], -m * k * s, -m * l * omega**2 * s**2]}
 
 
-class Reference(_FixedParticle):
+class Reference(ParticleOnBase):
     """m (a_E - g) in B3 from 1.8.1's numerical Newton-Euler at psi' = psi'' = 0; energy from it too."""
 
-    def _motion(self, t):
-        position, v_e, a_e, gravity = particle_motion(self.p, t, self.p["psi"], 0.0, 0.0, self.p["l"])
-        return position, v_e, self.p["m"] * (a_e - gravity)
+    coords = COORDS
+    reaction_names = REACTIONS
+    reaction_axes = (0, 1, 2)
+
+    def accelerations(self, t, q, v):
+        return np.zeros(0)  # no coordinate: nothing to solve
+
+    def _motion(self, t, q, v):
+        """No acceleration, and the particle's position, velocity and the rod's force on it (ParticleOnBase)."""
+        p = self.p
+        position, v_e, a_e, gravity = particle_motion(p, t, p["psi"], 0.0, 0.0, p["l"])
+        return (), position, v_e, scale(p["m"], sub(a_e, gravity))
 
     def point_accelerations(self, t, q, v):
         """B3 w3, w3', a_D and a_E from the chain of frames at psi' = psi'' = 0."""
         p = self.p
         _, _, a_e, _, w, w_dot = chain(p, t, p["psi"], 0.0, 0.0, p["l"])
         return {"omega3": w, "omega3_dot": w_dot, "a_D": chain(p, t, p["psi"], 0.0, 0.0, 0.0)[2], "a_E": a_e}
-
-    def reactions(self, t, q, v):
-        force = self._motion(t)[2]
-        return {"R1": force[0], "R2": force[1], "T": force[2]}
-
-    def energy(self, t, q, v):
-        position, v_e, _ = self._motion(t)
-        return 0.5 * self.p["m"] * v_e @ v_e + self.p["m"] * self.p["g"] * position[2]
-
-    def drive_power(self, t, q, v):
-        _, v_e, force = self._motion(t)
-        return force @ v_e

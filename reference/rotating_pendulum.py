@@ -56,7 +56,7 @@ import numpy as np
 
 from reference import printed
 
-from reference.spinning_base import FRAMES, base_terms, book_height, book_velocities, chain, last_state, particle_motion  # noqa: F401  (FRAMES: the student page shows them)
+from reference.spinning_base import FRAMES, ParticleOnBase, add, base_terms, book_height, book_velocities, chain, particle_motion, scale, sub  # noqa: F401  (FRAMES: the student page shows them)
 
 COORDS = ("psi",)
 REACTIONS = ("R", "T")
@@ -175,44 +175,26 @@ class Book:
                                       -m * l * omega**2 * s**2]}
 
 
-class Reference:
+class Reference(ParticleOnBase):
     """Newton's law in B3 with B3 a_E from `particle_motion`; psi'' from Y3, where the rod pushes nothing."""
 
     coords = COORDS
     reaction_names = REACTIONS
+    reaction_axes = (0, 2)
 
-    def __init__(self, params):
-        self.p = dict(params)
-
-    @last_state
     def _motion(self, t, q, v):
-        """Position, velocity, acceleration of E and the rod's force on it, psi'' solved from Y3."""
+        """psi'', and the position, velocity of E and the rod's force on it (ParticleOnBase), psi'' solved from Y3."""
         p = self.p
         (psi,), (psi_rate,) = q, v
         position, v_e, a_free, gravity = particle_motion(p, t, psi, psi_rate, 0.0, p["l"])
         # a_E is affine in psi'' with slope w3' x r_DE = i3 x (0, 0, -l) = (0, l, 0).
         psi_acc = (gravity[1] - a_free[1]) / p["l"]
-        a_e = a_free + np.array([0.0, p["l"] * psi_acc, 0.0])
-        return psi_acc, position, v_e, p["m"] * (a_e - gravity)
-
-    def accelerations(self, t, q, v):
-        return np.array([self._motion(t, q, v)[0]])
+        a_e = add(a_free, (0.0, p["l"] * psi_acc, 0.0))
+        return (psi_acc,), position, v_e, scale(p["m"], sub(a_e, gravity))
 
     def point_accelerations(self, t, q, v):
         """B3 w3, w3', a_D and a_E from the chain of frames (a_D: the chain with DE of length 0)."""
         p = self.p
-        psi_acc = self._motion(t, q, v)[0]
+        (psi_acc,) = self._at(t, q, v)[0]
         _, _, a_e, _, w, w_dot = chain(p, t, q[0], v[0], psi_acc, p["l"])
         return {"omega3": w, "omega3_dot": w_dot, "a_D": chain(p, t, q[0], v[0], psi_acc, 0.0)[2], "a_E": a_e}
-
-    def reactions(self, t, q, v):
-        force = self._motion(t, q, v)[3]
-        return {"R": force[0], "T": force[2]}
-
-    def energy(self, t, q, v):
-        _, position, v_e, _ = self._motion(t, q, v)
-        return 0.5 * self.p["m"] * v_e @ v_e + self.p["m"] * self.p["g"] * position[2]
-
-    def drive_power(self, t, q, v):
-        _, _, v_e, force = self._motion(t, q, v)
-        return force @ v_e

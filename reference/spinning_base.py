@@ -8,13 +8,14 @@ The arm and the disk turn at constant rates, Omega = alpha' + beta'; gravity is 
 """
 
 import functools
+import math
 
 import numpy as np
 
 from reference import printed
 
-# Vectors and matrices of the chain are tuples of floats: on 3-vectors numpy's overhead per
-# operation is most of the time, and the integrators evaluate the chain at every step.
+# Vectors and matrices of the chain are tuples of floats (or of arrays over many states): on 3-vectors
+# numpy's overhead per operation is most of the time, and the integrators evaluate the chain at every step.
 I3, K3, ZERO = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
 IDENTITY = (I3, (0.0, 1.0, 0.0), K3)
 
@@ -47,45 +48,69 @@ FRAMES = {"T_z": "array([[cos(a), sin(a), 0.0], [-sin(a), cos(a), 0.0], [0.0, 0.
           "T_x": "array([[1.0, 0.0, 0.0], [0.0, cos(a), sin(a)], [0.0, -sin(a), cos(a)]])"}
 
 
+_MATRICES = printed.Functions(FRAMES, ("a",), {"sin": np.sin, "cos": np.cos, "array": np.array})
+
+
 def T_z(angle):
-    return printed.evaluate(FRAMES, {"a": angle, "sin": np.sin, "cos": np.cos, "array": np.array}, ("T_z",))["T_z"]
+    return _MATRICES["T_z"](angle)
 
 
 def T_x(angle):
-    return printed.evaluate(FRAMES, {"a": angle, "sin": np.sin, "cos": np.cos, "array": np.array}, ("T_x",))["T_x"]
+    return _MATRICES["T_x"](angle)
 
 
+# The same expressions for the chain, rows as tuples: on one state with math's sin and cos (numpy's cost more
+# on one number and give the same values), on many with numpy's.
+_TURNS = printed.Functions(FRAMES, ("a",), {"sin": math.sin, "cos": math.cos, "array": tuple})
+_TURNS_MANY = printed.Functions(FRAMES, ("a",), {"sin": np.sin, "cos": np.cos, "array": tuple})
+
+
+# Vectors are (x, y, z) components, each a float at one state or an array at many: the same operations,
+# in the same order, give the same numbers either way.
 def cross(a, b):
     """a x b."""
     return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
 
 
-def _add(*vectors):
+def add(first, *rest):
     """The sum of 3-vectors, left to right."""
-    (x, y, z), *rest = vectors
+    x, y, z = first
     for a in rest:
         x, y, z = x + a[0], y + a[1], z + a[2]
     return x, y, z
 
 
-def _scale(k, a):
+def sub(a, b):
+    """a - b."""
+    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
+
+
+def scale(k, a):
     return k * a[0], k * a[1], k * a[2]
+
+
+def dot(a, b):
+    """a . b, summed left to right (as numpy's a @ b of two 3-vectors)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def _apply(matrix, x):
     """matrix @ x, the matrix given by rows."""
-    (m0, m1, m2), (x0, x1, x2) = matrix, x
-    return (m0[0] * x0 + m0[1] * x1 + m0[2] * x2, m1[0] * x0 + m1[1] * x1 + m1[2] * x2,
-            m2[0] * x0 + m2[1] * x1 + m2[2] * x2)
+    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = matrix
+    x0, x1, x2 = x
+    return m00 * x0 + m01 * x1 + m02 * x2, m10 * x0 + m11 * x1 + m12 * x2, m20 * x0 + m21 * x1 + m22 * x2
 
 
 def particle_motion(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0):
-    """I r_OE, B3 v_E, B3 a_E and gravity per unit mass in B3 (see `chain`)."""
-    return chain(p, t, psi, psi_rate, psi_acc, length, length_rate, length_acc)[:4]
+    """I r_OE, B3 v_E, B3 a_E and gravity per unit mass in B3 (see `chain`) as components: at one state
+    (floats) or at many (t and the rest arrays of shape (N,), or floats where constant)."""
+    turns = _TURNS_MANY if isinstance(t, np.ndarray) or isinstance(psi, np.ndarray) else _TURNS
+    return _chain(p, t, psi, psi_rate, psi_acc, length, length_rate, length_acc, turns)[:4]
 
 
 def chain(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0):
-    """I r_OE, B3 v_E, B3 a_E, gravity per unit mass in B3, and B3 w3, w3', by the book's method.
+    """I r_OE, B3 v_E, B3 a_E, gravity per unit mass in B3, and B3 w3, w3', by the book's method, at one
+    state: arrays of shape (3,).
 
     The chain is three rotations, each about an axis through a point that is fixed in both the
     parent and the child frame (A, then B on the disk's axis, then D), each followed by the vector
@@ -99,28 +124,34 @@ def chain(p, t, psi, psi_rate, psi_acc, length, length_rate=0.0, length_acc=0.0)
     v = T v_0 + w x r + v_rel,  a = T a_0 + w x (w x r) + w' x r + 2 w x v_rel + a_rel,
     with v_rel = (0, 0, -L') and a_rel = (0, 0, -L'') on the last link only.
     """
+    # floats: arithmetic on numpy's scalars is slower
+    state = (float(x) for x in (t, psi, psi_rate, psi_acc, length, length_rate, length_acc))
+    return tuple(np.array(x) for x in _chain(p, *state, _TURNS))
+
+
+def _chain(p, t, psi, psi_rate, psi_acc, length, length_rate, length_acc, turns):
+    """`chain` as components, its turns evaluated by `turns` (_TURNS at one state, _TURNS_MANY at many)."""
     alpha = p["alpha0"] + p["alpha_rate"] * t
     beta = p["beta0"] + p["beta_rate"] * t
-    # floats: arithmetic on numpy's scalars is slower
-    psi_rate, psi_acc, length, length_rate, length_acc = (float(x) for x in (psi_rate, psi_acc, length,
-                                                                             length_rate, length_acc))
-    chain = [(T_z(alpha), p["alpha_rate"], 0.0, K3, (0.0, p["b"], 0.0), 0.0, 0.0),
-             (T_z(beta), p["beta_rate"], 0.0, K3, (0.0, p["r"], p["c"] + p["h"]), 0.0, 0.0),
-             (T_x(psi), psi_rate, psi_acc, I3, (0.0, 0.0, -length), length_rate, length_acc)]
+    t_z, t_x = turns["T_z"], turns["T_x"]
+    chain = [(t_z(alpha), p["alpha_rate"], 0.0, K3, (0.0, p["b"], 0.0), 0.0, 0.0),
+             (t_z(beta), p["beta_rate"], 0.0, K3, (0.0, p["r"], p["c"] + p["h"]), 0.0, 0.0),
+             (t_x(psi), psi_rate, psi_acc, I3, (0.0, 0.0, -length), length_rate, length_acc)]
     position, to_inertial = (0.0, 0.0, p["a"]), IDENTITY  # at A; to_inertial: I components from the frame's
     v = a = w = w_dot = ZERO
     for turn, rate, acc, axis, r, r_rate, r_acc in chain:
-        turn = turn.tolist()
-        w_in, w_dot_in = _apply(turn, w), _apply(turn, w_dot)
-        w = _add(w_in, _scale(rate, axis))
-        w_dot = _add(w_dot_in, cross(w_in, _scale(rate, axis)), _scale(acc, axis))
-        v_rel, a_rel = _scale(-r_rate, K3), _scale(-r_acc, K3)
-        v = _add(_apply(turn, v), cross(w, r), v_rel)
-        a = _add(_apply(turn, a), cross(w, cross(w, r)), cross(w_dot, r), _scale(2, cross(w, v_rel)), a_rel)
-        to_inertial = tuple(_apply(turn, row) for row in to_inertial)  # (I from child) = (I from parent) turn^T
-        position = _add(position, _apply(to_inertial, r))
-    gravity = _scale(-p["g"], to_inertial[2])  # (0, 0, -g) in the last frame: -g times its components of K
-    return tuple(np.array(x) for x in (position, v, a, gravity, w, w_dot))
+        # the parent's vectors in the child frame; (I from child) = (I from parent) turn^T
+        w_in, w_dot_in, v_in, a_in = _apply(turn, w), _apply(turn, w_dot), _apply(turn, v), _apply(turn, a)
+        to_inertial = _apply(turn, to_inertial[0]), _apply(turn, to_inertial[1]), _apply(turn, to_inertial[2])
+        spin = scale(rate, axis)
+        w = add(w_in, spin)
+        w_dot = add(w_dot_in, cross(w_in, spin), scale(acc, axis))
+        v_rel, a_rel, w_r = scale(-r_rate, K3), scale(-r_acc, K3), cross(w, r)
+        v = add(v_in, w_r, v_rel)
+        a = add(a_in, cross(w, w_r), cross(w_dot, r), scale(2, cross(w, v_rel)), a_rel)
+        position = add(position, _apply(to_inertial, r))
+    gravity = scale(-p["g"], to_inertial[2])  # (0, 0, -g) in the last frame: -g times its components of K
+    return position, v, a, gravity, w, w_dot
 
 
 def last_state(method):
@@ -133,3 +164,58 @@ def last_state(method):
             self._last = (key, method(self, t, q, v))
         return self._last[1]
     return remembered
+
+
+class ParticleOnBase:
+    """The numerical Newton-Euler of a particle on the spinning base (1.8.1-3) behind the model interface, at
+    one state or at many.  A subclass's `_motion(t, q, v)` gives the accelerations, and I r_OE, B3 v_E and the
+    force on the particle in B3, as components (`particle_motion`): floats at one state (q, v the coordinates),
+    arrays at many (q, v their columns); `reaction_axes` are the B3 components of its `reaction_names`."""
+
+    def __init__(self, params):
+        self.p = dict(params)
+
+    @last_state
+    def _at(self, t, q, v):
+        """`_motion` at one state, on floats (numpy's scalars cost more)."""
+        return self._motion(float(t), [float(x) for x in q], [float(x) for x in v])
+
+    def _at_many(self, t, q, v):
+        """`_motion` at many states: t of shape (N,), q and v (N, n); and the columns of q and v."""
+        q, v = np.asarray(q, dtype=float).T, np.asarray(v, dtype=float).T
+        return self._motion(np.asarray(t, dtype=float), q, v), q, v
+
+    def accelerations(self, t, q, v):
+        return np.array(self._at(t, q, v)[0])
+
+    def reactions(self, t, q, v):
+        force = self._at(t, q, v)[3]
+        return {name: force[axis] for name, axis in zip(self.reaction_names, self.reaction_axes)}
+
+    def energy(self, t, q, v):
+        return self._energy(q, self._at(t, q, v))
+
+    def drive_power(self, t, q, v):
+        return self._drive_power(q, v, self._at(t, q, v))
+
+    def reactions_many(self, t, q, v):
+        """`reactions` at many states: t of shape (N,), q and v (N, n) -> {name: (N,)}, the same numbers."""
+        force = self._at_many(t, q, v)[0][3]
+        return {name: np.broadcast_to(force[axis], np.shape(t)).copy()
+                for name, axis in zip(self.reaction_names, self.reaction_axes)}
+
+    def energy_many(self, t, q, v):
+        """`energy` at many states (as `reactions_many`) -> (N,)."""
+        motion, q, _ = self._at_many(t, q, v)
+        return np.broadcast_to(self._energy(q, motion), np.shape(t)).copy()
+
+    def _energy(self, q, motion):
+        """The particle's kinetic and potential energy."""
+        p = self.p
+        _, position, v_e, _ = motion
+        return dot(scale(0.5 * p["m"], v_e), v_e) + p["m"] * p["g"] * position[2]
+
+    def _drive_power(self, q, v, motion):
+        """The power of the force on the particle, F . v_E."""
+        _, _, v_e, force = motion
+        return dot(force, v_e)

@@ -255,6 +255,7 @@ from reference.spinning_base import FRAMES, T_x, T_z  # noqa: F401  (FRAMES: the
 COORDS = ("precession", "nutation", "spin")
 REACTIONS = ("Rx", "Ry", "Rz")
 COORD_ACCS = ("precession_acc", "nutation_acc", "spin_acc")
+STATE = ("p", "n", "dp", "dn", "ds")  # the printed symbols of the state
 
 
 class Book:
@@ -265,6 +266,10 @@ class Book:
 
     def __init__(self, params):
         self.p = dict(params)
+        # The printed expressions as functions of the state, the rest bound once, with math's functions (on one
+        # number numpy's cost more and give the same values): an integrator evaluates them at every step.
+        self._evaluate = printed.Functions(self.PRINTED, STATE, {**self._constants(), "sin": math.sin, "cos": math.cos,
+                                                                 "tan": math.tan})
 
     # -- inertias ------------------------------------------------------------
     def _cm_inertias(self):
@@ -275,8 +280,8 @@ class Book:
 
     # -- model interface -------------------------------------------------------
     def accelerations(self, t, q, v):
-        found = printed.evaluate(self.PRINTED, self._names(q, v), COORD_ACCS)
-        return np.array([found[key] for key in COORD_ACCS])
+        state = [float(x) for x in (q[0], q[1], *v)]
+        return np.array([self._evaluate[key](*state) for key in COORD_ACCS])
 
     # The transposes of the book's frames (spinning_base.FRAMES), T_z(a)^T and T_x(a)^T, laid out by rows as
     # a matrix built by rows is: numpy's product with a transposed view rounds differently.
@@ -309,12 +314,16 @@ class Book:
     PRINTED["omega_dot"] = ("TzT(p) @ TxT(n) @ array([ddn + dp*ds*sin(n), ddp*sin(n) + dp*dn*cos(n) - dn*ds,"
                             " ddp*cos(n) - dp*dn*sin(n) + dds])")
 
+    def _constants(self):
+        """The symbols of the printed expressions that stay constant."""
+        p = self.p
+        return {"m": p["m"], "g": p["g"], "h": p["h"], "Mz": p["Mz"], "array": np.array, "TxT": self._tx_t,
+                "TzT": self._tz_t, **dict(zip(("CM_Ixx", "CM_Iyy", "CM_Izz"), self._cm_inertias()))}
+
     def _names(self, q, v):
         """The symbols of the printed expressions but the accelerations."""
-        p = self.p
-        return {"m": p["m"], "g": p["g"], "h": p["h"], "Mz": p["Mz"], "p": q[0], "n": q[1], "dp": v[0], "dn": v[1],
-                "ds": v[2], "sin": np.sin, "cos": np.cos, "tan": np.tan, "array": np.array, "TxT": self._tx_t,
-                "TzT": self._tz_t, **dict(zip(("CM_Ixx", "CM_Iyy", "CM_Izz"), self._cm_inertias()))}
+        return {**self._constants(), **dict(zip(STATE, (q[0], q[1], v[0], v[1], v[2]))), "sin": np.sin, "cos": np.cos,
+                "tan": np.tan}
 
     def symbols(self, t, q, v):
         ddp, ddn, dds = self.accelerations(t, q, v)

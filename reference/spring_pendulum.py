@@ -43,11 +43,12 @@ import numpy as np
 
 from reference import printed
 
-from reference.spinning_base import FRAMES, T_z, base_terms, book_height, book_velocities, chain, last_state, particle_motion  # noqa: F401  (FRAMES: the student page shows them)
+from reference.spinning_base import FRAMES, ParticleOnBase, T_z, add, base_terms, book_height, book_velocities, chain, particle_motion, scale, sub  # noqa: F401  (FRAMES: the student page shows them)
 
 COORDS = ("psi", "l")
 REACTIONS = ("R",)
 COORD_ACCS = ("psi_acc", "l_acc")
+STATE = ("beta", "K", "L", "l", "psi", "psi_rate", "l_rate")  # the printed symbols that change with the state
 
 
 class Book:
@@ -58,10 +59,13 @@ class Book:
 
     def __init__(self, params):
         self.p = dict(params)
+        # The printed expressions as functions of the state's symbols, the rest bound once, with math's sin and
+        # cos (on one number numpy's cost more and give the same values): an integrator evaluates them at every step.
+        self._evaluate = printed.Functions(self.PRINTED, STATE, {**self._constants(), "sin": math.sin, "cos": math.cos})
 
     def accelerations(self, t, q, v):
-        found = printed.evaluate(self.PRINTED, self._names(t, q, v), COORD_ACCS)
-        return np.array([found["psi_acc"], found["l_acc"]])
+        state = self._floats(t, q, v)
+        return np.array([self._evaluate[key](*state) for key in COORD_ACCS])
 
     # R = m a_E,x with the printed a_E,x (one L psi' Omega cos(psi) term).  The string is the code
     # (evaluated with `symbols`), so that dyncheck can search edits of it.
@@ -81,13 +85,25 @@ class Book:
                "psi_acc": "-g/L*sin(psi) + K/L*cos(psi) + Omega**2*sin(psi)*cos(psi) - 2*l_rate*psi_rate/L",
                "l_acc": "-k/m*l + g*cos(psi) + K*sin(psi) + L*(psi_rate**2 + Omega**2*sin(psi)**2)"}
 
+    def _constants(self):
+        """The symbols of the printed expressions that stay constant."""
+        p = self.p
+        return {"m": p["m"], "k": p["k"], "g": p["g"], "b": p["b"], "alpha_rate": p["alpha_rate"],
+                "Omega": p["alpha_rate"] + p["beta_rate"], "array": np.array}
+
+    def _state(self, t, q, v):
+        """The values of the symbols STATE at (t, q, v)."""
+        beta, _, base = base_terms(self.p, t)
+        return beta, base, self.p["l0"] + q[1], q[1], q[0], v[0], v[1]
+
+    def _floats(self, t, q, v):
+        """`_state` as floats, for `_evaluate` (`_names` keeps numpy's scalars: an edit that divides by zero gives
+        inf there, as numpy does, where floats would raise)."""
+        return [float(x) for x in self._state(t, q, v)]
+
     def _names(self, t, q, v):
         """The symbols of the printed expressions but psi'' and l''."""
-        p = self.p
-        beta, omega, base = base_terms(p, t)
-        return {"m": p["m"], "k": p["k"], "g": p["g"], "b": p["b"], "alpha_rate": p["alpha_rate"], "beta": beta,
-                "Omega": omega, "K": base, "L": p["l0"] + q[1], "l": q[1], "psi": q[0], "psi_rate": v[0],
-                "l_rate": v[1], "sin": np.sin, "cos": np.cos, "array": np.array}
+        return {**self._constants(), **dict(zip(STATE, self._state(t, q, v))), "sin": np.sin, "cos": np.cos}
 
     def symbols(self, t, q, v):
         names = self._names(t, q, v)
@@ -98,7 +114,7 @@ class Book:
         return printed.evaluate(self.PRINTED, names, ("omega1", "omega2", "a_C", "omega3", "omega3_dot", "a_D", "a_E"))
 
     def reactions(self, t, q, v):
-        return printed.evaluate(self.PRINTED, self.symbols(t, q, v), ("R",))
+        return {"R": self._evaluate["R"](*self._floats(t, q, v))}
 
     def energy(self, t, q, v):
         p = self.p
@@ -142,7 +158,7 @@ class Book:
                                       -m * length * omega**2 * s**2, m * l_acc]}
 
 
-class Reference:
+class Reference(ParticleOnBase):
     """The book's method evaluated numerically: B3 a_E from the five-term formula frame by frame
     (`particle_motion`), Newton's law in B3 with the arm's force (R, 0, k l): psi'' from Y3, l''
     from Z3, R from X3.  It sums terms (II) and (III) as vectors, so it has both of their
@@ -150,13 +166,10 @@ class Reference:
 
     coords = COORDS
     reaction_names = REACTIONS
+    reaction_axes = (0,)
 
-    def __init__(self, params):
-        self.p = dict(params)
-
-    @last_state
     def _motion(self, t, q, v):
-        """psi'', l'', and the particle's position, velocity and the arm's force on it."""
+        """(psi'', l''), and the particle's position, velocity and the arm's force on it (ParticleOnBase)."""
         p = self.p
         (psi, l), (psi_rate, l_rate) = q, v
         length = p["l0"] + l
@@ -165,16 +178,13 @@ class Reference:
         position, v_e, a_free, gravity = particle_motion(p, t, psi, psi_rate, 0.0, length, l_rate, 0.0)
         psi_acc = (gravity[1] - a_free[1]) / length
         l_acc = a_free[2] - gravity[2] - p["k"] * l / p["m"]
-        a_e = a_free + np.array([0.0, length * psi_acc, -l_acc])
-        return np.array([psi_acc, l_acc]), position, v_e, p["m"] * (a_e - gravity)
-
-    def accelerations(self, t, q, v):
-        return self._motion(t, q, v)[0]
+        a_e = add(a_free, (0.0, length * psi_acc, -l_acc))
+        return (psi_acc, l_acc), position, v_e, scale(p["m"], sub(a_e, gravity))
 
     def point_accelerations(self, t, q, v):
         """B3 w3, w3', a_D and a_E from the chain of frames (a_D: the chain with DE of length 0)."""
         p = self.p
-        (psi_acc, l_acc), _, _, force = self._motion(t, q, v)
+        (psi_acc, l_acc), _, _, force = self._at(t, q, v)
         *_, gravity, w, w_dot = chain(p, t, q[0], v[0], psi_acc, p["l0"] + q[1], v[1], l_acc)
         a_d = chain(p, t, q[0], v[0], psi_acc, 0.0)[2]
         beta, omega, _ = base_terms(p, t)
@@ -182,21 +192,16 @@ class Reference:
         # B1, turned into B2 by T_z(beta); the frames turn about Z at alpha' and alpha' + beta'.
         a_c = T_z(beta) @ np.array([0.0, -p["b"] * p["alpha_rate"] ** 2, 0.0])
         return {"omega1": np.array([0.0, 0.0, p["alpha_rate"]]), "omega2": np.array([0.0, 0.0, omega]),
-                "a_C": a_c, "omega3": w, "omega3_dot": w_dot, "a_D": a_d, "a_E": force / p["m"] + gravity}
+                "a_C": a_c, "omega3": w, "omega3_dot": w_dot, "a_D": a_d, "a_E": np.array(force) / p["m"] + gravity}
 
-    def reactions(self, t, q, v):
-        return {"R": self._motion(t, q, v)[3][0]}
+    def _energy(self, q, motion):
+        """The particle's energy and the spring's."""
+        return super()._energy(q, motion) + 0.5 * self.p["k"] * q[1] ** 2
 
-    def energy(self, t, q, v):
-        p = self.p
-        _, position, v_e, _ = self._motion(t, q, v)
-        return 0.5 * p["m"] * v_e @ v_e + p["m"] * p["g"] * position[2] + 0.5 * p["k"] * q[1] ** 2
-
-    def drive_power(self, t, q, v):
+    def _drive_power(self, q, v, motion):
         """The arm's whole force on the particle (R, 0, k l) at v_E, less the spring's own power
         -k l l' (the spring's energy is in E): R v_E,x + k l (v_E,z + l') = R v_E,x + k l v_D,z."""
-        _, _, v_e, force = self._motion(t, q, v)
-        return force @ v_e + self.p["k"] * q[1] * v[1]
+        return super()._drive_power(q, v, motion) + self.p["k"] * q[1] * v[1]
 
 
 class Program:
