@@ -553,9 +553,7 @@ def with_paths(case, run):
     needs none."""
     if not case.scene["paths"]:
         return run
-    model = case.model("mujoco")
-    q = run[list(case.coords)].to_numpy()
-    positions = np.array([model.points(t, qi)[0] for t, qi in zip(run.index, q)])  # (time, body, xyz)
+    positions = case.model("mujoco").paths_many(run.index.to_numpy(), run[list(case.coords)].to_numpy())  # (time, body, xyz)
     out = run.copy()
     for b, body in enumerate(case.scene["paths"]):
         for i, axis in enumerate("xyz"):

@@ -378,12 +378,11 @@ def _frame(model, t, q, v, work, attrs):
         columns[name] = q[:, i]
         columns[name + "_rate"] = v[:, i]
     with np.errstate(all="ignore"):
-        reactions = [_arithmetic(method, ti, None, model.reactions, ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
+        reactions = _at_every_state(model, "reactions", method, t, q, v)
         for name in model.reaction_names:
-            columns[name] = [r[name] for r in reactions]
+            columns[name] = reactions[name] if isinstance(reactions, dict) else [r[name] for r in reactions]
         if hasattr(model, "energy"):  # optional of a derivation (docs/model-interface.md)
-            columns["energy"] = [_arithmetic(method, ti, None, model.energy, ti, qi, vi)
-                                 for ti, qi, vi in zip(t, q, v)]
+            columns["energy"] = _at_every_state(model, "energy", method, t, q, v)
     if work is not None:
         columns["work"] = work
     frame = pd.DataFrame(columns, index=pd.Index(t, name="t"))
@@ -393,3 +392,18 @@ def _frame(model, t, q, v, work, attrs):
         raise Unstable(method, t[at], None, f"{frame.columns[column]} is not finite")
     frame.attrs.update(attrs)
     return frame
+
+
+def _at_every_state(model, quantity, method, t, q, v):
+    """model.<quantity> at each state of a run: by the model's many-state form `<quantity>_many` where it has
+    one (the same numbers, in one call), else state by state; also state by state where the many-state form
+    raises or gives a number that is not finite, so that the failure is named at its time."""
+    many = getattr(model, quantity + "_many", None)
+    if many is not None:
+        try:
+            values = many(t, q, v)
+            if all(finite(x) for x in (values.values() if isinstance(values, dict) else [values])):
+                return values
+        except Exception:  # named below, state by state
+            pass
+    return [_arithmetic(method, ti, None, getattr(model, quantity), ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
