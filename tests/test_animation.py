@@ -58,6 +58,7 @@ def test_the_gif_is_the_same_bytes_again(piston, tmp_path):
         assert gif.info["duration"] == interval
 
 
+@pytest.mark.full
 def test_no_animations_makes_none(piston, tmp_path):
     write_reports([piston], tmp_path / "without", animations=False)
     assert not list((tmp_path / "without").rglob("*.gif"))
@@ -92,6 +93,7 @@ print("same")
 """
 
 
+@pytest.mark.full
 def test_both_renderers_draw_the_same_frames(piston, tmp_path):
     """MuJoCo's renderer (MUJOCO_GL=egl) and matplotlib: the same frame times and image size, both moving;
     skipped where no OpenGL context opens."""

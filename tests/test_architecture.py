@@ -125,6 +125,7 @@ def doc_example():
     return dict(zip(("equations.py", "case.toml", "scene.xml", "scene.urdf"), (code for _, code in blocks)))
 
 
+@pytest.mark.full
 def test_a_mechanism_from_a_folder_outside_the_tree_runs(tmp_path, capsys):
     """The documented example, a case folder made outside the checkout with its derivation in its own
     file: `dyncheck run --cases DIR` runs it and passes, and `report --from` renders it; nothing in

@@ -121,6 +121,7 @@ def test_settings_that_ask_for_unbounded_work_are_refused(tmp_path, field, text,
 
 @pytest.mark.parametrize("args", [["spinning_top", "--set", "Mz=1e300"], ["piston", "--set", "m=1e300"],
                                   ["double_pendulum", "--set", "m2=1e300"]])
+@pytest.mark.full
 def test_absurd_values_give_rows_not_tracebacks(args, capsys):
     assert main(["run", *args]) == 1
     assert "unstable" in capsys.readouterr().out

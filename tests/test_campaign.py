@@ -18,6 +18,7 @@ def client():
             yield c
 
 
+@pytest.mark.full
 def test_a_campaign_writes_chunks_that_read_back_resume_and_summarise(client, tmp_path):
     case = dyncheck.load_case(CASE)
     plan = campaign.plan(case, 20, 3, 5, tmp_path)
@@ -85,6 +86,7 @@ def test_an_unreachable_scheduler_is_one_line_and_exit_2(monkeypatch, capsys, tm
     assert "--scheduler tcp://127.0.0.1:1: cannot reach it" in err and len(err.splitlines()) == 1
 
 
+@pytest.mark.full
 def test_the_stability_map_runs_as_tasks_and_is_drawn(client, tmp_path):
     case = dyncheck.load_case("spring_pendulum")
     drawn = campaign.run_maps(case, client, 2, tmp_path)

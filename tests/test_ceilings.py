@@ -22,6 +22,7 @@ def test_a_row_at_its_ceiling_is_judged():
     assert row("energy", "drift", ("mujoco",), 5e-4, 1e-3, ceiling=1e-3).status == "pass"
 
 
+@pytest.mark.full
 def test_a_mujoco_step_too_coarse_to_prove_anything_is_not_a_pass(tmp_path):
     """The issue's six-second reproduction: at 0.1 s steps MuJoCo is tens of per cent off the motion, and
     its own error estimate is as large: the comparison proves nothing, so it must not pass."""

@@ -123,6 +123,7 @@ def test_a_listing_that_blows_up_gives_unstable_rows_not_a_crash():
     assert {r.status for r in rows if r not in unstable} == {"pass", "finding"}
 
 
+@pytest.mark.full
 def test_a_scene_at_rest_is_judged_in_si_units_and_an_unmeasurable_order_says_so():
     """Without gravity the double pendulum released from rest stays put: every trajectory and energy
     row passes (errors in SI units, not 0/0), and the convergence order, which cannot be measured
@@ -134,6 +135,7 @@ def test_a_scene_at_rest_is_judged_in_si_units_and_an_unmeasurable_order_says_so
     assert "not measured" in bad[0].detail and "omega" in bad[0].detail
 
 
+@pytest.mark.full
 def test_the_book_s_printed_figures_and_data_do_not_apply_to_other_parameters():
     """`--set k=500` once failed on the axes of the book's figures (drawn for k = 2000): such rows are
     not applicable under overrides, say why, and the physics decides the exit code."""

@@ -73,6 +73,7 @@ def test_the_tool_block_is_only_at_the_top_level():
     assert "tool" not in json.dumps(case_json(toy())) and "commit" not in case_json(toy())
 
 
+@pytest.mark.full
 def test_a_real_run_writes_json_of_the_schema_and_junit_of_its_rows(tmp_path, capsys):
     json_path, junit_path = tmp_path / "piston.json", tmp_path / "piston.xml"
     assert cli.main(["run", "piston", "--json", str(json_path), "--junit", str(junit_path)]) == 0

@@ -115,6 +115,7 @@ def test_a_scene_that_disagrees_with_its_case_exits_2(monkeypatch, tmp_path, cap
     assert "scene.xml of case 'double_pendulum': body 'link2' mass[0] is 0.5" in capsys.readouterr().err
 
 
+@pytest.mark.full
 def test_bench_prints_throughput_and_ratios(capsys):
     assert cli.main(["bench", "double_pendulum"]) == 0
     out = capsys.readouterr().out

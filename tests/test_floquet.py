@@ -14,6 +14,8 @@ from dyncheck import vibration
 from dyncheck.results import Status
 from test_vibration import edited_case
 
+pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
+
 CASES = Path(__file__).resolve().parent.parent / "cases"
 BOOK = ("rotating_pendulum", "spring_pendulum")
 

@@ -11,6 +11,8 @@ from dyncheck import stability
 from dyncheck.case import load_case
 from dyncheck.stability.common import settings_of
 
+pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
+
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 

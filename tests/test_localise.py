@@ -45,6 +45,7 @@ def test_the_books_errors_are_localised(results):
     assert "none of the" in localised["1.8.3-listing-R"]  # three slips: beyond the pair search
 
 
+@pytest.mark.full
 def test_a_plain_run_leaves_the_search_out_and_says_so():
     """The search costs seconds per finding; a run that writes nothing of it skips it, and says so."""
     import dyncheck

@@ -6,8 +6,12 @@ its equation, and one whose position solve has a wrong sign fails that row."""
 from functools import partial
 from pathlib import Path
 
+import pytest
+
 import test_mechanisms
 from test_mechanisms import run
+
+pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "slider_crank"
 example = partial(test_mechanisms.example, source=EXAMPLE)

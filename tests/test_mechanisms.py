@@ -11,6 +11,8 @@ import pytest
 
 from dyncheck.cli import main
 
+pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
+
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "forced_cart_pendulum"
 
 # The example's scene for Pinocchio's URDF reader: a second model, compared with scene.xml on load.  A URDF has

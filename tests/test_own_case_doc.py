@@ -4,6 +4,8 @@ and `dyncheck new`, whose scaffold runs once its equations are written."""
 import re
 from pathlib import Path
 
+import pytest
+
 from dyncheck.cli import main
 
 GUIDE = Path(__file__).resolve().parent.parent / "docs" / "own-case.md"
@@ -20,6 +22,7 @@ def steps():
             yield ("diff" if language == "diff" else "file"), what.removeprefix("file="), text
 
 
+@pytest.mark.full
 def test_the_guide_runs_as_written(tmp_path, capsys):
     cases = tmp_path / "my_cases"
     expected_status = 0
@@ -92,6 +95,7 @@ def reactions(t, q, v, p):
 '''
 
 
+@pytest.mark.full
 def test_a_wrong_reaction_is_named_while_the_equations_hold(tmp_path, capsys):
     """A reaction named after a force sensor of the scene (<sensor>_z) is compared with the engines'; with g
     dropped from it, the run names the term, and counts no consequences: the equations hold."""

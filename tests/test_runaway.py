@@ -16,6 +16,7 @@ from dyncheck.simulate import Escape, Escaped, simulate
 K_CRIT = 0.2 * (9 * 3.141592653589793) ** 2  # m Omega^2 at the book's m = 0.2 kg, Omega = pi + 8 pi rad/s: 159.9 N/m
 
 
+@pytest.mark.full
 def test_below_k_crit_every_source_runs_away_and_the_run_passes(tmp_path, capsys):
     path = tmp_path / "run.json"
     assert cli.main(["run", "spring_pendulum", "--set", "k=100", "--json", str(path)]) == 0

@@ -66,6 +66,7 @@ def stiff_spring():
     return result, s, time.perf_counter() - start
 
 
+@pytest.mark.full
 def test_semi_implicit_euler_blows_up_at_2_over_omega_within_the_bisection(stiff_spring):
     result, s, wall = stiff_spring
     data = result.data
@@ -130,6 +131,7 @@ def test_agreement_horizon_is_finite_positive_and_cheap():
     assert horizon == math.inf and details["within"]
 
 
+@pytest.mark.full
 def test_lyapunov_exponent_tells_chaos_from_regular_motion():
     case = dyncheck.load_case("double_pendulum")
     chaotic = np.array([math.pi / 2, math.pi / 2])
@@ -170,6 +172,7 @@ def test_euler_angle_error_grows_toward_zero_nutation_while_engines_stay_exact()
     assert engines.max() < 1e-14
 
 
+@pytest.mark.full
 def test_sleeping_threshold_agrees_with_the_criterion_within_its_resolution():
     case = dyncheck.load_case("spinning_top")
     result = stability.case_module(case).sleeping_top(case, settings(case, "sleeping_top"))

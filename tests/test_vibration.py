@@ -15,6 +15,8 @@ import dyncheck
 from dyncheck import vibration
 from dyncheck.results import Status
 
+pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
+
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 

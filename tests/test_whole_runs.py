@@ -69,6 +69,7 @@ def examples(n):
                     suppress_health_check=[HealthCheck.too_slow])
 
 
+@pytest.mark.full
 @pytest.mark.parametrize("name", CASES)
 @examples(DEFAULT_EXAMPLES)
 @given(data=st.data())

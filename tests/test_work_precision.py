@@ -47,6 +47,7 @@ def tiny(case, sweep):
     return case
 
 
+@pytest.mark.full
 def test_sweep_rows_and_an_unstable_point(tmp_path):
     case = tiny(dyncheck.load_case("spring_pendulum"), {
         "reference": {"DOP853": [1e-6], "explicit Euler": [1e-3]},  # explicit Euler blows up at 0.8 s
