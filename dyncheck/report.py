@@ -775,6 +775,10 @@ def write_timing_page(result, case, tmp):
     files = [timing_page_name(case)]
     if studies and not studies["work_precision"].empty:
         frame = sweep_in_words(studies["work_precision"], case)
+        missing = set(work_precision.TIMING_COLUMNS) - set(frame.columns)
+        if missing:  # results saved before the column was measured: nothing to rank by
+            raise ValueError(f"{case.name}: the saved work-precision sweep lacks {', '.join(sorted(missing))} (saved"
+                             " by an earlier dyncheck); make the results again with `dyncheck report`")
         csv, chart = (f"data/{case.name}_work_precision_timing.csv",
                       f"figures/{case.name}_work_precision_timing.png")
         work_precision.write_csv(frame, tmp / csv, timing=True)
@@ -786,11 +790,11 @@ def write_timing_page(result, case, tmp):
         def wall_with_spread(label):
             r = labels.get(label)
             return "-" if r is None or pd.isna(r["wall"]) else \
-                f"{r['wall']:.3g} ({r['wall_min']:.3g} to {r['wall_max']:.3g}, {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
+                f"{r['wall']:.3g} (IQR {r['wall_iqr']:.2g}; {r['wall_min']:.3g} to {r['wall_max']:.3g}; {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
         table = pd.DataFrame({"level": best["level"].map(lambda x: f"{x:.0e}"),
                               "fewest evaluations": work_precision.cheapest(frame)["cheapest"],
                               "least wall time": best["cheapest"],
-                              "wall [s]: median (least to most)": best["points"].map(
+                              "wall [s]: median (IQR; least to most)": best["points"].map(
                                   lambda points: "; ".join(map(wall_with_spread, points)) or "-"),
                               "runner-up in wall time": best["runner_up"],
                               "runner-up wall [s]": best["runner_up"].map(wall_with_spread)})
@@ -1040,18 +1044,27 @@ def speed_table(tmp, cases):
 
 
 INDEX_TIMING = "index_timing.md"
-WALL_TIES = ("A method is the cheapest only when its slowest run beats every other method's fastest (its bar on the"
-             " chart overlaps none of theirs); else the methods that cannot be told apart are named together (tie"
-             f" within spread).  The runs that decide it are {work_precision.DECIDING_REPEATS} of each point, taken in"
-             " turns with the other points' runs.")
+WALL_TIES = ("A method is the cheapest only when its median is below every other method's by more than the sum of"
+             " their interquartile ranges (a spread that one stray run does not move); else the methods that cannot be"
+             " told apart are named together (tie within spread).  The runs that decide it are"
+             f" {work_precision.DECIDING_REPEATS} of each point, taken in turns with the other points' runs.")
 
 
 def sweeps(tmp, cases, timing=False):
-    """{case: its work-precision sweep as data/ holds it} for the cases with one (and their wall times: timing)."""
+    """{case: its work-precision sweep as data/ holds it} for the cases with one (and their wall times: timing).
+    A timing file without every wall-time column (an earlier version's) is left out with a warning naming it."""
     def csv(case, suffix):
         return tmp / "data" / f"{case}_work_precision{suffix}.csv"
-    return {c["case"]: work_precision.read_csv(csv(c["case"], ""), csv(c["case"], "_timing") if timing else None)
-            for c in cases if c.get("cheapest")}
+    out = {}
+    for case in (c["case"] for c in cases if c.get("cheapest")):
+        frame = work_precision.read_csv(csv(case, ""), csv(case, "_timing") if timing else None)
+        if timing and not set(work_precision.TIMING_COLUMNS) <= set(frame.columns):
+            print(f"dyncheck: warning: data/{csv(case, '_timing').name} lacks wall-time columns"
+                  f" ({', '.join(sorted(set(work_precision.TIMING_COLUMNS) - set(frame.columns)))}; an earlier"
+                  f" version's): left out of {INDEX_TIMING}", file=sys.stderr)
+            continue
+        out[case] = frame
+    return out
 
 
 def write_index_timing(tmp, cases):

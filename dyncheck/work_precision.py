@@ -23,10 +23,10 @@ from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_M
 from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
 
 COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "wall_min", "wall_max",
-           "repeats", "evaluations", "steps", "status", "resolved", "detail"]
+           "wall_iqr", "repeats", "evaluations", "steps", "status", "resolved", "detail"]
 # Wall times differ from run to run: the pages and their CSV leave them out (a report made twice is
 # the same), and the timing files (write_csv(..., timing=True), figure(..., cost="wall")) carry them.
-TIMING_COLUMNS = ["wall", "wall_min", "wall_max", "repeats"]
+TIMING_COLUMNS = ["wall", "wall_min", "wall_max", "wall_iqr", "repeats"]
 COSTS = {"evaluations": "right-hand-side evaluations", "wall": "wall time [s], median (bars: fastest to slowest)"}
 COST_WORDS = {"evaluations": "right-hand-side evaluations", "wall": "wall time (medians of repeated runs)"}
 NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no free coordinate), so it "
@@ -48,10 +48,10 @@ KEYS = ("t_end", "output_step", "repeat", "repeat_under", "why", "solution", "sw
 CONVERGENCE_KEYS = ("omega", "omega_t", "omega_h", "why")
 OPTIONAL_KEYS = ("method_omega",)
 MAX_REPEAT = 100  # timed repetitions of a quick run (under repeat_under seconds in all)
-# Timed runs of the points that decide which method is cheapest in wall time.  One method is ahead of
-# another only when its slowest run is faster than the other's fastest (cheapest()): of two methods
-# equally fast, n runs each put one ahead by chance with probability 2 / C(2n, n), 10 % at 3 runs,
-# 0.8 % at 5.
+# Timed runs of the points that decide which method is cheapest in wall time (cheapest(): medians apart
+# by more than the sum of the interquartile ranges).  At 5 runs the quartiles are the 2nd and 4th
+# fastest, so one stray run on either side (a load spike on a shared machine: 2x to 10x measured) moves
+# neither median nor spread; the fastest-to-slowest range would, and named ties 13x apart.
 DECIDING_REPEATS = 5
 
 
@@ -206,8 +206,8 @@ def sweep(case, progress=None):
 
     error: max over time and state coordinates of |x - x_ref| / max |x_ref| (per coordinate);
     energy_error: max |E(t) - E(0) - W(t)| / max(|E_ref|, |W_ref|), the energy drift of a closed scene
-    or the work-energy balance of a driven one (energy_error); wall, wall_min, wall_max: median, least and most of
-    `repeats` timed runs (`repeat` when one run takes under `repeat_under` seconds in all, else one; DECIDING_REPEATS
+    or the work-energy balance of a driven one (energy_error); wall, wall_min, wall_max, wall_iqr: median, least,
+    most and interquartile range of `repeats` timed runs (`repeat` when one run takes under `repeat_under` seconds in all, else one; DECIDING_REPEATS
     for a point that decides the wall-time table of cheapest()); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
     steps: fixed steps (NaN for scipy, which does not report them).  A run that blows up is a row
     with status "unstable", NaN errors and the time and step in `detail`.  resolved: whether the error
@@ -254,7 +254,8 @@ def sweep(case, progress=None):
         _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: {error:.1e}")
 
     def frame():
-        timing = pd.DataFrame([{"wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w), "repeats": len(w)}
+        timing = pd.DataFrame([{"wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w),
+                                "wall_iqr": float(np.subtract(*np.percentile(w, [75, 25]))), "repeats": len(w)}
                                for w in walls.values()], index=list(walls), columns=TIMING_COLUMNS)
         out = pd.DataFrame(rows).join(timing).reindex(columns=COLUMNS)
         out["repeats"] = out["repeats"].fillna(0).astype(int)  # an unstable point's: none timed to the end
@@ -318,12 +319,13 @@ def cheapest(frame, cost="evaluations", levels=LEVELS):
     """For each accuracy level (relative trajectory error), the (source, method) that reaches it at the least
     `cost` (a column: "evaluations" or "wall"), those that cannot be told from it, and the runner-up, the
     cheapest of the rest: a DataFrame with level, cheapest (in words: "A", or "A or B (tie ...)"), points and
-    methods (the labels and method names of the cheapest and the tied, the cheapest first), <cost> and error
-    (of the cheapest), runner_up, runner_up_<cost>.  Each (source, method) stands by its cheapest point that
-    reaches the level.  Evaluations are counts: a tie is an equal count.  Wall times are medians of repeated
-    runs: one method is ahead of another only when its slowest run is faster than the other's fastest (their
-    bars on the chart do not overlap), else they tie.  Only resolved points count; a level below RESOLUTION
-    times the reference's accuracy cannot be decided and says so, a level nobody reaches says "none reached"."""
+    methods (the labels and method names of the cheapest and the tied, in the sweep's order), <cost> and error
+    (of the cheapest), runner_up, runner_up_<cost>.  Each (source, method) stands by its point of fewest
+    evaluations that reaches the level: a count, the same in every run, and within one method wall time
+    follows it.  Evaluations are counts: a tie is an equal count.  Wall times are medians of repeated runs:
+    one method is ahead of another only when their medians are apart by more than the sum of their
+    interquartile ranges, else they tie.  Only resolved points count; a level below RESOLUTION times the
+    reference's accuracy cannot be decided and says so, a level nobody reaches says "none reached"."""
     floor = RESOLUTION * frame.attrs.get("reference", {}).get("accuracy", 0.0)
     ok = frame[(frame["status"] == "ok") & frame["resolved"]]
     out = []
@@ -333,13 +335,15 @@ def cheapest(frame, cost="evaluations", levels=LEVELS):
         if level < floor:
             entry["cheapest"] = f"not resolvable: below {floor:.1g}, {RESOLUTION:g}x the reference's accuracy"
         else:
-            # each (source, method)'s cheapest point that reaches the level, cheapest first; a stable sort
-            # (ties in the sweep's order) so that equal counts list the same points in the same order every time
-            reached = ok[ok["error"] <= level].sort_values(cost, kind="stable").drop_duplicates(["source", "method"])
+            # each (source, method)'s point that reaches the level, cheapest first; stable sorts (ties in the
+            # sweep's order) so that equal counts pick the same points every time
+            reached = ok[ok["error"] <= level].sort_values("evaluations", kind="stable") \
+                .drop_duplicates(["source", "method"]).sort_values(cost, kind="stable")
             if len(reached):
                 best, others = reached.iloc[0], reached.iloc[1:]
-                tied = others["wall_min"] <= best["wall_max"] if cost == "wall" else others[cost] == best[cost]
-                winners = pd.concat([reached.iloc[:1], others[tied]])
+                tied = (others["wall"] - best["wall"] <= others["wall_iqr"] + best["wall_iqr"] if cost == "wall"
+                        else others[cost] == best[cost])
+                winners = pd.concat([reached.iloc[:1], others[tied]]).sort_index()
                 entry.update({"cheapest": tie_in_words(winners, cost),
                               "points": tuple(point_label(r) for _, r in winners.iterrows()),
                               "methods": tuple(winners["method"]), cost: best[cost], "error": best["error"]})

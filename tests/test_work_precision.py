@@ -99,7 +99,7 @@ def test_cheapest_picks_the_cheapest_point_that_reaches_each_level():
     rows = [("a", "RK4", 1e-3, 0.10, 400), ("b", "DOP853", 5e-3, 0.05, 300), ("b", "DOP853", 1e-5, 0.20, 900),
             ("c", "Euler", 1e-9, 0.01, 50)]  # c: within 10x of the reference's accuracy, unresolved
     frame = pd.DataFrame([{"source": s, "method": m, "setting": "dt", "value": 0.1, "error": e, "wall": w,
-                           "wall_min": 0.9 * w, "wall_max": 1.1 * w,
+                           "wall_min": 0.9 * w, "wall_max": 1.1 * w, "wall_iqr": 0.1 * w,
                            "evaluations": n, "status": "ok", "resolved": e > 1e-8} for s, m, e, w, n in rows]
                          + [{"source": "d", "method": "RK45", "setting": "rtol", "value": 1.0, "error": np.nan,
                              "wall": np.nan, "evaluations": np.nan, "status": "unstable", "resolved": False}])
@@ -119,26 +119,33 @@ def test_cheapest_picks_the_cheapest_point_that_reaches_each_level():
 def synthetic(points):
     """A resolved sweep frame from (source, method, error, evaluations, wall runs)."""
     return pd.DataFrame([{"source": s, "method": m, "setting": "rtol", "value": 1e-6, "error": e, "evaluations": n,
-                          "wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w), "repeats": len(w),
+                          "wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w),
+                          "wall_iqr": float(np.subtract(*np.percentile(w, [75, 25]))), "repeats": len(w),
                           "status": "ok", "resolved": True} for s, m, e, n, w in points])
 
 
 def test_cheapest_in_wall_time_only_beyond_the_spread():
-    # a's runs all beat b's (bars apart): a alone, b the runner-up
-    apart = synthetic([("a", "LSODA", 1e-3, 300, [1.0, 1.1, 1.2]), ("b", "DOP853", 1e-3, 200, [1.3, 1.4, 1.5])])
+    # medians 1.1 and 1.4, interquartile ranges 0.1 each: a alone, b the runner-up; a's one stray run (2.0,
+    # slower than all of b's) moves neither its median nor its spread
+    apart = synthetic([("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 1.15, 2.0]),
+                       ("b", "DOP853", 1e-3, 200, [1.3, 1.35, 1.4, 1.45, 1.5])])
     table = work_precision.cheapest(apart, cost="wall", levels=(1e-2,)).iloc[0]
     assert table["cheapest"] == "a LSODA, rtol = 1e-06" and table["points"] == ("a LSODA, rtol = 1e-06",)
     assert table["runner_up"] == "b DOP853, rtol = 1e-06" and table["wall"] == 1.1
-    # a's slowest run is slower than b's fastest (bars overlap): a tie, listing both, the smaller median first;
-    # c is beaten by a beyond the spread: the runner-up
-    overlapping = synthetic([("b", "DOP853", 1e-3, 200, [1.15, 1.4, 1.5]), ("a", "LSODA", 1e-3, 300, [1.0, 1.1, 1.2]),
-                             ("c", "RK45", 1e-3, 900, [2.0, 2.1, 2.2])])
-    table = work_precision.cheapest(overlapping, cost="wall", levels=(1e-2,)).iloc[0]
-    assert table["cheapest"] == "a LSODA, rtol = 1e-06 or b DOP853, rtol = 1e-06 (tie within spread)"
-    assert table["methods"] == ("LSODA", "DOP853") and table["runner_up"] == "c RK45, rtol = 1e-06"
+    # medians 1.25 and 1.1, closer than the spreads' sum 0.2: a tie, both named in the sweep's order; c is
+    # beaten beyond the spread: the runner-up
+    close = synthetic([("b", "DOP853", 1e-3, 200, [1.15, 1.2, 1.25, 1.3, 1.35]),
+                       ("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 1.15, 1.2]), ("c", "RK45", 1e-3, 900, [2.0, 2.1, 2.2])])
+    table = work_precision.cheapest(close, cost="wall", levels=(1e-2,)).iloc[0]
+    assert table["cheapest"] == "b DOP853, rtol = 1e-06 or a LSODA, rtol = 1e-06 (tie within spread)"
+    assert table["methods"] == ("DOP853", "LSODA") and table["runner_up"] == "c RK45, rtol = 1e-06"
+    assert table["wall"] == 1.1  # the cheapest's
     # a single run has no spread: two of them tie only when equal
     single = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("b", "DOP853", 1e-3, 300, [1.01])])
     assert work_precision.cheapest(single, cost="wall", levels=(1e-2,)).iloc[0]["points"] == ("a LSODA, rtol = 1e-06",)
+    # a method stands by its point of fewest evaluations that reaches the level, whatever its wall time
+    two_points = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("a", "LSODA", 1e-4, 400, [0.9])])
+    assert work_precision.cheapest(two_points, cost="wall", levels=(1e-2,)).iloc[0]["wall"] == 1.0
     # evaluations are counts: equal counts tie, whatever the wall times
     table = work_precision.cheapest(single, levels=(1e-2,)).iloc[0]
     assert table["cheapest"] == "a LSODA, rtol = 1e-06 or b DOP853, rtol = 1e-06 (tie: equal counts)"
