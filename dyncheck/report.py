@@ -64,6 +64,7 @@ def write_reports(results, out, animations=True):
                 written.append(write_summary(result, case, tree))
             cases = summaries(tree, out)
             written.append(write_index(tree, cases))
+            written += write_index_timing(tree, cases)
             if not all(c["one_derivation"] for c in cases):  # the book's errata; a researcher's case has no book
                 written.append(write_errata(tree, cases))
             swap(tree, out)
@@ -774,6 +775,10 @@ def write_timing_page(result, case, tmp):
     files = [timing_page_name(case)]
     if studies and not studies["work_precision"].empty:
         frame = sweep_in_words(studies["work_precision"], case)
+        missing = set(work_precision.TIMING_COLUMNS) - set(frame.columns)
+        if missing:  # results saved before the column was measured: nothing to rank by
+            raise ValueError(f"{case.name}: the saved work-precision sweep lacks {', '.join(sorted(missing))} (saved"
+                             " by an earlier dyncheck); make the results again with `dyncheck report`")
         csv, chart = (f"data/{case.name}_work_precision_timing.csv",
                       f"figures/{case.name}_work_precision_timing.png")
         work_precision.write_csv(frame, tmp / csv, timing=True)
@@ -785,10 +790,13 @@ def write_timing_page(result, case, tmp):
         def wall_with_spread(label):
             r = labels.get(label)
             return "-" if r is None or pd.isna(r["wall"]) else \
-                f"{r['wall']:.3g} ({r['wall_min']:.3g} to {r['wall_max']:.3g}, {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
-        table = pd.DataFrame({"level": best["level"].map(lambda x: f"{x:.0e}"), "cheapest": best["cheapest"],
-                              "wall [s]: median (least to most)": best["cheapest"].map(wall_with_spread),
-                              "runner-up": best["runner_up"],
+                f"{r['wall']:.3g} (IQR {r['wall_iqr']:.2g}; {r['wall_min']:.3g} to {r['wall_max']:.3g}; {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
+        table = pd.DataFrame({"level": best["level"].map(lambda x: f"{x:.0e}"),
+                              "fewest evaluations": work_precision.cheapest(frame)["cheapest"],
+                              "least wall time": best["cheapest"],
+                              "wall [s]: median (IQR; least to most)": best["points"].map(
+                                  lambda points: "; ".join(map(wall_with_spread, points)) or "-"),
+                              "runner-up in wall time": best["runner_up"],
                               "runner-up wall [s]": best["runner_up"].map(wall_with_spread)})
         lines += ["## Speed against accuracy in wall time", "",
                   f"The work-precision sweep of [the case page]({case.name}.md#speed-against-accuracy) against wall"
@@ -796,7 +804,8 @@ def write_timing_page(result, case, tmp):
                   " case file's `work_precision.repeat` says), the bars from the fastest to the slowest.  "
                   + work_precision.WALL_NOTE, "",
                   *embed(chart, "work-precision, wall time", wall_caption),
-                  "Which method reaches each accuracy level (relative trajectory error) in the least wall time:", "",
+                  "Which method reaches each accuracy level (relative trajectory error) in the least wall time, beside"
+                  " the fewest evaluations (the case page's ranking).  " + WALL_TIES, "",
                   markdown_table(table), "", f"The rows behind the chart: [{csv}]({csv}).", ""]
     if studies and studies["stability"]:
         lines += ["## Stability studies", "", markdown_table(pd.DataFrame(
@@ -838,7 +847,7 @@ def study_sections(result, case, tmp):
         files += [csv, chart]
         reference = frame.attrs["reference"]
         unstable = frame[frame["status"] == "unstable"]
-        best = work_precision.cheapest(frame)
+        best = work_precision.cheapest(frame).drop(columns=["points", "methods"])
         best["level"] = best["level"].map(lambda x: f"{x:.0e}")
         for column in ("evaluations", "runner_up_evaluations"):
             best[column] = best[column].map(lambda x: "-" if pd.isna(x) else f"{x:.0f}")
@@ -1020,15 +1029,62 @@ def write_errata(tmp, cases):
     return "errata.md"
 
 
-def speed_table(cases):
-    """Index lines: for each case with a work-precision sweep, the cheapest method at each accuracy."""
+def speed_table(tmp, cases):
+    """Index lines: for each case with a work-precision sweep, the cheapest method at each accuracy, and in
+    short which methods are cheapest (in wall time: index_timing.md)."""
     rows = [{"case": f"[{c['case']}]({c['case']}.md#speed-against-accuracy)", **c["cheapest"]}
             for c in cases if c.get("cheapest")]
     if not rows:
         return []
     return ["The cheapest method (fewest right-hand-side evaluations) that reaches each relative trajectory error, from each"
             " case's work-precision sweep (details, charts and the stability studies on the case pages):", "",
-            markdown_table(pd.DataFrame(rows).fillna("-")), ""]
+            markdown_table(pd.DataFrame(rows).fillna("-")), "",
+            f"In short, {work_precision.in_short(sweeps(tmp, cases))}.  In wall time, which differs from run to run:"
+            f" [{INDEX_TIMING}]({INDEX_TIMING}).", ""]
+
+
+INDEX_TIMING = "index_timing.md"
+WALL_TIES = ("A method is the cheapest only when its median is below every other method's by more than the sum of"
+             " their interquartile ranges (a spread that one stray run does not move); else the methods that cannot be"
+             " told apart are named together (tie within spread).  The runs that decide it are"
+             f" {work_precision.DECIDING_REPEATS} of each point, taken in turns with the other points' runs.")
+
+
+def sweeps(tmp, cases, timing=False):
+    """{case: its work-precision sweep as data/ holds it} for the cases with one (and their wall times: timing).
+    A timing file without every wall-time column (an earlier version's) is left out with a warning naming it."""
+    def csv(case, suffix):
+        return tmp / "data" / f"{case}_work_precision{suffix}.csv"
+    out = {}
+    for case in (c["case"] for c in cases if c.get("cheapest")):
+        frame = work_precision.read_csv(csv(case, ""), csv(case, "_timing") if timing else None)
+        if timing and not set(work_precision.TIMING_COLUMNS) <= set(frame.columns):
+            print(f"dyncheck: warning: data/{csv(case, '_timing').name} lacks wall-time columns"
+                  f" ({', '.join(sorted(set(work_precision.TIMING_COLUMNS) - set(frame.columns)))}; an earlier"
+                  f" version's): left out of {INDEX_TIMING}", file=sys.stderr)
+            continue
+        out[case] = frame
+    return out
+
+
+def write_index_timing(tmp, cases):
+    """index_timing.md: the index's speed table and sentence in wall time, apart from the index because wall
+    times differ from run to run; [] and none (an earlier one removed) when no case has a sweep."""
+    walls = sweeps(tmp, cases, timing=True)
+    if not walls:
+        (tmp / INDEX_TIMING).unlink(missing_ok=True)
+        return []
+    rows = [{"case": f"[{case}]({case}_timing.md)",
+             **{f"{r['level']:.0e}": r["cheapest"] for _, r in work_precision.cheapest(frame, cost="wall").iterrows()}}
+            for case, frame in walls.items()]
+    lines = ["# dyncheck reports: wall times", "",
+             "Wall times of the last report on this machine, which differ from run to run; [the index](index.md).", "",
+             "The cheapest method in wall time that reaches each relative trajectory error, from each case's"
+             " work-precision sweep (its timing page has the times).  " + WALL_TIES, "",
+             markdown_table(pd.DataFrame(rows).fillna("-")), "",
+             f"In short, {work_precision.in_short(walls, cost='wall')}.", ""]
+    (tmp / INDEX_TIMING).write_text("\n".join(lines))
+    return [INDEX_TIMING]
 
 
 def write_index(tmp, cases):
@@ -1057,7 +1113,7 @@ def write_index(tmp, cases):
              + ("; a finding is an error of the book, with the largest relative error it causes: all of them"
                 " are in the [errata](errata.md)." if any(c["findings"] for c in cases) else "."), "",
              markdown_table(pd.DataFrame(rows)), "",
-             *speed_table(cases),
+             *speed_table(tmp, cases),
              *vibration_page.index_lines(cases, book),
              f"The last run tried {plural(sum(t['parameter_sets'] for t in tried), 'random parameter set')} besides"
              f" {'the book' if book else 'each case'}'s and {plural(states, 'random state')} in all"

@@ -8,12 +8,14 @@ method as check rows.  Both read the case file's [work_precision] table.
 
 import math
 import time
+from collections import Counter
 
 import numpy as np
 import pandas as pd
 
 from dyncheck import cache, ceilings
 from dyncheck.ceilings import ROUNDING_FLOOR
+from dyncheck.messages import plural
 from dyncheck.results import heading, no_number, row
 from dyncheck.schema import MAX_OUTPUTS
 from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
@@ -21,11 +23,12 @@ from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_M
 from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
 
 COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "wall_min", "wall_max",
-           "repeats", "evaluations", "steps", "status", "resolved", "detail"]
+           "wall_iqr", "repeats", "evaluations", "steps", "status", "resolved", "detail"]
 # Wall times differ from run to run: the pages and their CSV leave them out (a report made twice is
 # the same), and the timing files (write_csv(..., timing=True), figure(..., cost="wall")) carry them.
-TIMING_COLUMNS = ["wall", "wall_min", "wall_max", "repeats"]
+TIMING_COLUMNS = ["wall", "wall_min", "wall_max", "wall_iqr", "repeats"]
 COSTS = {"evaluations": "right-hand-side evaluations", "wall": "wall time [s], median (bars: fastest to slowest)"}
+COST_WORDS = {"evaluations": "right-hand-side evaluations", "wall": "wall time (medians of repeated runs)"}
 NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no free coordinate), so it "
             "has no work-precision chart and no convergence check.")
 EVALUATIONS_NOTE = ("Cost is counted in right-hand-side evaluations (MuJoCo's RK4: 4 a step, its Euler: 1), "
@@ -45,6 +48,11 @@ KEYS = ("t_end", "output_step", "repeat", "repeat_under", "why", "solution", "sw
 CONVERGENCE_KEYS = ("omega", "omega_t", "omega_h", "why")
 OPTIONAL_KEYS = ("method_omega",)
 MAX_REPEAT = 100  # timed repetitions of a quick run (under repeat_under seconds in all)
+# Timed runs of the points that decide which method is cheapest in wall time (cheapest(): medians apart
+# by more than the sum of the interquartile ranges).  At 5 runs the quartiles are the 2nd and 4th
+# fastest, so one stray run on either side (a load spike on a shared machine: 2x to 10x measured) moves
+# neither median nor spread; the fastest-to-slowest range would, and named ties 13x apart.
+DECIDING_REPEATS = 5
 
 
 # -- the case file's [work_precision] table ---------------------------------------------------------
@@ -198,8 +206,9 @@ def sweep(case, progress=None):
 
     error: max over time and state coordinates of |x - x_ref| / max |x_ref| (per coordinate);
     energy_error: max |E(t) - E(0) - W(t)| / max(|E_ref|, |W_ref|), the energy drift of a closed scene
-    or the work-energy balance of a driven one (energy_error); wall, wall_min, wall_max: median, least and most of
-    `repeats` timed runs (`repeat`, or fewer when they take longer than `repeat_under` seconds in all); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
+    or the work-energy balance of a driven one (energy_error); wall, wall_min, wall_max, wall_iqr: median, least,
+    most and interquartile range of `repeats` timed runs (`repeat` when one run takes under `repeat_under` seconds in all, else one; DECIDING_REPEATS
+    for a point that decides the wall-time table of cheapest()); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
     steps: fixed steps (NaN for scipy, which does not report them).  A run that blows up is a row
     with status "unstable", NaN errors and the time and step in `detail`.  resolved: whether the error
     is above RESOLUTION times the reference's verified accuracy.  An empty frame for a case with
@@ -214,38 +223,64 @@ def sweep(case, progress=None):
     scale = max(reference["energy"].abs().max(), reference["work"].abs().max()) \
         if {"energy", "work"} <= set(reference) else None
     q0, v0, _ = case.initial
-    rows = []
+
+    def timed(source, method, setting, value):  # one run of a point and the time it took in all
+        start = time.perf_counter()
+        run = simulate(case.model(source), (q0, v0), wp["t_end"], method, output_step=wp["output_step"],
+                       work=case.driven, omega=fastest_frequency(case), **{setting: value})
+        return run, time.perf_counter() - start
+
+    rows, walls, quick = [], {}, []  # walls: row -> the wall times of its runs; quick: rows to repeat at will
     for source, method, setting, value in plan(case):
         point = {"case": case.name, "source": source, "method": method, "setting": setting, "value": value}
-        model = case.model(source)
-        walls, took = [], 0.0
         try:
-            # Repeat only runs that are quick in all (integration, energy and work on the grid, for
-            # MuJoCo the drive power at every step): timer noise matters there, and it bounds the cost.
-            while len(walls) < wp["repeat"] and took < wp["repeat_under"]:
-                start = time.perf_counter()
-                run = simulate(model, (q0, v0), wp["t_end"], method, output_step=wp["output_step"],
-                               work=case.driven, omega=fastest_frequency(case), **{setting: value})
-                took = time.perf_counter() - start
-                walls.append(run.attrs["wall"])
+            run, took = timed(source, method, setting, value)
         except Unstable as failure:
-            rows.append({**point, "error": np.nan, "energy_error": np.nan, "wall": np.nan, "wall_min": np.nan,
-                         "wall_max": np.nan, "repeats": len(walls), "evaluations": np.nan,
+            rows.append({**point, "error": np.nan, "energy_error": np.nan, "evaluations": np.nan,
                          "steps": failure.step, "status": "unstable", "resolved": False,
                          "detail": f"unstable at t = {failure.t:.4g} s"
                                    + (f", step {failure.step}" if failure.step is not None else "") + f": {failure.why}"})
             _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: unstable")
             continue
         error = trajectory_error(run, reference, columns)
+        walls[len(rows)] = [run.attrs["wall"]]
+        # Repeat only runs that are quick in all (integration, energy and work on the grid, for MuJoCo the
+        # drive power at every step): timer noise matters there, and it bounds the cost.
+        if took < wp["repeat_under"]:
+            quick.append(len(rows))
         rows.append({**point, "error": error, "energy_error": energy_error(run, scale),
-                     "wall": float(np.median(walls)), "wall_min": min(walls), "wall_max": max(walls),
-                     "repeats": len(walls), "evaluations": run.attrs["evaluations"],
-                     "steps": run.attrs.get("steps", np.nan), "status": "ok",
+                     "evaluations": run.attrs["evaluations"], "steps": run.attrs.get("steps", np.nan), "status": "ok",
                      "resolved": bool(error > RESOLUTION * accuracy), "detail": ""})
         _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: {error:.1e}")
-    frame = pd.DataFrame(rows, columns=COLUMNS)
-    frame.attrs["reference"] = {"label": label, "accuracy": accuracy, "t_end": wp["t_end"]}
-    return frame
+
+    def frame():
+        timing = pd.DataFrame([{"wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w),
+                                "wall_iqr": float(np.subtract(*np.percentile(w, [75, 25]))), "repeats": len(w)}
+                               for w in walls.values()], index=list(walls), columns=TIMING_COLUMNS)
+        out = pd.DataFrame(rows).join(timing).reindex(columns=COLUMNS)
+        out["repeats"] = out["repeats"].fillna(0).astype(int)  # an unstable point's: none timed to the end
+        out.attrs["reference"] = {"label": label, "accuracy": accuracy, "t_end": wp["t_end"]}
+        return out
+
+    def again(points):  # one more timed run of each point, in the sweep's order
+        for i in points:
+            walls[i].append(timed(*(rows[i][key] for key in ("source", "method", "setting", "value")))[0].attrs["wall"])
+
+    # More runs go round the points, not back to back, so that a change of the machine's load during the
+    # sweep falls on every point alike (runs back to back share one load and understate the spread): the
+    # quick points up to `repeat` runs, for the chart's bars; then the points that decide the wall-time
+    # table (at each level the cheapest, those tied with it and the runner-up) up to DECIDING_REPEATS
+    # runs whatever they cost, for a claim that one is faster than another.
+    for _ in range(wp["repeat"] - 1):
+        again(quick)
+    while True:
+        table = cheapest(frame(), cost="wall")
+        named = {label for labels in table["points"] for label in labels} | set(table["runner_up"])
+        deciding = [i for i in walls if point_label(rows[i]) in named
+                    and len(walls[i]) < max(wp["repeat"], DECIDING_REPEATS)]
+        if not deciding:
+            return frame()
+        again(deciding)
 
 
 def write_csv(frame, path, timing=False):
@@ -267,30 +302,88 @@ def point_label(r):
     return f"{name}, {r['setting']} = {r['value']:g}" + (" s" if r["setting"] == "dt" else "")
 
 
+TIE_WORDS = {"evaluations": "tie: equal counts", "wall": "tie within spread"}
+
+
+def tie_in_words(points, cost):
+    """"A", or for several points "A or B (tie ...)", the points of one method and setting from several
+    sources named once: "reference and pinocchio LSODA, rtol = 0.0001"."""
+    names = []
+    for _, same in points.groupby(["method", "setting", "value"], sort=False):
+        label, source = point_label(same.iloc[0]), same["source"].iloc[0]
+        names.append(" and ".join(same["source"]) + label[len(source):] if label.startswith(source + " ") else label)
+    return names[0] if len(points) == 1 else f"{' or '.join(names)} ({TIE_WORDS[cost]})"
+
+
 def cheapest(frame, cost="evaluations", levels=LEVELS):
-    """For each accuracy level (relative trajectory error), the point that reaches it at the least
-    `cost` (a column: "evaluations" or "wall") and the runner-up from another (source, method): a
-    DataFrame with level, cheapest, <cost>, error, runner_up, runner_up_<cost>.  Only resolved points count; a level below RESOLUTION times the
+    """For each accuracy level (relative trajectory error), the (source, method) that reaches it at the least
+    `cost` (a column: "evaluations" or "wall"), those that cannot be told from it, and the runner-up, the
+    cheapest of the rest: a DataFrame with level, cheapest (in words: "A", or "A or B (tie ...)"), points and
+    methods (the labels and method names of the cheapest and the tied, in the sweep's order), <cost> and error
+    (of the cheapest), runner_up, runner_up_<cost>.  Each (source, method) stands by its point of fewest
+    evaluations that reaches the level: a count, the same in every run, and within one method wall time
+    follows it.  Evaluations are counts: a tie is an equal count.  Wall times are medians of repeated runs:
+    one method is ahead of another only when their medians are apart by more than the sum of their
+    interquartile ranges, else they tie.  Only resolved points count; a level below RESOLUTION times the
     reference's accuracy cannot be decided and says so, a level nobody reaches says "none reached"."""
     floor = RESOLUTION * frame.attrs.get("reference", {}).get("accuracy", 0.0)
     ok = frame[(frame["status"] == "ok") & frame["resolved"]]
     out = []
     for level in levels:
-        entry = {"level": level, "cheapest": "none reached", cost: np.nan, "error": np.nan,
-                 "runner_up": "", f"runner_up_{cost}": np.nan}
+        entry = {"level": level, "cheapest": "none reached", "points": (), "methods": (), cost: np.nan,
+                 "error": np.nan, "runner_up": "", f"runner_up_{cost}": np.nan}
         if level < floor:
             entry["cheapest"] = f"not resolvable: below {floor:.1g}, {RESOLUTION:g}x the reference's accuracy"
         else:
-            # each (source, method)'s cheapest point that reaches the level, cheapest first; a stable sort
-            # (ties in the sweep's order) so that equal counts pick the same point every time
-            reached = ok[ok["error"] <= level].sort_values(cost, kind="stable").drop_duplicates(["source", "method"])
+            # each (source, method)'s point that reaches the level, cheapest first; stable sorts (ties in the
+            # sweep's order) so that equal counts pick the same points every time
+            reached = ok[ok["error"] <= level].sort_values("evaluations", kind="stable") \
+                .drop_duplicates(["source", "method"]).sort_values(cost, kind="stable")
             if len(reached):
-                best = reached.iloc[0]
-                entry.update({"cheapest": point_label(best), cost: best[cost], "error": best["error"]})
-            if len(reached) > 1:
-                entry.update({"runner_up": point_label(reached.iloc[1]), f"runner_up_{cost}": reached.iloc[1][cost]})
+                best, others = reached.iloc[0], reached.iloc[1:]
+                tied = (others["wall"] - best["wall"] <= others["wall_iqr"] + best["wall_iqr"] if cost == "wall"
+                        else others[cost] == best[cost])
+                winners = pd.concat([reached.iloc[:1], others[tied]]).sort_index()
+                entry.update({"cheapest": tie_in_words(winners, cost),
+                              "points": tuple(point_label(r) for _, r in winners.iterrows()),
+                              "methods": tuple(winners["method"]), cost: best[cost], "error": best["error"]})
+                rest = others[~tied]
+                if len(rest):
+                    entry.update({"runner_up": point_label(rest.iloc[0]), f"runner_up_{cost}": rest.iloc[0][cost]})
         out.append(entry)
     return pd.DataFrame(out)
+
+
+def in_short(sweeps, cost="evaluations"):
+    """A sentence on which methods are cheapest in `cost` over the sweeps of several cases ({case: frame}): at
+    how many of the accuracy levels they reach each method is the cheapest (cheapest(): methods tied count
+    each), e.g. "counted in right-hand-side evaluations, the cheapest method at each of the 19 accuracy levels
+    (1e-02 to 1e-10) that the 4 integrated cases reach is an adaptive one: LSODA at 15 of them, ..."."""
+    cells = [set(methods) for frame in sweeps.values() if not frame.empty
+             for methods in cheapest(frame, cost)["methods"] if methods]
+    wins = Counter(method for methods in cells for method in methods)
+    ranked = [f"{method} at {wins[method]}" for method in sorted(wins, key=lambda m: (-wins[m], m))]
+    if not ranked:
+        return f"counted in {COST_WORDS[cost]}, no method reaches any of the accuracy levels {LEVELS[0]:.0e} to {LEVELS[-1]:.0e}"
+    ranked[0] += " of them"
+    kind = ("an adaptive one: " if set(wins) <= set(SCIPY_METHODS) else
+            "a fixed-step one: " if not set(wins) & set(SCIPY_METHODS) else "")
+    integrated = sum(not frame.empty for frame in sweeps.values())
+    ties = sum(len(methods) > 1 for methods in cells)
+    return (f"counted in {COST_WORDS[cost]}, the cheapest method at each of the {len(cells)} accuracy levels"
+            f" ({LEVELS[0]:.0e} to {LEVELS[-1]:.0e}) that the {plural(integrated, 'integrated case')} reach is {kind}"
+            + (", ".join(ranked[:-1]) + " and " if len(ranked) > 1 else "") + ranked[-1]
+            + (f"; {plural(ties, 'level')} {'is a tie' if ties == 1 else 'are ties'} between methods"
+               f" ({TIE_WORDS[cost]}), counted for each" if ties else ""))
+
+
+def read_csv(path, timing=None):
+    """A sweep as write_csv wrote it, with the wall times of its `timing` twin when given (the reference's
+    label and accuracy are not restored: below its resolution a level reads "none reached")."""
+    frame = pd.read_csv(path, comment="#")
+    if timing is not None:
+        frame = frame.merge(pd.read_csv(timing, comment="#"), on=["case", "source", "method", "setting", "value"])
+    return frame
 
 
 # -- the chart ---------------------------------------------------------------------------------

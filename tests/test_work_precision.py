@@ -1,5 +1,7 @@
 """Work-precision sweep, cheapest method, and the convergence checks (fast: small configurations)."""
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -62,6 +64,12 @@ def test_sweep_rows_and_an_unstable_point(tmp_path):
     assert (ok["error"] > 0).all() and (ok["error"] < 1e-2).all() and (ok["energy_error"] > 0).all()
     assert (ok["wall"] > 0).all() and (ok["evaluations"] > 0).all()
     assert (ok["wall_min"] <= ok["wall"]).all() and (ok["wall"] <= ok["wall_max"]).all() and (ok["repeats"] >= 1).all()
+    # the points that decide the wall-time table are timed DECIDING_REPEATS times, the others `repeat` times
+    table = work_precision.cheapest(frame, cost="wall")
+    deciding = {label for labels in table["points"] for label in labels} | set(table["runner_up"])
+    assert deciding >= {"reference DOP853, rtol = 1e-06", "mujoco:RK4, dt = 0.005 s"}
+    assert (ok["repeats"] == [work_precision.DECIDING_REPEATS if work_precision.point_label(r) in deciding else 2
+                              for _, r in ok.iterrows()]).all()
     # The reference solution is named and its accuracy verified (tolerance 1e-9 here).
     assert frame.attrs["reference"]["accuracy"] < 1e-6
     for cost in work_precision.COSTS:
@@ -92,6 +100,7 @@ def test_cheapest_picks_the_cheapest_point_that_reaches_each_level():
     rows = [("a", "RK4", 1e-3, 0.10, 400), ("b", "DOP853", 5e-3, 0.05, 300), ("b", "DOP853", 1e-5, 0.20, 900),
             ("c", "Euler", 1e-9, 0.01, 50)]  # c: within 10x of the reference's accuracy, unresolved
     frame = pd.DataFrame([{"source": s, "method": m, "setting": "dt", "value": 0.1, "error": e, "wall": w,
+                           "wall_min": 0.9 * w, "wall_max": 1.1 * w, "wall_iqr": 0.1 * w,
                            "evaluations": n, "status": "ok", "resolved": e > 1e-8} for s, m, e, w, n in rows]
                          + [{"source": "d", "method": "RK45", "setting": "rtol", "value": 1.0, "error": np.nan,
                              "wall": np.nan, "evaluations": np.nan, "status": "unstable", "resolved": False}])
@@ -106,3 +115,64 @@ def test_cheapest_picks_the_cheapest_point_that_reaches_each_level():
     assert table.loc[1e-4, "evaluations"] == 900 and table.loc[1e-4, "runner_up"] == ""
     assert table.loc[1e-8, "cheapest"] == "none reached"
     assert table.loc[1e-10, "cheapest"].startswith("not resolvable")
+
+
+def synthetic(points):
+    """A resolved sweep frame from (source, method, error, evaluations, wall runs)."""
+    return pd.DataFrame([{"source": s, "method": m, "setting": "rtol", "value": 1e-6, "error": e, "evaluations": n,
+                          "wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w),
+                          "wall_iqr": float(np.subtract(*np.percentile(w, [75, 25]))), "repeats": len(w),
+                          "status": "ok", "resolved": True} for s, m, e, n, w in points])
+
+
+def test_cheapest_in_wall_time_only_beyond_the_spread():
+    # medians 1.1 and 1.4, interquartile ranges 0.1 each: a alone, b the runner-up; a's one stray run (2.0,
+    # slower than all of b's) moves neither its median nor its spread
+    apart = synthetic([("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 1.15, 2.0]),
+                       ("b", "DOP853", 1e-3, 200, [1.3, 1.35, 1.4, 1.45, 1.5])])
+    table = work_precision.cheapest(apart, cost="wall", levels=(1e-2,)).iloc[0]
+    assert table["cheapest"] == "a LSODA, rtol = 1e-06" and table["points"] == ("a LSODA, rtol = 1e-06",)
+    assert table["runner_up"] == "b DOP853, rtol = 1e-06" and table["wall"] == 1.1
+    # medians 1.25 and 1.1, closer than the spreads' sum 0.2: a tie, both named in the sweep's order; c is
+    # beaten beyond the spread: the runner-up
+    close = synthetic([("b", "DOP853", 1e-3, 200, [1.15, 1.2, 1.25, 1.3, 1.35]),
+                       ("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 1.15, 1.2]), ("c", "RK45", 1e-3, 900, [2.0, 2.1, 2.2])])
+    table = work_precision.cheapest(close, cost="wall", levels=(1e-2,)).iloc[0]
+    assert table["cheapest"] == "b DOP853, rtol = 1e-06 or a LSODA, rtol = 1e-06 (tie within spread)"
+    assert table["methods"] == ("DOP853", "LSODA") and table["runner_up"] == "c RK45, rtol = 1e-06"
+    assert table["wall"] == 1.1  # the cheapest's
+    # a single run has no spread: two of them tie only when equal
+    single = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("b", "DOP853", 1e-3, 300, [1.01])])
+    assert work_precision.cheapest(single, cost="wall", levels=(1e-2,)).iloc[0]["points"] == ("a LSODA, rtol = 1e-06",)
+    # a method stands by its point of fewest evaluations that reaches the level, whatever its wall time
+    two_points = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("a", "LSODA", 1e-4, 400, [0.9])])
+    assert work_precision.cheapest(two_points, cost="wall", levels=(1e-2,)).iloc[0]["wall"] == 1.0
+    # evaluations are counts: equal counts tie, whatever the wall times
+    table = work_precision.cheapest(single, levels=(1e-2,)).iloc[0]
+    assert table["cheapest"] == "a LSODA, rtol = 1e-06 or b DOP853, rtol = 1e-06 (tie: equal counts)"
+    assert table["runner_up"] == "" and table["evaluations"] == 300
+    # one method and setting from several sources: named once
+    same = synthetic([("reference", "LSODA", 1e-3, 300, [1.0]), ("pinocchio", "LSODA", 1e-3, 300, [1.2])])
+    assert work_precision.cheapest(same, levels=(1e-2,)).iloc[0]["cheapest"] == \
+        "reference and pinocchio LSODA, rtol = 1e-06 (tie: equal counts)"
+
+
+def test_in_short_counts_the_levels_each_method_wins():
+    # evaluations: 1e-2 DOP853, 1e-4 LSODA in one, a tie at 1e-2 in two; wall time: LSODA at all three
+    one = synthetic([("a", "LSODA", 1e-5, 300, [1.0]), ("b", "DOP853", 1e-3, 200, [2.0])])
+    two = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("b", "DOP853", 1e-3, 300, [2.0])])
+    sweeps = {"one": one, "two": two, "none": pd.DataFrame(columns=work_precision.COLUMNS)}
+    assert work_precision.in_short(sweeps) == (
+        "counted in right-hand-side evaluations, the cheapest method at each of the 3 accuracy levels (1e-02 to 1e-10)"
+        " that the 2 integrated cases reach is an adaptive one: DOP853 at 2 of them and LSODA at 2; 1 level is a tie"
+        " between methods (tie: equal counts), counted for each")
+    assert work_precision.in_short(sweeps, cost="wall").endswith("reach is an adaptive one: LSODA at 3 of them")
+
+
+def test_readme_quotes_the_sentence_of_the_committed_sweeps():
+    """README's "Speed against accuracy, in short" is the index's sentence, from the committed sweeps' rows."""
+    data = Path(__file__).parents[1] / "reports" / "data"
+    sweeps = {path.name.removesuffix("_work_precision.csv"): work_precision.read_csv(path)
+              for path in sorted(data.glob("*_work_precision.csv"))}
+    readme = " ".join((Path(__file__).parents[1] / "README.md").read_text().split())
+    assert f"Speed against accuracy, in short: {work_precision.in_short(sweeps)}." in readme
