@@ -45,13 +45,19 @@ the loop.  The numerical Newton-Euler references (chains of frames, linear
 solves) take one state at a time: vectorising them would mean writing their equations twice.
 """
 
+import contextlib
+import os
+import shutil
 import statistics
+import tempfile
 import time
 
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
+from dyncheck import cache
+from dyncheck.checks import run_case
 from dyncheck.simulate import simulate
 from engines.bench import MujocoLoops, pinocchio_rhs, pinocchio_steps
 
@@ -87,16 +93,66 @@ def bench_case(case, steps=2000, repeat=5):
     rows = _mujoco_rows(case, steps, repeat) + _pinocchio_rows(case, repeat) + _equation_rows(case, repeat)
     frame = pd.DataFrame(rows, columns=["source", "what", "count", "median s", "against"])
     frame.insert(0, "case", case.name)
+    return _table(frame)
+
+
+def _table(frame, bound=BOUND):
+    """The rows with their rate, their ratio to the row they are measured against, and `bound` on it (None: the
+    ratio is a measurement, not held to a bound)."""
     frame["per second"] = frame["count"] / frame["median s"]
-    cost = {(s, w): t / n for s, w, n, t in zip(frame["source"], frame["what"], frame["count"], frame["median s"])}
-    bare = set(zip(frame["source"], frame["against"]))
-    frame["ratio to bare"] = [cost[s, w] / cost[s, a] if a else (1.0 if (s, w) in bare else np.nan)
-                              for s, w, a in zip(frame["source"], frame["what"], frame["against"])]
-    compared = frame["against"] != ""
-    frame["bound"] = np.where(compared, f"{BOUND:g}", "")
-    frame["mark"] = np.where(compared & (frame["ratio to bare"] > BOUND), "EXCEEDED", "")
+    keys = list(zip(frame["case"], frame["source"]))
+    cost = {(c, s, w): t / n for (c, s), w, n, t in zip(keys, frame["what"], frame["count"], frame["median s"])}
+    bare = {(c, s, a) for (c, s), a in zip(keys, frame["against"])}
+    frame["ratio to bare"] = [cost[c, s, w] / cost[c, s, a] if a else (1.0 if (c, s, w) in bare else np.nan)
+                              for (c, s), w, a in zip(keys, frame["what"], frame["against"])]
+    compared = (frame["against"] != "") & (bound is not None)
+    frame["bound"] = np.where(compared, f"{bound:g}" if bound else "", "")
+    frame["mark"] = np.where(compared & (frame["ratio to bare"] > (bound or np.inf)), "EXCEEDED", "")
     return frame[["case", "source", "what", "count", "median s", "per second", "ratio to bare", "bound", "mark",
                   "against"]]
+
+
+def bench_runs(cases, run_all, repeat=3):
+    """Whole runs side by side (`dyncheck bench --runs`), in the table of bench_case: each case's checks
+    (`run_case`, without the findings' localisation, as `dyncheck run` runs them) with an empty cache of tight
+    solutions against with the cache that run left; and all the cases one after another in this process
+    against `run_all` (the command line's run_cases), one process per core.  Minutes: a whole run per row
+    and repeat."""
+    rows = []
+    with tempfile.TemporaryDirectory() as folder, _cache_in(folder):
+        for case in cases:
+            def cold():
+                shutil.rmtree(cache.folder(), ignore_errors=True)
+                return _timed(lambda: run_case(case, localise=False))()
+            computed = "run_case, tight solutions computed (empty cache)"
+            rows += [(case.name,) + r for r in _measure("harness", [
+                (computed, 1, cold, ""),
+                ("run_case, tight solutions from the cache", 1, _timed(lambda: run_case(case, localise=False)),
+                 computed)], repeat)]
+    cache.enabled = False
+    try:
+        one = f"{len(cases)} cases in one process"
+        rows += [("all",) + r for r in _measure("harness", [
+            (one, len(cases), _timed(lambda: run_all(cases, False, workers=1)), ""),
+            (f"{len(cases)} cases, one process per core ({os.cpu_count()})", len(cases),
+             _timed(lambda: run_all(cases, False)), one)], repeat)]
+    finally:
+        cache.enabled = True
+    return _table(pd.DataFrame(rows, columns=["case", "source", "what", "count", "median s", "against"]), bound=None)
+
+
+@contextlib.contextmanager
+def _cache_in(folder):
+    """The cache of tight solutions in `folder` meanwhile."""
+    before = os.environ.get("DYNCHECK_CACHE")
+    os.environ["DYNCHECK_CACHE"] = folder
+    try:
+        yield
+    finally:
+        if before is None:
+            del os.environ["DYNCHECK_CACHE"]
+        else:
+            os.environ["DYNCHECK_CACHE"] = before
 
 
 def _mujoco_rows(case, steps, repeat):

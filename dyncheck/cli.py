@@ -57,6 +57,8 @@ def main(argv=None):
                      help="the folder of case folders to make it in (default: the current folder)")
     bench.add_argument("cases", nargs="*", metavar="CASE", help="cases to measure (default: all)")
     bench.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help=argparse.SUPPRESS)
+    bench.add_argument("--runs", action="store_true",
+                       help="also whole runs: the tight solutions' cache, and the cases in parallel (minutes)")
     listing.add_argument("cases", nargs="*", metavar="CASE", help="cases to list (default: all)")
     for sub in (run, report):
         sub.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
@@ -107,8 +109,9 @@ def main(argv=None):
     except ValueError as error:
         return error_exit(error)
     if args.command == "bench":
-        from dyncheck.bench import bench_case
-        table = pd.concat([bench_case(case) for case in cases], ignore_index=True)
+        from dyncheck.bench import bench_case, bench_runs
+        table = pd.concat([bench_case(case) for case in cases] + ([bench_runs(cases, run_cases)] if args.runs else []),
+                          ignore_index=True)
         table["ratio to bare"] = table["ratio to bare"].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")  # no bare loop
         print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
         return 0
@@ -152,13 +155,13 @@ def error_exit(error):
     return 2
 
 
-def run_cases(cases, localise=True):
+def run_cases(cases, localise=True, workers=None):
     """The results of the cases, and the name of the case that Ctrl-C stopped (None if none did).
     The cases run in parallel, one process per core (forked: each inherits its Case, whose engine models
     cannot be pickled); the results come back in the cases' order, and on Ctrl-C the ones before the
     first unfinished case are kept."""
     global _INHERITED
-    workers = min(len(cases), os.cpu_count() or 1)
+    workers = min(len(cases), workers or os.cpu_count() or 1)
     results = []
     bar = tqdm(total=len(cases), desc="checks", unit="case", disable=None, leave=False)
     try:
