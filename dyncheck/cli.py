@@ -23,6 +23,7 @@ from tqdm import tqdm
 from dyncheck import cache, ci
 from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
 from dyncheck.checks import run_case
+from dyncheck.simulate import fastest_frequency
 from dyncheck.messages import suggest
 from dyncheck.results import format_rows, heading, load_results, save_results, to_json
 
@@ -156,46 +157,51 @@ def error_exit(error):
 
 
 def run_cases(cases, localise=True, workers=None):
-    """The results of the cases, and the name of the case that Ctrl-C stopped (None if none did).
-    The cases run in parallel, one process per core (forked: each inherits its Case, whose engine models
-    cannot be pickled); the results come back in the cases' order, and on Ctrl-C the ones before the
-    first unfinished case are kept."""
+    """The results of the cases, in their order, and the name of the first case that did not finish because of
+    Ctrl-C (None if all did).  The cases run in parallel, one process per core (forked: each inherits its Case,
+    whose engine models cannot be pickled), the longest first (expected_cost) so that no long case starts last."""
     global _INHERITED
     workers = min(len(cases), workers or os.cpu_count() or 1)
-    results = []
+    finished = {}  # index -> result
     bar = tqdm(total=len(cases), desc="checks", unit="case", disable=None, leave=False)
     try:
         if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
-            for case in cases:
-                results.append(run_case(case, localise))
+            for index, case in enumerate(cases):
+                finished[index] = run_case(case, localise)
                 bar.update()
-            return results, None
-        _INHERITED = (cases, localise)
-        # The workers ignore Ctrl-C: the terminal sends it to them too, and this process ends them.
-        with multiprocessing.get_context("fork").Pool(workers, signal.signal, (signal.SIGINT, signal.SIG_IGN)) as pool:
-            for result in pool.imap(_run_inherited, range(len(cases))):
-                if result is None:  # the case's run_case was interrupted
-                    raise KeyboardInterrupt
-                results.append(result)
-                bar.update()
+        else:
+            _INHERITED = (cases, localise)
+            longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
+            # The workers ignore Ctrl-C: the terminal sends it to them too, and this process ends them.
+            with multiprocessing.get_context("fork").Pool(workers, signal.signal, (signal.SIGINT, signal.SIG_IGN)) as pool:
+                for index, result in pool.imap_unordered(_run_inherited, longest_first):
+                    if result is not None:  # None: the case's run_case was interrupted
+                        finished[index] = result
+                    bar.update()
     except KeyboardInterrupt:
-        return results, cases[len(results)].name
+        pass
     finally:
         bar.close()
         _INHERITED = None
-    return results, None
+    unfinished = [case.name for index, case in enumerate(cases) if index not in finished]
+    return [finished[index] for index in sorted(finished)], (unfinished[0] if unfinished else None)
+
+
+def expected_cost(case):
+    """A case's checks' cost, roughly: how many radians of its fastest motion it integrates (omega t_end)."""
+    return (fastest_frequency(case) or 0.0) * case.initial[2]
 
 
 _INHERITED = None  # (cases, localise) of run_cases, for its forked workers
 
 
 def _run_inherited(index):
-    """A worker's case: its result, or None if run_case was interrupted."""
+    """A worker's case: its index and result, or None if run_case was interrupted."""
     cases, localise = _INHERITED
     try:
-        return run_case(cases[index], localise)
+        return index, run_case(cases[index], localise)
     except KeyboardInterrupt:
-        return None
+        return index, None
 
 
 def make_report(results, cases, out, no_studies, animations=True):

@@ -81,12 +81,14 @@ def test_bad_input_exits_2_with_a_message(argv, message, capsys):
     assert message in capsys.readouterr().err
 
 
-def test_overrides_reach_the_run(monkeypatch, results):
-    seen = []
-    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: seen.append(case) or results[case.name])
-    assert cli.main(["run", "--set", "g=3.5"]) == 0
-    assert {c.name for c in seen} == set(dyncheck.case_names())
-    assert all(c.params["g"] == 3.5 and c.overrides == {"g": 3.5} for c in seen)
+def test_overrides_reach_the_run(monkeypatch, results, tmp_path):
+    def run_case(case, localise=True):  # in a worker process: a case without the override fails the run there
+        assert case.params["g"] == 3.5 and case.overrides == {"g": 3.5}, case.name
+        return results[case.name]
+    monkeypatch.setattr(cli, "run_case", run_case)
+    path = tmp_path / "out.json"
+    assert cli.main(["run", "--set", "g=3.5", "--json", str(path)]) == 0
+    assert [c["case"] for c in json.loads(path.read_text())["cases"]] == dyncheck.case_names()
 
 
 def test_report_writes_pages_figures_and_index(canned, tmp_path):
