@@ -20,16 +20,18 @@ constant generalized forces) from the case's initial state:
   - where something does work: `drive_powers` over the states of a run (the work integral of a
     MuJoCo run needs the power at every step) against `drive_power` state by state.
 Pinocchio:
-  - "harness accelerations" at the pointwise check's states, against "pin.<engine> loop": the
-    engine step alone (`PinocchioModel.engine_dynamics`: the generalized forces, then ABA when nothing is
-    prescribed, else RNEA with the prescribed accelerations and, if anything is free, CRBA's free
-    block solved; the work any Pinocchio user does for the scene) on the same states already in
-    Pinocchio's configuration.  This bare loop does less than the harness must: the question is asked
-    in the book's coordinates, and its configuration costs about 1 us (cos and sin of each angle, the
-    prescribed motions at t, one array of Python floats), the answer's order and the remembered
-    state about 1 us more, against an engine step of 1-3 us on these few-joint scenes (ABA), so the
-    ratio stays above BOUND where the step is that cheap; the top's Euler angles cost ~10 us more (its
-    quaternion and angular velocity, and the Euler-angle accelerations back).
+  - "harness accelerations" at the pointwise check's states, as the pointwise and random-parameter
+    checks ask for them (`PinocchioModel.accelerations_many`, all the states in one call), against
+    "pin.<engine> loop": the engine step alone (`PinocchioModel.engine_dynamics`: the generalized forces,
+    then ABA when nothing is prescribed, else RNEA with the prescribed accelerations and, if anything is
+    free, CRBA's free block solved; the work any Pinocchio user does for the scene) on the same states
+    already in Pinocchio's configuration.  The harness does more: the question is asked in the book's
+    coordinates.  Their conversions (cos and sin of each angle, the prescribed motions at t, the top's
+    quaternions and angular velocities, its Euler-angle accelerations back) are made in numpy over all
+    the states, a few tenths of a microsecond each, against an engine step of 1.5-3 us on these
+    few-joint scenes (ABA); the engine step goes state by state, as in the bare loop, and its answers
+    are gathered into one array.  State by state, `accelerations` costs 1.5-4 times the bare loop, the
+    top's ~18 times (its conversions on one state's Python floats, ~10 us).
   - "DOP853, harness simulate": `simulate(pinocchio, "DOP853")`, whose right-hand side asks the
     harness for the accelerations and the drive power (one engine step per state, remembered),
     against "DOP853, bare pin.<engine> rhs": `solve_ivp` with the same method, tolerances, span
@@ -192,11 +194,11 @@ def _pinocchio_rows(case, repeat):
     pn = case.model("pinocchio")
     sample = case.sample_states() * 10
     engine_states = [pn.engine_state(t, q, v) for t, q, v in sample]
+    columns = [np.array(column) for column in zip(*sample)]  # t (N,), q and v (N, n)
     bare = f"pin.{pn.algorithm} loop"
     rows = _measure("pinocchio", [
         (bare, len(sample), _timed(lambda: pinocchio_steps(pn, engine_states)), ""),
-        ("harness accelerations", len(sample), _timed(lambda: [pn.accelerations(t, q, v) for t, q, v in sample]),
-         bare)], repeat)
+        ("harness accelerations", len(sample), _timed(lambda: pn.accelerations_many(*columns)), bare)], repeat)
 
     q0, v0, t_end = case.initial
     span, setting = min(SPAN, t_end), case.integration

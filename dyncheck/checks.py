@@ -44,8 +44,23 @@ def evaluate(case, source, states):
                                       f"{error}") from None
         return out
 
+    def accelerations():
+        """All the states' in one call where the model has `accelerations_many` (the same numbers); state by state
+        where it has not, or where that call raises or gives a number that is not finite, so that `each` names
+        the state."""
+        many = getattr(model, "accelerations_many", None)
+        if many is not None:
+            try:
+                with np.errstate(all="ignore"):
+                    acc = np.asarray(many(*[np.array(column) for column in zip(*states)]), dtype=float)
+                if acc.shape == (len(states), len(case.coords)) and np.all(np.isfinite(acc)):
+                    return acc
+            except Exception:  # named below, state by state
+                pass
+        return np.array(each("accelerations", model.accelerations), dtype=float)
+
     try:
-        acc = np.array(each("accelerations", model.accelerations), dtype=float)
+        acc = accelerations()
     except (TypeError, ValueError):  # vectors of different lengths, or not numbers
         acc = np.empty(0)
     if acc.shape != (len(states), len(case.coords)):  # one number per coordinate at every state

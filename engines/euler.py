@@ -52,8 +52,13 @@ def angular_velocity(angles, rates):
 
 
 def euler_rates(angles, w):
-    """angles' = J(angles)^-1 w: the rows of J^-1 multiplied out."""
-    st, ct, ss, cs = _trig(angles)
+    """angles' = J(angles)^-1 w."""
+    return _inverse(_trig(angles), w)
+
+
+def _inverse(trig, w):
+    """J^-1 w, J's sines and cosines `trig` (`_trig`): the rows of J^-1 multiplied out."""
+    st, ct, ss, cs = trig
     w0, w1, w2 = _components(w)
     dphi = (ss * w0 + cs * w1) / st
     return _stack(dphi, cs * w0 - ss * w1, w2 - ct * dphi)
@@ -61,7 +66,12 @@ def euler_rates(angles, w):
 
 def bias(angles, rates):
     """J' angles': the part of w' that the Euler-angle accelerations do not give."""
-    st, ct, ss, cs = _trig(angles)
+    return _bias(_trig(angles), rates)
+
+
+def _bias(trig, rates):
+    """`bias`, J's sines and cosines `trig` (`_trig`)."""
+    st, ct, ss, cs = trig
     dphi, dtheta, dspin = _components(rates)
     return _stack(-ss * dspin * dtheta + (cs * dspin * st + ss * ct * dtheta) * dphi,
                   -cs * dspin * dtheta + (-ss * dspin * st + cs * ct * dtheta) * dphi,
@@ -69,8 +79,10 @@ def bias(angles, rates):
 
 
 def euler_accelerations(angles, angle_rates, angular_acc):
-    """Euler-angle accelerations from the body's local angular acceleration: J angles'' = w' - J' angles'."""
-    return euler_rates(angles, np.asarray(angular_acc) - bias(angles, angle_rates))
+    """Euler-angle accelerations from the body's local angular acceleration: J angles'' = w' - J' angles'
+    (the sines and cosines computed once for both)."""
+    trig = _trig(angles)
+    return _inverse(trig, np.asarray(angular_acc) - _bias(trig, angle_rates))
 
 
 def angles(quaternions, start):

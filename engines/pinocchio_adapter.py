@@ -270,6 +270,31 @@ class PinocchioModel:
         state = np.array(state)
         return state[:self._nq], state[self._nq:]
 
+    def engine_states(self, t, q, v):
+        """`engine_state` of many states, t (N,), q and v (N, n): Pinocchio's configurations (N, nq) and velocities
+        (N, nv), the same numbers, the conversions made in numpy over all the states at once."""
+        t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
+        if self.loops.loops:  # each closing starts from the last (its branch): state after state
+            states = [self._engine_state(*state) for state in zip(t.tolist(), q.tolist(), v.tolist())]
+            return np.array([c for c, _ in states]), np.array([w for _, w in states])
+        config, velocity = np.tile(self.neutral, (len(t), 1)), np.zeros((len(t), self._nv))
+        # t**2 by libm's pow, as Python's (`_engine_state`): numpy's t**2 of an array is t * t, which rounds
+        # otherwise at times
+        squared = np.power(t, np.full_like(t, 2.0)) if self._driven_joints else None
+        one_dof = [(nq, iq, iv, q[:, i], v[:, i]) for nq, iq, iv, i in self._scalars] + [
+            (nq, iq, iv, q0 + rate * t + 0.5 * acc * squared, rate + acc * t)
+            for (nq, iq, iv), (q0, rate, acc) in self._driven_joints]
+        for nq, iq, iv, position, rate in one_dof:
+            if nq == 2:  # continuous joint: (cos, sin)
+                config[:, iq], config[:, iq + 1] = np.cos(position), np.sin(position)
+            else:
+                config[:, iq] = position
+            velocity[:, iv] = rate
+        for iq, iv, idx in self._balls:  # spherical: quaternion (x, y, z, w), the body's angular velocity
+            config[:, iq:iq + 4] = euler.quaternion(q[:, idx])[:, [1, 2, 3, 0]]
+            velocity[:, iv:iv + 3] = euler.angular_velocity(q[:, idx], v[:, idx])
+        return config, velocity
+
     def _write_dof(self, state, nq, iq, iv, position, rate):
         """A one-dof joint's position and rate into `_engine_state`'s list."""
         if nq == 2:  # continuous joint: (cos, sin)
@@ -319,15 +344,33 @@ class PinocchioModel:
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        acc = self._dynamics(t, q, v)[2]
+        return self._book_accelerations(q, v, self._dynamics(t, q, v)[2])
+
+    def accelerations_many(self, t, q, v):
+        """`accelerations` at many states, t (N,), q and v (N, n): an array (N, n), the same numbers.  The book's
+        coordinates become Pinocchio's state (`engine_states`), and its accelerations the book's, in numpy over all
+        the states; the engine step alone goes state by state."""
+        t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
+        configs, velocities = self.engine_states(t, q, v)
+        # the laws of the state given t as a Python float, as by `_dynamics`
+        applied = ([self._applied_at(*state) for state in zip(t.tolist(), q, v)] if self.varying
+                   else [self.applied] * len(t))
+        # the answers' bytes joined: a quarter of numpy's cost of concatenating as many small arrays
+        acc = np.frombuffer(b"".join([dofs for dofs, _ in map(self.engine_dynamics, configs, velocities, applied)]))
+        return self._book_accelerations(q, v, acc.reshape(len(t), self._nv))
+
+    def _book_accelerations(self, q, v, acc):
+        """The accelerations of the case's coordinates from Pinocchio's, acc (nv,) at one state (q, v) or (N, nv)
+        at many, q and v (N, n)."""
         if not self._balls:  # the case's coordinates are one-dof joints' positions
-            return acc[self._coord_dofs]
-        out = np.zeros(len(self.coords))
+            return acc[..., self._coord_dofs]
+        q, v = np.asarray(q), np.asarray(v)
+        out = np.zeros(q.shape)
         for kind, (_, _, iv), idx in self._coord_joints:
             if kind == "scalar":
-                out[idx[0]] = acc[iv]
+                out[..., idx[0]] = acc[..., iv]
             else:
-                out[idx] = euler.euler_accelerations(np.asarray(q)[idx], np.asarray(v)[idx], acc[iv:iv + 3])
+                out[..., idx] = euler.euler_accelerations(q[..., idx], v[..., idx], acc[..., iv:iv + 3])
         return out
 
     def reactions(self, t, q, v):

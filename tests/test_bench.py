@@ -84,3 +84,6 @@ def test_the_bench_table_names_each_rows_bare_loop():
     for source, against in zip(compared["source"], compared["against"]):
         bare = table[(table["source"] == source) & (table["what"] == against)]
         assert len(bare) == 1 and (bare["against"].iloc[0] or bare["ratio to bare"].iloc[0] == 1.0)
+    # the harness's accelerations (all the states in one call) against the engine step on as many states
+    harness, loop = (table[table["what"] == what] for what in ("harness accelerations", "pin.rnea loop"))
+    assert list(harness["against"]) == ["pin.rnea loop"] and list(harness["count"]) == list(loop["count"])

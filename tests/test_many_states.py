@@ -1,0 +1,57 @@
+"""Pinocchio's accelerations of many states in one call are its accelerations state by state, to the bit; the checks
+that ask for many states name the state where one fails."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dyncheck
+from dyncheck.checks import evaluate
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+
+
+def columns(states):
+    """t (N,), q and v (N, n) of a list of (t, q, v)."""
+    return [np.array(column) for column in zip(*states)]
+
+
+def random_states(case, count, seed):
+    """`count` random states within the span of the case's sample states (its [sample] ranges: the top's nutation
+    away from 0 and pi, where its Euler angles are singular)."""
+    rng = np.random.default_rng(seed)
+    return [rng.uniform(x.min(axis=0), x.max(axis=0), (count,) + x.shape[1:]) for x in columns(case.sample_states())]
+
+
+def assert_many_is_each(case, t, q, v):
+    # Fresh models both: a scene with loops closes each state from the last closing.  Bit for bit: the conversions
+    # in numpy are the same operations on the same numbers as on one state's Python floats (numpy's sin and cos
+    # are libm's, as math's; t**2 is libm's pow on both sides).
+    one_state = case.with_params().model("pinocchio")
+    each = np.array([one_state.accelerations(*state) for state in zip(t, q, v)]).reshape(len(t), len(case.coords))
+    many = case.with_params().model("pinocchio").accelerations_many(t, q, v)
+    np.testing.assert_array_equal(many, each)
+
+
+@pytest.mark.parametrize("name", dyncheck.case_names())
+def test_pinocchio_accelerations_of_many_states_are_those_of_each(name):
+    case = dyncheck.load_case(name)
+    assert_many_is_each(case, *columns(case.sample_states()))
+    assert_many_is_each(case, *random_states(case, 3000, seed=17))
+
+
+@pytest.mark.parametrize("name", ["slider_crank", "forced_cart_pendulum"])  # a closed loop; applied laws of the state
+def test_pinocchio_accelerations_of_many_states_in_the_examples(name):
+    case = dyncheck.load_case(name, EXAMPLES)
+    assert_many_is_each(case, *columns(case.sample_states()))
+
+
+def test_evaluate_names_the_state_where_the_many_state_call_fails(monkeypatch):
+    case = dyncheck.load_case("double_pendulum")
+    model, states = case.model("pinocchio"), case.sample_states()[:5]
+    one_state = model.accelerations
+    monkeypatch.setattr(model, "accelerations_many", lambda t, q, v: np.full((len(t), 2), np.nan))
+    monkeypatch.setattr(model, "accelerations", lambda t, q, v: 1 / 0 if t == states[3][0] else one_state(t, q, v))
+    with pytest.raises(ArithmeticError, match="pinocchio: accelerations at random state 3: ZeroDivisionError"):
+        evaluate(case, "pinocchio", states)
