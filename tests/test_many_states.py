@@ -1,5 +1,6 @@
-"""Pinocchio's accelerations of many states in one call are its accelerations state by state, to the bit; the checks
-that ask for many states name the state where one fails."""
+"""A model's quantities of many states in one call (`*_many`: Pinocchio's accelerations, the 1.8.x references' and
+MuJoCo's reactions and energy, MuJoCo's paths) are its quantities state by state, to the bit; the checks that ask
+for many states name the state where one fails."""
 
 from pathlib import Path
 
@@ -39,6 +40,36 @@ def test_pinocchio_accelerations_of_many_states_are_those_of_each(name):
     case = dyncheck.load_case(name)
     assert_many_is_each(case, *columns(case.sample_states()))
     assert_many_is_each(case, *random_states(case, 3000, seed=17))
+
+
+def one_by_one(model, quantity, t, q, v):
+    """model.<quantity> state by state, stacked as its many-state form gives them."""
+    values = [getattr(model, quantity)(*state) for state in zip(t, q, v)]
+    if isinstance(values[0], dict):
+        return {name: np.array([value[name] for value in values]) for name in values[0]}
+    return np.array(values)
+
+
+@pytest.mark.parametrize("name", dyncheck.case_names())
+@pytest.mark.parametrize("source", ["reference", "book", "mujoco"])
+def test_reactions_energy_and_paths_of_many_states_are_those_of_each(name, source):
+    case = dyncheck.load_case(name)
+    model = case.model(source)
+    t, q, v = columns(case.sample_states())
+    many = [quantity for quantity in ("reactions", "energy") if hasattr(model, quantity + "_many")]
+    for quantity in many:
+        expected, got = one_by_one(model, quantity, t, q, v), getattr(model, quantity + "_many")(t, q, v)
+        if isinstance(expected, dict):
+            assert got.keys() == expected.keys()
+            for key in expected:
+                np.testing.assert_array_equal(got[key], expected[key], err_msg=f"{quantity} {key}")
+        else:
+            np.testing.assert_array_equal(got, expected, err_msg=quantity)
+    if hasattr(model, "paths_many") and case.scene["paths"]:
+        np.testing.assert_array_equal(model.paths_many(t, q), np.array([model.points(*s)[0] for s in zip(t, q)]))
+    if source == "mujoco" or (source == "reference" and name in ("rotating_pendulum", "rotating_particle",
+                                                                    "spring_pendulum")):
+        assert "reactions" in many and "energy" in many  # the models that have them: not a test of nothing
 
 
 @pytest.mark.parametrize("name", ["slider_crank", "forced_cart_pendulum"])  # a closed loop; applied laws of the state
