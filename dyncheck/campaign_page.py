@@ -171,7 +171,7 @@ def timing(case, table, wall, workers, computed):
              f"**{60 * len(per_set) / per_set.sum():.1f} sets/min/core** (median {per_set.median() * 1e3:.0f} ms a set)"
              if per_set.sum() > 0 else "- no sets"]
     if computed and wall > 0:
-        lines.append(f"- this run: {computed} sets in {wall:.1f} s on {workers} workers: "
+        lines.append(f"- this run: {computed} sets in {wall:.1f} s on {workers} worker{'s' * (workers != 1)}: "
                      f"{60 * computed / wall:.1f} sets/min, {60 * computed / wall / workers:.1f} sets/min/core")
     return lines + [""]
 
