@@ -131,7 +131,7 @@ def bench_runs(cases, run_all, repeat=3):
                 (computed, 1, cold, ""),
                 ("run_case, tight solutions from the cache", 1, _timed(lambda: run_case(case, localise=False)),
                  computed)], repeat)]
-    cache.enabled = False
+    was, cache.enabled = cache.enabled, False
     try:
         one = f"{len(cases)} cases in one process"
         rows += [("all",) + r for r in _measure("harness", [
@@ -139,7 +139,7 @@ def bench_runs(cases, run_all, repeat=3):
             (f"{len(cases)} cases, one process per core ({os.cpu_count()})", len(cases),
              _timed(lambda: run_all(cases, False)), one)], repeat)]
     finally:
-        cache.enabled = True
+        cache.enabled = was
     return _table(pd.DataFrame(rows, columns=["case", "source", "what", "count", "median s", "against"]), bound=None)
 
 

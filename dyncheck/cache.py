@@ -5,7 +5,7 @@ An entry's key is a hash of everything the solution depends on: the sources of d
 engines/, the versions of Python, numpy, scipy, pandas, MuJoCo and Pinocchio and the machine's
 architecture (`code_version`); every file of the case's folder and its parameters' values; and the
 simulate call (source, initial state, span, method and options).  A change in any of them makes a new
-key, so a stale entry is never read; it is deleted with its code version (PRUNE_AFTER).
+key, so a stale entry is never read; it is deleted with its code version (KEPT_VERSIONS).
 
 The folder: $DYNCHECK_CACHE, else $XDG_CACHE_HOME/dyncheck, else ~/.cache/dyncheck.  `--no-cache`
 (`enabled = False`) computes everything and neither reads nor writes it.

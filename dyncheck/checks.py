@@ -16,8 +16,8 @@ from dyncheck.expressions import namespace, of_parameters
 from dyncheck.localise import localise, values_at
 from dyncheck.messages import suggest
 from dyncheck.results import OWN_WORDS, CaseResult, Finding, Outcome, Pair, Status, no_number, row
-from dyncheck.simulate import (ERROR_EXPONENT, Escape, Unstable, energy_residual, fastest_frequency, simulate,
-                               state_columns)
+from dyncheck.simulate import (ERROR_EXPONENT, Escape, Unstable, at_many_states, energy_residual, fastest_frequency,
+                               simulate, state_columns)
 from dyncheck.stability.long_runs import agreement_horizon
 from dyncheck.work_precision import convergence
 
@@ -45,18 +45,11 @@ def evaluate(case, source, states):
         return out
 
     def accelerations():
-        """All the states' in one call where the model has `accelerations_many` (the same numbers); state by state
-        where it has not, or where that call raises or gives a number that is not finite, so that `each` names
-        the state."""
-        many = getattr(model, "accelerations_many", None)
-        if many is not None:
-            try:
-                with np.errstate(all="ignore"):
-                    acc = np.asarray(many(*[np.array(column) for column in zip(*states)]), dtype=float)
-                if acc.shape == (len(states), len(case.coords)) and np.all(np.isfinite(acc)):
-                    return acc
-            except Exception:  # named below, state by state
-                pass
+        """All the states' in one call where the model has a many-state form (`at_many_states`), else state by
+        state, so that `each` names the state where one fails."""
+        acc = at_many_states(model, "accelerations", *[np.array(column) for column in zip(*states)])
+        if acc is not None and np.shape(acc) == (len(states), len(case.coords)):
+            return np.asarray(acc, dtype=float)
         return np.array(each("accelerations", model.accelerations), dtype=float)
 
     try:

@@ -226,6 +226,9 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
         y0, book = np.concatenate([q0, v0]), lambda y, start: (y[..., :n], y[..., n:])
     else:  # book(y, start): the book's coordinates and rates of states y, the angles continuous from `start`
         y0, book = native.state(q0, v0), native.book
+    # The book's coordinates of a solver state, for `bound` (a native state's angles within half a turn of q0's:
+    # bound no winding angle)
+    coordinates = lambda y: book(y[None, :-1], q0)[0][0]
     start = time.perf_counter()
     outputs, done = [], 0  # the states at grid[:done]
     with np.errstate(all="ignore"):
@@ -238,10 +241,8 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
                 raise Unstable(method, solver.t, steps, message)
             if not finite(solver.y):
                 raise Unstable(method, solver.t, steps, "state is not finite")
-            if bound is not None:  # a native state's angles taken within half a turn of q0's: bound no winding angle
-                coordinates = lambda y: book(y[None, :-1], q0)[0][0]
-                if abs(coordinates(solver.y)[bound[1]]) > bound[2]:
-                    _escape_within_step(solver, bound, method, steps, coordinates)
+            if bound is not None and abs(coordinates(solver.y)[bound[1]]) > bound[2]:
+                _escape_within_step(solver, bound, method, steps, coordinates)
             budget.check(solver.t, steps)
             reached = np.searchsorted(grid, solver.t, side="right")
             if reached > done:
@@ -395,15 +396,24 @@ def _frame(model, t, q, v, work, attrs):
 
 
 def _at_every_state(model, quantity, method, t, q, v):
-    """model.<quantity> at each state of a run: by the model's many-state form `<quantity>_many` where it has
-    one (the same numbers, in one call), else state by state; also state by state where the many-state form
-    raises or gives a number that is not finite, so that the failure is named at its time."""
-    many = getattr(model, quantity + "_many", None)
-    if many is not None:
-        try:
-            values = many(t, q, v)
-            if all(finite(x) for x in (values.values() if isinstance(values, dict) else [values])):
-                return values
-        except Exception:  # named below, state by state
-            pass
+    """model.<quantity> at each state of a run: in one call where the model has a many-state form
+    (`at_many_states`), else state by state, which names the time where one fails."""
+    values = at_many_states(model, quantity, t, q, v)
+    if values is not None:
+        return values
     return [_arithmetic(method, ti, None, getattr(model, quantity), ti, qi, vi) for ti, qi, vi in zip(t, q, v)]
+
+
+def at_many_states(model, quantity, t, q, v):
+    """model.<quantity>_many(t, q, v) (t of shape (N,), q and v (N, n)) where the model has it: the same numbers as
+    model.<quantity> state by state, in one call.  None where it has none, or where the call raises or gives a
+    number that is not finite: the caller then goes state by state, and names the state that fails."""
+    many = getattr(model, quantity + "_many", None)
+    if many is None:
+        return None
+    try:
+        with np.errstate(all="ignore"):
+            values = many(t, q, v)
+        return values if all(finite(x) for x in (values.values() if isinstance(values, dict) else [values])) else None
+    except Exception:  # named by the caller, state by state
+        return None
