@@ -3,7 +3,9 @@ changed, comes out the same bit for bit, so a run takes it from here when one be
 
 An entry's key is a hash of everything the solution depends on: the sources of dyncheck, reference/ and
 engines/, the versions of Python, numpy, scipy, pandas, MuJoCo and Pinocchio and the machine's
-architecture (`code_version`); every file of the case's folder and its parameters' values; and the
+architecture (`code_version`); the sources of every other module imported from outside the Python
+installation (`imported_code`: a derivation that a case names by module, or that imports a researcher's own
+library, from anywhere on the path); every file of the case's folder and its parameters' values; and the
 simulate call (source, initial state, span, method and options).  A change in any of them makes a new
 key, so a stale entry is never read; it is deleted with its code version (KEPT_VERSIONS).
 
@@ -17,6 +19,7 @@ import os
 import pickle
 import platform
 import sys
+import sysconfig
 import tempfile
 from importlib.metadata import version
 from pathlib import Path
@@ -53,6 +56,40 @@ def code_version():
     return digest.hexdigest()[:16]
 
 
+def imported_code():
+    """A hash of the sources of the modules imported from outside the Python installation (its standard library
+    and site-packages) and CODE, read as the key is made: a case may name its derivation by module, and a
+    derivation may import code of its own, from any folder on the path."""
+    digest = hashlib.sha256()
+    for path in sorted(filter(None, map(_outside, {getattr(m, "__file__", None) for m in list(sys.modules.values())}))):
+        stat = os.stat(path)
+        digest.update(path.encode() + b"\0" + _source_digest(path, stat.st_mtime_ns, stat.st_size) + b"\0")
+    return digest.hexdigest()
+
+
+@functools.cache
+def _outside(file):
+    """The real path of a module's source file when it lies outside the installation and CODE, else None."""
+    if not file or not file.endswith(".py"):
+        return None
+    path = os.path.realpath(file)
+    return None if path.startswith(_known_roots()) else path
+
+
+@functools.cache
+def _known_roots():
+    root = Path(sys.modules["dyncheck"].__file__).parent.parent
+    roots = [sysconfig.get_path(kind) for kind in ("stdlib", "platstdlib", "purelib", "platlib")]
+    return tuple(os.path.join(os.path.realpath(r), "") for r in roots + [str(root / package) for package in CODE])
+
+
+@functools.cache
+def _source_digest(path, mtime_ns, size):
+    """A file's hash, read again when it changes (its time or size: the arguments key the memo)."""
+    with open(path, "rb") as file:
+        return hashlib.sha256(file.read()).digest()
+
+
 def case_version(case):
     """A hash of every file of the case's folder: case file, scenes, studies, a researcher's equations."""
     files = [p for p in case.folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts]
@@ -78,7 +115,7 @@ def solution(case, source, ic, t_end, method, **options):
     call = _exact((source, [np.asarray(x, dtype=float) for x in ic], float(t_end), method,
                    sorted((name, value) for name, value in options.items())))
     parameters = sorted((name, float(value).hex()) for name, value in case.params.items())
-    key = hashlib.sha256(repr((case_version(case), parameters, call)).encode()).hexdigest()
+    key = hashlib.sha256(repr((case_version(case), imported_code(), parameters, call)).encode()).hexdigest()
     path = folder() / code_version() / f"{key}.pkl"
     try:
         with open(path, "rb") as file:

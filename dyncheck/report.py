@@ -790,11 +790,11 @@ def write_timing_page(result, case, tmp):
         def wall_with_spread(label):
             r = labels.get(label)
             return "-" if r is None or pd.isna(r["wall"]) else \
-                f"{r['wall']:.3g} (IQR {r['wall_iqr']:.2g}; {r['wall_min']:.3g} to {r['wall_max']:.3g}; {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
+                f"{r['wall']:.3g} (spread {r['wall_spread']:.2g}; {r['wall_min']:.3g} to {r['wall_max']:.3g}; {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
         table = pd.DataFrame({"level": best["level"].map(lambda x: f"{x:.0e}"),
                               "fewest evaluations": work_precision.cheapest(frame)["cheapest"],
                               "least wall time": best["cheapest"],
-                              "wall [s]: median (IQR; least to most)": best["points"].map(
+                              "wall [s]: median (spread; least to most)": best["points"].map(
                                   lambda points: "; ".join(map(wall_with_spread, points)) or "-"),
                               "runner-up in wall time": best["runner_up"],
                               "runner-up wall [s]": best["runner_up"].map(wall_with_spread)})
@@ -1045,8 +1045,10 @@ def speed_table(tmp, cases):
 
 INDEX_TIMING = "index_timing.md"
 WALL_TIES = ("A method is the cheapest only when its median is below every other method's by more than the sum of"
-             " their interquartile ranges (a spread that one stray run does not move); else the methods that cannot be"
-             " told apart are named together (tie within spread).  The runs that decide it are"
+             f" their spreads and {work_precision.REPRODUCIBILITY:.0%} of its own median; else the methods that cannot be told apart are named together"
+             " (tie within spread).  A point's spread is twice the median absolute deviation of its runs, which two"
+             " stray runs of five do not inflate; the margin covers what a median moves between two regenerations of"
+             " the report (3.6% at the 90th percentile), for both medians of a comparison.  The runs that decide it are"
              f" {work_precision.DECIDING_REPEATS} of each point, taken in turns with the other points' runs.")
 
 

@@ -23,10 +23,10 @@ from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_M
 from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
 
 COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "wall_min", "wall_max",
-           "wall_iqr", "repeats", "evaluations", "steps", "status", "resolved", "detail"]
+           "wall_spread", "repeats", "evaluations", "steps", "status", "resolved", "detail"]
 # Wall times differ from run to run: the pages and their CSV leave them out (a report made twice is
 # the same), and the timing files (write_csv(..., timing=True), figure(..., cost="wall")) carry them.
-TIMING_COLUMNS = ["wall", "wall_min", "wall_max", "wall_iqr", "repeats"]
+TIMING_COLUMNS = ["wall", "wall_min", "wall_max", "wall_spread", "repeats"]
 COSTS = {"evaluations": "right-hand-side evaluations", "wall": "wall time [s], median (bars: fastest to slowest)"}
 COST_WORDS = {"evaluations": "right-hand-side evaluations", "wall": "wall time (medians of repeated runs)"}
 NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no free coordinate), so it "
@@ -48,11 +48,23 @@ KEYS = ("t_end", "output_step", "repeat", "repeat_under", "why", "solution", "sw
 CONVERGENCE_KEYS = ("omega", "omega_t", "omega_h", "why")
 OPTIONAL_KEYS = ("method_omega",)
 MAX_REPEAT = 100  # timed repetitions of a quick run (under repeat_under seconds in all)
-# Timed runs of the points that decide which method is cheapest in wall time (cheapest(): medians apart
-# by more than the sum of the interquartile ranges).  At 5 runs the quartiles are the 2nd and 4th
-# fastest, so one stray run on either side (a load spike on a shared machine: 2x to 10x measured) moves
-# neither median nor spread; the fastest-to-slowest range would, and named ties 13x apart.
+# Timed runs of the points that decide which method is cheapest in wall time (cheapest()).  A point's spread
+# is twice the median absolute deviation of its runs (the interquartile range of evenly scattered runs): at 5
+# runs it is the middle of the five distances from the median, so with two stray runs (load spikes on a shared
+# machine: 2x to 10x measured) the median is a clean run and the spread at most the clean runs' farthest from
+# it.  The interquartile range grows with the second stray: it once named a tie of two points 1.7x apart.
 DECIDING_REPEATS = 5
+# Beyond one sweep's spreads a median moves between regenerations: the deciding points' medians moved by 1.3%
+# (median), 3.6% (90th percentile) and 5.8% (95th) between two regenerations of the report at the same code,
+# and a ratio of two moves with both.  A method is ahead only when it is faster by more than this fraction of
+# its median beyond the spreads; closer, the two tie, as they would in another regeneration.
+REPRODUCIBILITY = 0.10
+
+
+def spread(walls):
+    """Twice the median absolute deviation of a point's timed runs (see DECIDING_REPEATS)."""
+    walls = np.asarray(walls, dtype=float)
+    return 2 * float(np.median(np.abs(walls - np.median(walls))))
 
 
 # -- the case file's [work_precision] table ---------------------------------------------------------
@@ -206,8 +218,8 @@ def sweep(case, progress=None):
 
     error: max over time and state coordinates of |x - x_ref| / max |x_ref| (per coordinate);
     energy_error: max |E(t) - E(0) - W(t)| / max(|E_ref|, |W_ref|), the energy drift of a closed scene
-    or the work-energy balance of a driven one (energy_error); wall, wall_min, wall_max, wall_iqr: median, least,
-    most and interquartile range of `repeats` timed runs (`repeat` when one run takes under `repeat_under` seconds in all, else one; DECIDING_REPEATS
+    or the work-energy balance of a driven one (energy_error); wall, wall_min, wall_max, wall_spread: median, least,
+    most and spread (spread()) of `repeats` timed runs (`repeat` when one run takes under `repeat_under` seconds in all, else one; DECIDING_REPEATS
     for a point that decides the wall-time table of cheapest()); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
     steps: fixed steps (NaN for scipy, which does not report them).  A run that blows up is a row
     with status "unstable", NaN errors and the time and step in `detail`.  resolved: whether the error
@@ -255,7 +267,7 @@ def sweep(case, progress=None):
 
     def frame():
         timing = pd.DataFrame([{"wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w),
-                                "wall_iqr": float(np.subtract(*np.percentile(w, [75, 25]))), "repeats": len(w)}
+                                "wall_spread": spread(w), "repeats": len(w)}
                                for w in walls.values()], index=list(walls), columns=TIMING_COLUMNS)
         out = pd.DataFrame(rows).join(timing).reindex(columns=COLUMNS)
         out["repeats"] = out["repeats"].fillna(0).astype(int)  # an unstable point's: none timed to the end
@@ -323,8 +335,8 @@ def cheapest(frame, cost="evaluations", levels=LEVELS):
     (of the cheapest), runner_up, runner_up_<cost>.  Each (source, method) stands by its point of fewest
     evaluations that reaches the level: a count, the same in every run, and within one method wall time
     follows it.  Evaluations are counts: a tie is an equal count.  Wall times are medians of repeated runs:
-    one method is ahead of another only when their medians are apart by more than the sum of their
-    interquartile ranges, else they tie.  Only resolved points count; a level below RESOLUTION times the
+    one method is ahead of another only when their medians are apart by more than the sum of their spreads
+    (spread()) and REPRODUCIBILITY times the faster median, else they tie.  Only resolved points count; a level below RESOLUTION times the
     reference's accuracy cannot be decided and says so, a level nobody reaches says "none reached"."""
     floor = RESOLUTION * frame.attrs.get("reference", {}).get("accuracy", 0.0)
     ok = frame[(frame["status"] == "ok") & frame["resolved"]]
@@ -341,7 +353,8 @@ def cheapest(frame, cost="evaluations", levels=LEVELS):
                 .drop_duplicates(["source", "method"]).sort_values(cost, kind="stable")
             if len(reached):
                 best, others = reached.iloc[0], reached.iloc[1:]
-                tied = (others["wall"] - best["wall"] <= others["wall_iqr"] + best["wall_iqr"] if cost == "wall"
+                tied = (others["wall"] - best["wall"] <= others["wall_spread"] + best["wall_spread"]
+                        + REPRODUCIBILITY * best["wall"] if cost == "wall"
                         else others[cost] == best[cost])
                 winners = pd.concat([reached.iloc[:1], others[tied]]).sort_index()
                 entry.update({"cheapest": tie_in_words(winners, cost),

@@ -1,7 +1,9 @@
 """The cache of tight solutions (dyncheck/cache.py): what it returns is what simulate computes, bit for bit,
 and a change in anything the solution depends on is a new key, never the old entry."""
 
+import importlib
 import shutil
+import sys
 
 import pandas as pd
 import pytest
@@ -61,6 +63,24 @@ def test_anything_the_solution_depends_on_makes_a_new_key(folder, monkeypatch, t
     elif change == "code":
         monkeypatch.setattr(cache, "code_version", lambda: "another version")
     solve(case, 0.06 if change == "span" else 0.05)
+    assert len(entries(folder)) == 2
+
+
+def test_a_module_imported_from_outside_the_checkout_is_in_the_key(folder, monkeypatch, tmp_path):
+    """A case may name its derivation by module, from anywhere on the path, and a derivation may import a
+    researcher's own library: an edit of either is a new key, as an edit of the case folder is."""
+    library = tmp_path / "library"
+    library.mkdir()
+    (library / "researchers_terms.py").write_text("TERM = 1.0\n")
+    monkeypatch.syspath_prepend(str(library))
+    monkeypatch.delitem(sys.modules, "researchers_terms", raising=False)
+    importlib.import_module("researchers_terms")
+    case = dyncheck.load_case("rotating_pendulum")
+    solve(case)
+    solve(case)
+    assert len(entries(folder)) == 1
+    (library / "researchers_terms.py").write_text("TERM = 2.0  # edited\n")
+    solve(case)
     assert len(entries(folder)) == 2
 
 

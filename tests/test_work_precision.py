@@ -100,7 +100,7 @@ def test_cheapest_picks_the_cheapest_point_that_reaches_each_level():
     rows = [("a", "RK4", 1e-3, 0.10, 400), ("b", "DOP853", 5e-3, 0.05, 300), ("b", "DOP853", 1e-5, 0.20, 900),
             ("c", "Euler", 1e-9, 0.01, 50)]  # c: within 10x of the reference's accuracy, unresolved
     frame = pd.DataFrame([{"source": s, "method": m, "setting": "dt", "value": 0.1, "error": e, "wall": w,
-                           "wall_min": 0.9 * w, "wall_max": 1.1 * w, "wall_iqr": 0.1 * w,
+                           "wall_min": 0.9 * w, "wall_max": 1.1 * w, "wall_spread": 0.1 * w,
                            "evaluations": n, "status": "ok", "resolved": e > 1e-8} for s, m, e, w, n in rows]
                          + [{"source": "d", "method": "RK45", "setting": "rtol", "value": 1.0, "error": np.nan,
                              "wall": np.nan, "evaluations": np.nan, "status": "unstable", "resolved": False}])
@@ -121,18 +121,29 @@ def synthetic(points):
     """A resolved sweep frame from (source, method, error, evaluations, wall runs)."""
     return pd.DataFrame([{"source": s, "method": m, "setting": "rtol", "value": 1e-6, "error": e, "evaluations": n,
                           "wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w),
-                          "wall_iqr": float(np.subtract(*np.percentile(w, [75, 25]))), "repeats": len(w),
+                          "wall_spread": work_precision.spread(w), "repeats": len(w),
                           "status": "ok", "resolved": True} for s, m, e, n, w in points])
 
 
-def test_cheapest_in_wall_time_only_beyond_the_spread():
-    # medians 1.1 and 1.4, interquartile ranges 0.1 each: a alone, b the runner-up; a's one stray run (2.0,
-    # slower than all of b's) moves neither its median nor its spread
-    apart = synthetic([("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 1.15, 2.0]),
-                       ("b", "DOP853", 1e-3, 200, [1.3, 1.35, 1.4, 1.45, 1.5])])
+def test_spread_is_twice_the_median_absolute_deviation_and_ignores_two_stray_runs():
+    assert work_precision.spread([1.0, 1.05, 1.1, 1.15, 1.2]) == pytest.approx(0.1)
+    # two load spikes of five leave the median, and the spread is the other runs' farthest from it, 2 x 0.1
+    # (the interquartile range would grow to 0.95)
+    assert work_precision.spread([1.0, 1.05, 1.1, 2.0, 3.0]) == pytest.approx(0.2)
+    assert work_precision.spread([1.0]) == 0.0
+
+
+def test_cheapest_in_wall_time_only_beyond_the_spread_and_the_reproducibility():
+    # medians 1.1 and 1.6, spreads 0.2 and 0.1: 0.5 apart, beyond 0.2 + 0.1 + 10% of 1.1: a alone, b the
+    # runner-up; a's two stray runs (slower than all of b's) do not make a tie
+    apart = synthetic([("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 2.0, 2.5]),
+                       ("b", "DOP853", 1e-3, 200, [1.5, 1.55, 1.6, 1.65, 1.7])])
     table = work_precision.cheapest(apart, cost="wall", levels=(1e-2,)).iloc[0]
     assert table["cheapest"] == "a LSODA, rtol = 1e-06" and table["points"] == ("a LSODA, rtol = 1e-06",)
     assert table["runner_up"] == "b DOP853, rtol = 1e-06" and table["wall"] == 1.1
+    # 0.4 apart is within 0.2 + 0.1 + 0.11: a tie
+    apart.loc[1, "wall"] = 1.5
+    assert work_precision.cheapest(apart, cost="wall", levels=(1e-2,)).iloc[0]["methods"] == ("LSODA", "DOP853")
     # medians 1.25 and 1.1, closer than the spreads' sum 0.2: a tie, both named in the sweep's order; c is
     # beaten beyond the spread: the runner-up
     close = synthetic([("b", "DOP853", 1e-3, 200, [1.15, 1.2, 1.25, 1.3, 1.35]),
@@ -141,8 +152,10 @@ def test_cheapest_in_wall_time_only_beyond_the_spread():
     assert table["cheapest"] == "b DOP853, rtol = 1e-06 or a LSODA, rtol = 1e-06 (tie within spread)"
     assert table["methods"] == ("DOP853", "LSODA") and table["runner_up"] == "c RK45, rtol = 1e-06"
     assert table["wall"] == 1.1  # the cheapest's
-    # a single run has no spread: two of them tie only when equal
-    single = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("b", "DOP853", 1e-3, 300, [1.01])])
+    # single runs have no spread: they tie within REPRODUCIBILITY of the faster, and are apart beyond it
+    single = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("b", "DOP853", 1e-3, 300, [1.09])])
+    assert work_precision.cheapest(single, cost="wall", levels=(1e-2,)).iloc[0]["methods"] == ("LSODA", "DOP853")
+    single.loc[1, "wall"] = 1.11
     assert work_precision.cheapest(single, cost="wall", levels=(1e-2,)).iloc[0]["points"] == ("a LSODA, rtol = 1e-06",)
     # a method stands by its point of fewest evaluations that reaches the level, whatever its wall time
     two_points = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("a", "LSODA", 1e-4, 400, [0.9])])
