@@ -8,11 +8,10 @@ The arm and the disk turn at constant rates, Omega = alpha' + beta'; gravity is 
 """
 
 import functools
-import math
 
 import numpy as np
 
-from reference import printed
+from reference import printed, straight
 
 # Vectors and matrices of the chain are tuples of floats (or of arrays over many states): on 3-vectors
 # numpy's overhead per operation is most of the time, and the integrators evaluate the chain at every step.
@@ -60,8 +59,9 @@ def T_x(angle):
 
 
 # The same expressions for the chain, rows as tuples: on one state with math's sin and cos (numpy's cost more
-# on one number and give the same values), on many with numpy's.
-_TURNS = printed.Functions(FRAMES, ("a",), {"sin": math.sin, "cos": math.cos, "array": tuple})
+# on one number and give the same values; straight's are math's on floats, and also follow a trace), on many
+# with numpy's.
+_TURNS = printed.Functions(FRAMES, ("a",), {"sin": straight.sin, "cos": straight.cos, "array": tuple})
 _TURNS_MANY = printed.Functions(FRAMES, ("a",), {"sin": np.sin, "cos": np.cos, "array": tuple})
 
 
@@ -177,8 +177,14 @@ class ParticleOnBase:
 
     @last_state
     def _at(self, t, q, v):
-        """`_motion` at one state, on floats (numpy's scalars cost more)."""
-        return self._motion(float(t), [float(x) for x in q], [float(x) for x in v])
+        """`_motion` at one state, on floats (numpy's scalars cost more): run as the straight-line code traced from
+        it for this model's parameters at the first call (reference/straight.py: the same floats, a fraction of
+        the time), or as itself where it cannot be traced."""
+        if "_straight_motion" not in self.__dict__:
+            n = len(q)
+            self._straight_motion = straight.compiled(lambda t, *x: self._motion(t, list(x[:n]), list(x[n:])),
+                                                      ["t", *(f"q{i}" for i in range(n)), *(f"v{i}" for i in range(n))])
+        return self._straight_motion(float(t), *[float(x) for x in q], *[float(x) for x in v])
 
     def _at_many(self, t, q, v):
         """`_motion` at many states: t of shape (N,), q and v (N, n); and the columns of q and v."""
