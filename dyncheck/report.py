@@ -764,11 +764,11 @@ def timing_page_name(case):
 
 
 def write_timing_page(result, case, tmp):
-    """<case>_timing.md and its chart and CSV: every wall time of the run, apart from the case page
-    because wall times differ from run to run (the page stays the same when nothing else changed)."""
+    """<case>_timing.md and its chart and CSV: every time of the run, apart from the case page because times
+    differ from run to run (the page stays the same when nothing else changed)."""
     studies = result.studies
-    lines = [f"# {heading(case.spec)}: wall times", "",
-             f"Wall times of this run on this machine, which differ from run to run; [the case page]({case.name}.md).",
+    lines = [f"# {heading(case.spec)}: times", "",
+             f"Times of this run on this machine, which differ from run to run; [the case page]({case.name}.md).",
              "", f"All checks of this case took {result.wall:.1f} s.", "",
              f"## The runs of {initial_words(case)}", "",
              markdown_table(cost_table(result.runs, case.one_derivation)), ""]
@@ -782,30 +782,30 @@ def write_timing_page(result, case, tmp):
         csv, chart = (f"data/{case.name}_work_precision_timing.csv",
                       f"figures/{case.name}_work_precision_timing.png")
         work_precision.write_csv(frame, tmp / csv, timing=True)
-        wall_caption = work_precision.figure(frame, case, tmp / chart, cost="wall")
+        cpu_caption = work_precision.figure(frame, case, tmp / chart, cost="cpu")
         files += [csv, chart]
-        best = work_precision.cheapest(frame, cost="wall")
+        best = work_precision.cheapest(frame, cost="cpu")
         labels = {work_precision.point_label(r): r for _, r in frame.iterrows()}
 
-        def wall_with_spread(label):
+        def cpu_times(label):
             r = labels.get(label)
-            return "-" if r is None or pd.isna(r["wall"]) else \
-                f"{r['wall']:.3g} (spread {r['wall_spread']:.2g}; {r['wall_min']:.3g} to {r['wall_max']:.3g}; {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
+            return "-" if r is None or pd.isna(r["cpu"]) else \
+                f"{r['cpu_min']:.3g} (median {r['cpu']:.3g}, slowest {r['cpu_max']:.3g}; {r['repeats']:g} run{'s' * (r['repeats'] > 1)})"
         table = pd.DataFrame({"level": best["level"].map(lambda x: f"{x:.0e}"),
                               "fewest evaluations": work_precision.cheapest(frame)["cheapest"],
-                              "least wall time": best["cheapest"],
-                              "wall [s]: median (spread; least to most)": best["points"].map(
-                                  lambda points: "; ".join(map(wall_with_spread, points)) or "-"),
-                              "runner-up in wall time": best["runner_up"],
-                              "runner-up wall [s]": best["runner_up"].map(wall_with_spread)})
-        lines += ["## Speed against accuracy in wall time", "",
-                  f"The work-precision sweep of [the case page]({case.name}.md#speed-against-accuracy) against wall"
+                              "least CPU time": best["cheapest"],
+                              "CPU [s]: fastest (median, slowest)": best["points"].map(
+                                  lambda points: "; ".join(map(cpu_times, points)) or "-"),
+                              "runner-up in CPU time": best["runner_up"],
+                              "runner-up CPU [s]": best["runner_up"].map(cpu_times)})
+        lines += ["## Speed against accuracy in CPU time", "",
+                  f"The work-precision sweep of [the case page]({case.name}.md#speed-against-accuracy) against CPU"
                   " time: the integration alone, the median of repeated runs (quick runs are repeated, as the"
                   " case file's `work_precision.repeat` says), the bars from the fastest to the slowest.  "
-                  + work_precision.WALL_NOTE, "",
-                  *embed(chart, "work-precision, wall time", wall_caption),
-                  "Which method reaches each accuracy level (relative trajectory error) in the least wall time, beside"
-                  " the fewest evaluations (the case page's ranking).  " + WALL_TIES, "",
+                  + CPU_TIME + "  " + work_precision.CPU_NOTE, "",
+                  *embed(chart, "work-precision, CPU time", cpu_caption),
+                  "Which method reaches each accuracy level (relative trajectory error) in the least CPU time, beside"
+                  " the fewest evaluations (the case page's ranking).  " + CPU_TIES, "",
                   markdown_table(table), "", f"The rows behind the chart: [{csv}]({csv}).", ""]
     if studies and studies["stability"]:
         lines += ["## Stability studies", "", markdown_table(pd.DataFrame(
@@ -860,7 +860,7 @@ def study_sections(result, case, tmp):
                   f" [{csv}]({csv}).  {work_precision.EVALUATIONS_NOTE}", "",
                   *embed(chart, "work-precision", caption),
                   "Which method is cheapest (fewest evaluations) at each accuracy level (relative trajectory"
-                  f" error); in wall time on the [timing page]({timing_page_name(case)}):", "",
+                  f" error); in CPU time on the [timing page]({timing_page_name(case)}):", "",
                   markdown_table(best.rename(columns={"runner_up": "runner-up",
                                                       "runner_up_evaluations": "runner-up evaluations"})), ""]
         if len(unstable):
@@ -1031,7 +1031,7 @@ def write_errata(tmp, cases):
 
 def speed_table(tmp, cases):
     """Index lines: for each case with a work-precision sweep, the cheapest method at each accuracy, and in
-    short which methods are cheapest (in wall time: index_timing.md)."""
+    short which methods are cheapest (in CPU time: index_timing.md)."""
     rows = [{"case": f"[{c['case']}]({c['case']}.md#speed-against-accuracy)", **c["cheapest"]}
             for c in cases if c.get("cheapest")]
     if not rows:
@@ -1039,29 +1039,31 @@ def speed_table(tmp, cases):
     return ["The cheapest method (fewest right-hand-side evaluations) that reaches each relative trajectory error, from each"
             " case's work-precision sweep (details, charts and the stability studies on the case pages):", "",
             markdown_table(pd.DataFrame(rows).fillna("-")), "",
-            f"In short, {work_precision.in_short(sweeps(tmp, cases))}.  In wall time, which differs from run to run:"
+            f"In short, {work_precision.in_short(sweeps(tmp, cases))}.  In CPU time, which differs from run to run:"
             f" [{INDEX_TIMING}]({INDEX_TIMING}).", ""]
 
 
 INDEX_TIMING = "index_timing.md"
-WALL_TIES = ("A method is the cheapest only when its median is below every other method's by more than the sum of"
-             f" their spreads and {work_precision.REPRODUCIBILITY:.0%} of its own median; else the methods that cannot be told apart are named together"
-             " (tie within spread).  A point's spread is twice the median absolute deviation of its runs, which two"
-             " stray runs of five do not inflate; the margin covers what a median moves between two regenerations of"
-             " the report (3.6% at the 90th percentile), for both medians of a comparison.  The runs that decide it are"
-             f" {work_precision.DECIDING_REPEATS} of each point, taken in turns with the other points' runs.")
+CPU_TIME = ("A run's CPU time is the wall time it takes on an idle core: other processes' load on the machine,"
+            " which stretches wall times by factors, leaves it out.")
+CPU_TIES = ("Each point ranks by its fastest run: what slows a run only adds time, and on a shared machine it adds it"
+            " to most runs now and then, while the fastest run of a point moves by about 10% between regenerations."
+            f"  A method is the cheapest only when its fastest run is faster than every other method's by more than"
+            f" {work_precision.REPRODUCIBILITY:.0%}; else the methods that cannot be told apart are named together.  The"
+            f" runs that decide it are {work_precision.DECIDING_REPEATS} of each point, taken in turns with the other"
+            " points' runs.")
 
 
 def sweeps(tmp, cases, timing=False):
-    """{case: its work-precision sweep as data/ holds it} for the cases with one (and their wall times: timing).
-    A timing file without every wall-time column (an earlier version's) is left out with a warning naming it."""
+    """{case: its work-precision sweep as data/ holds it} for the cases with one (and their CPU times: timing).
+    A timing file without every CPU-time column (an earlier version's) is left out with a warning naming it."""
     def csv(case, suffix):
         return tmp / "data" / f"{case}_work_precision{suffix}.csv"
     out = {}
     for case in (c["case"] for c in cases if c.get("cheapest")):
         frame = work_precision.read_csv(csv(case, ""), csv(case, "_timing") if timing else None)
         if timing and not set(work_precision.TIMING_COLUMNS) <= set(frame.columns):
-            print(f"dyncheck: warning: data/{csv(case, '_timing').name} lacks wall-time columns"
+            print(f"dyncheck: warning: data/{csv(case, '_timing').name} lacks CPU-time columns"
                   f" ({', '.join(sorted(set(work_precision.TIMING_COLUMNS) - set(frame.columns)))}; an earlier"
                   f" version's): left out of {INDEX_TIMING}", file=sys.stderr)
             continue
@@ -1070,21 +1072,21 @@ def sweeps(tmp, cases, timing=False):
 
 
 def write_index_timing(tmp, cases):
-    """index_timing.md: the index's speed table and sentence in wall time, apart from the index because wall
+    """index_timing.md: the index's speed table and sentence in CPU time, apart from the index because CPU
     times differ from run to run; [] and none (an earlier one removed) when no case has a sweep."""
-    walls = sweeps(tmp, cases, timing=True)
-    if not walls:
+    timed = sweeps(tmp, cases, timing=True)
+    if not timed:
         (tmp / INDEX_TIMING).unlink(missing_ok=True)
         return []
     rows = [{"case": f"[{case}]({case}_timing.md)",
-             **{f"{r['level']:.0e}": r["cheapest"] for _, r in work_precision.cheapest(frame, cost="wall").iterrows()}}
-            for case, frame in walls.items()]
-    lines = ["# dyncheck reports: wall times", "",
-             "Wall times of the last report on this machine, which differ from run to run; [the index](index.md).", "",
-             "The cheapest method in wall time that reaches each relative trajectory error, from each case's"
-             " work-precision sweep (its timing page has the times).  " + WALL_TIES, "",
+             **{f"{r['level']:.0e}": r["cheapest"] for _, r in work_precision.cheapest(frame, cost="cpu").iterrows()}}
+            for case, frame in timed.items()]
+    lines = ["# dyncheck reports: times", "",
+             "Times of the last report on this machine, which differ from run to run; [the index](index.md).", "",
+             "The cheapest method in CPU time that reaches each relative trajectory error, from each case's"
+             " work-precision sweep (its timing page has the times).  " + CPU_TIME + "  " + CPU_TIES, "",
              markdown_table(pd.DataFrame(rows).fillna("-")), "",
-             f"In short, {work_precision.in_short(walls, cost='wall')}.", ""]
+             f"In short, {work_precision.in_short(timed, cost='cpu')}.", ""]
     (tmp / INDEX_TIMING).write_text("\n".join(lines))
     return [INDEX_TIMING]
 

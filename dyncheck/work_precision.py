@@ -22,19 +22,22 @@ from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_M
                                energy_residual, fastest_frequency, simulate, state_columns)
 from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
 
-COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "wall", "wall_min", "wall_max",
-           "wall_spread", "repeats", "evaluations", "steps", "status", "resolved", "detail"]
-# Wall times differ from run to run: the pages and their CSV leave them out (a report made twice is
-# the same), and the timing files (write_csv(..., timing=True), figure(..., cost="wall")) carry them.
-TIMING_COLUMNS = ["wall", "wall_min", "wall_max", "wall_spread", "repeats"]
-COSTS = {"evaluations": "right-hand-side evaluations", "wall": "wall time [s], median (bars: fastest to slowest)"}
-COST_WORDS = {"evaluations": "right-hand-side evaluations", "wall": "wall time (medians of repeated runs)"}
+COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "cpu", "cpu_min", "cpu_max",
+           "repeats", "evaluations", "steps", "status", "resolved", "detail"]
+# A timed run's cost is its CPU time (simulate's attrs["cpu"]): the wall time it takes on an idle core, which
+# other processes' load leaves out (three busy processes on this 2-core machine stretched wall times 2.6x and
+# their spreads 5-15x, CPU times by 4-11%).  CPU times still differ from run to run: the pages and their CSV
+# leave them out (a report made twice is the same), and the timing files (write_csv(..., timing=True),
+# figure(..., cost="cpu")) carry them.
+TIMING_COLUMNS = ["cpu", "cpu_min", "cpu_max", "repeats"]
+COSTS = {"evaluations": "right-hand-side evaluations", "cpu": "CPU time [s], median (bars: fastest to slowest)"}
+COST_WORDS = {"evaluations": "right-hand-side evaluations", "cpu": "CPU time (medians of repeated runs)"}
 NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no free coordinate), so it "
             "has no work-precision chart and no convergence check.")
 EVALUATIONS_NOTE = ("Cost is counted in right-hand-side evaluations (MuJoCo's RK4: 4 a step, its Euler: 1), "
                     "which compare the methods whatever steps them.")
-WALL_NOTE = ("MuJoCo steps in C (its rollout) and every other method in Python around its right-hand side, so "
-             "across engines wall time measures the harness as much as the method.")
+CPU_NOTE = ("MuJoCo steps in C (its rollout) and every other method in Python around its right-hand side, so "
+             "across engines CPU time measures the harness as much as the method.")
 # A point whose error is within this factor of the reference solution's verified accuracy cannot be
 # told apart from the reference's own error: it is drawn hollow and never counts as reaching a level.
 RESOLUTION = 10.0
@@ -48,23 +51,16 @@ KEYS = ("t_end", "output_step", "repeat", "repeat_under", "why", "solution", "sw
 CONVERGENCE_KEYS = ("omega", "omega_t", "omega_h", "why")
 OPTIONAL_KEYS = ("method_omega",)
 MAX_REPEAT = 100  # timed repetitions of a quick run (under repeat_under seconds in all)
-# Timed runs of the points that decide which method is cheapest in wall time (cheapest()).  A point's spread
-# is twice the median absolute deviation of its runs (the interquartile range of evenly scattered runs): at 5
-# runs it is the middle of the five distances from the median, so with two stray runs (load spikes on a shared
-# machine: 2x to 10x measured) the median is a clean run and the spread at most the clean runs' farthest from
-# it.  The interquartile range grows with the second stray: it once named a tie of two points 1.7x apart.
+# Timed runs of the points that decide which method is cheapest in CPU time (cheapest()), which ranks the
+# points by their fastest run.  What slows a run (caches, the other core's work, the host's other tenants)
+# only adds time, and on this machine it added it to most runs of a point now and then, even idle and in CPU
+# time: between three idle regenerations of the sweeps a point's median moved by up to 2.1x (1.7x at the 90th
+# percentile), its fastest run by 4% (median), 9% (90th percentile), 13% (95th).  Interquartile ranges and
+# median absolute deviations of five runs named ties 1.7x apart and left 5 of 20 cells unreproduced.
 DECIDING_REPEATS = 5
-# Beyond one sweep's spreads a median moves between regenerations: the deciding points' medians moved by 1.3%
-# (median), 3.6% (90th percentile) and 5.8% (95th) between two regenerations of the report at the same code,
-# and a ratio of two moves with both.  A method is ahead only when it is faster by more than this fraction of
-# its median beyond the spreads; closer, the two tie, as they would in another regeneration.
-REPRODUCIBILITY = 0.10
-
-
-def spread(walls):
-    """Twice the median absolute deviation of a point's timed runs (see DECIDING_REPEATS)."""
-    walls = np.asarray(walls, dtype=float)
-    return 2 * float(np.median(np.abs(walls - np.median(walls))))
+# Two fastest runs closer than this fraction of the faster cannot be told apart: each moves by up to ~10%
+# between regenerations (above), and their ratio with both.
+REPRODUCIBILITY = 0.20
 
 
 # -- the case file's [work_precision] table ---------------------------------------------------------
@@ -218,9 +214,9 @@ def sweep(case, progress=None):
 
     error: max over time and state coordinates of |x - x_ref| / max |x_ref| (per coordinate);
     energy_error: max |E(t) - E(0) - W(t)| / max(|E_ref|, |W_ref|), the energy drift of a closed scene
-    or the work-energy balance of a driven one (energy_error); wall, wall_min, wall_max, wall_spread: median, least,
-    most and spread (spread()) of `repeats` timed runs (`repeat` when one run takes under `repeat_under` seconds in all, else one; DECIDING_REPEATS
-    for a point that decides the wall-time table of cheapest()); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
+    or the work-energy balance of a driven one (energy_error); cpu, cpu_min, cpu_max: median, least and most
+    of the CPU times of `repeats` timed runs (`repeat` when one run takes under `repeat_under` seconds in all, else one; DECIDING_REPEATS
+    for a point that decides the CPU-time table of cheapest()); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
     steps: fixed steps (NaN for scipy, which does not report them).  A run that blows up is a row
     with status "unstable", NaN errors and the time and step in `detail`.  resolved: whether the error
     is above RESOLUTION times the reference's verified accuracy.  An empty frame for a case with
@@ -242,7 +238,7 @@ def sweep(case, progress=None):
                        work=case.driven, omega=fastest_frequency(case), **{setting: value})
         return run, time.perf_counter() - start
 
-    rows, walls, quick = [], {}, []  # walls: row -> the wall times of its runs; quick: rows to repeat at will
+    rows, times, quick = [], {}, []  # times: row -> the CPU times of its runs; quick: rows to repeat at will
     for source, method, setting, value in plan(case):
         point = {"case": case.name, "source": source, "method": method, "setting": setting, "value": value}
         try:
@@ -255,7 +251,7 @@ def sweep(case, progress=None):
             _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: unstable")
             continue
         error = trajectory_error(run, reference, columns)
-        walls[len(rows)] = [run.attrs["wall"]]
+        times[len(rows)] = [run.attrs["cpu"]]
         # Repeat only runs that are quick in all (integration, energy and work on the grid, for MuJoCo the
         # drive power at every step): timer noise matters there, and it bounds the cost.
         if took < wp["repeat_under"]:
@@ -266,9 +262,9 @@ def sweep(case, progress=None):
         _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: {error:.1e}")
 
     def frame():
-        timing = pd.DataFrame([{"wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w),
-                                "wall_spread": spread(w), "repeats": len(w)}
-                               for w in walls.values()], index=list(walls), columns=TIMING_COLUMNS)
+        timing = pd.DataFrame([{"cpu": float(np.median(w)), "cpu_min": min(w), "cpu_max": max(w),
+                                "repeats": len(w)}
+                               for w in times.values()], index=list(times), columns=TIMING_COLUMNS)
         out = pd.DataFrame(rows).join(timing).reindex(columns=COLUMNS)
         out["repeats"] = out["repeats"].fillna(0).astype(int)  # an unstable point's: none timed to the end
         out.attrs["reference"] = {"label": label, "accuracy": accuracy, "t_end": wp["t_end"]}
@@ -276,20 +272,20 @@ def sweep(case, progress=None):
 
     def again(points):  # one more timed run of each point, in the sweep's order
         for i in points:
-            walls[i].append(timed(*(rows[i][key] for key in ("source", "method", "setting", "value")))[0].attrs["wall"])
+            times[i].append(timed(*(rows[i][key] for key in ("source", "method", "setting", "value")))[0].attrs["cpu"])
 
     # More runs go round the points, not back to back, so that a change of the machine's load during the
     # sweep falls on every point alike (runs back to back share one load and understate the spread): the
-    # quick points up to `repeat` runs, for the chart's bars; then the points that decide the wall-time
+    # quick points up to `repeat` runs, for the chart's bars; then the points that decide the CPU-time
     # table (at each level the cheapest, those tied with it and the runner-up) up to DECIDING_REPEATS
     # runs whatever they cost, for a claim that one is faster than another.
     for _ in range(wp["repeat"] - 1):
         again(quick)
     while True:
-        table = cheapest(frame(), cost="wall")
+        table = cheapest(frame(), cost="cpu")
         named = {label for labels in table["points"] for label in labels} | set(table["runner_up"])
-        deciding = [i for i in walls if point_label(rows[i]) in named
-                    and len(walls[i]) < max(wp["repeat"], DECIDING_REPEATS)]
+        deciding = [i for i in times if point_label(rows[i]) in named
+                    and len(times[i]) < max(wp["repeat"], DECIDING_REPEATS)]
         if not deciding:
             return frame()
         again(deciding)
@@ -297,7 +293,7 @@ def sweep(case, progress=None):
 
 def write_csv(frame, path, timing=False):
     """The tidy rows, with the reference solution named in a comment line above the header: without the
-    wall times, or (timing) the points' keys with only their wall times."""
+    CPU times, or (timing) the points' keys with only their CPU times."""
     keys = ["case", "source", "method", "setting", "value"]
     columns = keys + TIMING_COLUMNS if timing else [c for c in frame.columns if c not in TIMING_COLUMNS]
     with open(path, "w") as f:
@@ -314,7 +310,7 @@ def point_label(r):
     return f"{name}, {r['setting']} = {r['value']:g}" + (" s" if r["setting"] == "dt" else "")
 
 
-TIE_WORDS = {"evaluations": "tie: equal counts", "wall": "tie within spread"}
+TIE_WORDS = {"evaluations": "tie: equal counts", "cpu": f"tie: fastest runs within {REPRODUCIBILITY:.0%}"}
 
 
 def tie_in_words(points, cost):
@@ -329,17 +325,19 @@ def tie_in_words(points, cost):
 
 def cheapest(frame, cost="evaluations", levels=LEVELS):
     """For each accuracy level (relative trajectory error), the (source, method) that reaches it at the least
-    `cost` (a column: "evaluations" or "wall"), those that cannot be told from it, and the runner-up, the
+    `cost` (a column: "evaluations" or "cpu"), those that cannot be told from it, and the runner-up, the
     cheapest of the rest: a DataFrame with level, cheapest (in words: "A", or "A or B (tie ...)"), points and
     methods (the labels and method names of the cheapest and the tied, in the sweep's order), <cost> and error
-    (of the cheapest), runner_up, runner_up_<cost>.  Each (source, method) stands by its point of fewest
-    evaluations that reaches the level: a count, the same in every run, and within one method wall time
-    follows it.  Evaluations are counts: a tie is an equal count.  Wall times are medians of repeated runs:
-    one method is ahead of another only when their medians are apart by more than the sum of their spreads
-    (spread()) and REPRODUCIBILITY times the faster median, else they tie.  Only resolved points count; a level below RESOLUTION times the
-    reference's accuracy cannot be decided and says so, a level nobody reaches says "none reached"."""
+    (of the cheapest; in CPU time its fastest run), runner_up, runner_up_<cost>.  Each (source, method) stands
+    by its point of fewest evaluations that reaches the level: a count, the same in every run, and within one
+    method CPU time follows it.  Evaluations are counts: a tie is an equal count.  CPU times rank by each
+    point's fastest run (see DECIDING_REPEATS): one method is ahead of another only when its fastest run is
+    faster by more than REPRODUCIBILITY of its own, else they tie.  Only resolved points count; a level below
+    RESOLUTION times the reference's accuracy cannot be decided and says so, a level nobody reaches says
+    "none reached"."""
     floor = RESOLUTION * frame.attrs.get("reference", {}).get("accuracy", 0.0)
     ok = frame[(frame["status"] == "ok") & frame["resolved"]]
+    ranked = "cpu_min" if cost == "cpu" else cost
     out = []
     for level in levels:
         entry = {"level": level, "cheapest": "none reached", "points": (), "methods": (), cost: np.nan,
@@ -350,19 +348,18 @@ def cheapest(frame, cost="evaluations", levels=LEVELS):
             # each (source, method)'s point that reaches the level, cheapest first; stable sorts (ties in the
             # sweep's order) so that equal counts pick the same points every time
             reached = ok[ok["error"] <= level].sort_values("evaluations", kind="stable") \
-                .drop_duplicates(["source", "method"]).sort_values(cost, kind="stable")
+                .drop_duplicates(["source", "method"]).sort_values(ranked, kind="stable")
             if len(reached):
                 best, others = reached.iloc[0], reached.iloc[1:]
-                tied = (others["wall"] - best["wall"] <= others["wall_spread"] + best["wall_spread"]
-                        + REPRODUCIBILITY * best["wall"] if cost == "wall"
-                        else others[cost] == best[cost])
+                tied = (others[ranked] <= (1 + REPRODUCIBILITY) * best[ranked] if cost == "cpu"
+                        else others[ranked] == best[ranked])
                 winners = pd.concat([reached.iloc[:1], others[tied]]).sort_index()
                 entry.update({"cheapest": tie_in_words(winners, cost),
                               "points": tuple(point_label(r) for _, r in winners.iterrows()),
-                              "methods": tuple(winners["method"]), cost: best[cost], "error": best["error"]})
+                              "methods": tuple(winners["method"]), cost: best[ranked], "error": best["error"]})
                 rest = others[~tied]
                 if len(rest):
-                    entry.update({"runner_up": point_label(rest.iloc[0]), f"runner_up_{cost}": rest.iloc[0][cost]})
+                    entry.update({"runner_up": point_label(rest.iloc[0]), f"runner_up_{cost}": rest.iloc[0][ranked]})
         out.append(entry)
     return pd.DataFrame(out)
 
@@ -391,7 +388,7 @@ def in_short(sweeps, cost="evaluations"):
 
 
 def read_csv(path, timing=None):
-    """A sweep as write_csv wrote it, with the wall times of its `timing` twin when given (the reference's
+    """A sweep as write_csv wrote it, with the CPU times of its `timing` twin when given (the reference's
     label and accuracy are not restored: below its resolution a level reads "none reached")."""
     frame = pd.read_csv(path, comment="#")
     if timing is not None:
@@ -403,7 +400,7 @@ def read_csv(path, timing=None):
 
 def figure(frame, case, path, cost="evaluations"):
     """Error against cost, log-log: trajectory error (top) and energy error (bottom) against `cost`
-    (COSTS: right-hand-side evaluations, or the wall time with bars from the fastest to the slowest
+    (COSTS: right-hand-side evaluations, or the CPU time with bars from the fastest to the slowest
     repeat); hollow markers for points the reference cannot resolve; the unresolvable band shaded.
     Returns the caption."""
     ref = frame.attrs.get("reference", {})
@@ -424,9 +421,9 @@ def figure(frame, case, path, cost="evaluations"):
             ax.plot(points[cost], points[y], mfc="none", label=label if ax is axes[0] else None, **style)
             solid = points[points["resolved"]]
             ax.plot(solid[cost], solid[y], ls="none", marker=style["marker"], color=style["color"], ms=5)
-            if cost == "wall":
-                spread = [points["wall"] - points["wall_min"], points["wall_max"] - points["wall"]]
-                ax.errorbar(points["wall"], points[y], xerr=spread, ls="none", color=style["color"], lw=0.7)
+            if cost == "cpu":
+                spread = [points["cpu"] - points["cpu_min"], points["cpu_max"] - points["cpu"]]
+                ax.errorbar(points["cpu"], points[y], xerr=spread, ls="none", color=style["color"], lw=0.7)
     for ax in axes:
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -443,7 +440,7 @@ def figure(frame, case, path, cost="evaluations"):
     sources = ", ".join(f"{GLYPHS[SWEEP_STYLE[s]['marker']]} {GLYPHS[SWEEP_STYLE[s]['ls']]} {s}"
                         for s in SWEEP_STYLE if s in set(frame["source"]))
     legend_below(fig, ncol=2, title=f"colour: method; marker and line: source ({sources})")
-    fig.suptitle(title(heading(case.spec), f"error against {'wall time' if cost == 'wall' else 'cost'} over "
+    fig.suptitle(title(heading(case.spec), f"error against {'CPU time' if cost == 'cpu' else 'cost'} over "
                                            f"{ref.get('t_end', 0):g} s"))
     save(fig, path)
     unstable = frame[frame["status"] == "unstable"]

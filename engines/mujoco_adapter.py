@@ -583,7 +583,7 @@ class MujocoModel:
 
     def step(self, q0, v0, t_end, dt, integrator):
         """mj_step with `integrator` from (q0, v0); times, book q and v of every step, and the cost."""
-        times, qpos, qvel, wall, warnings = self._rollout(q0, v0, t_end, dt, integrator)
+        times, qpos, qvel, elapsed, warnings = self._rollout(q0, v0, t_end, dt, integrator)
         nstep = len(times) - 1
         q, v = self._book_states(qpos, qvel, q0)
         # How well the armatures held the prescribed rates, relative to the largest rate of the run,
@@ -593,7 +593,7 @@ class MujocoModel:
         # (rad/s, or m/s for a slider: at rest, the drift in SI units)
         scale = max(np.max(np.abs(prescribed), initial=0.0), np.max(np.abs(qvel), initial=0.0), 1.0)
         driven_error = float(drift / scale if scale > 0 else drift)
-        return {"t": times, "q": q, "v": v, "wall": wall, "steps": nstep, "warnings": warnings,
+        return {"t": times, "q": q, "v": v, **elapsed, "steps": nstep, "warnings": warnings,
                 "evaluations": nstep * (4 if integrator == "RK4" else 1), "driven_rate_error": driven_error}
 
     def ball_joint_quaternions(self, q0, v0, t_end, dt, integrator):
@@ -604,21 +604,22 @@ class MujocoModel:
 
     def _rollout(self, q0, v0, t_end, dt, integrator):
         """mj_step with `integrator` from the book's (q0, v0) to t_end, in MuJoCo's own coordinates: times,
-        qpos and qvel of every step (the start included), the rollout's wall time, and the warnings MuJoCo
+        qpos and qvel of every step (the start included), the rollout's wall and CPU time ({"wall", "cpu"}:
+        the process's CPU seconds, which other processes' load leaves out), and the warnings MuJoCo
         counted (a NaN or huge state, which it answers by resetting) in the data the rollout stepped."""
         m, d, state0, forces = self.stepping(q0, v0, dt, integrator)
         nstep = int(round(t_end / dt))
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         if self.varying:
             states = self._stepped(m, d, state0, forces, nstep, q0)
         else:
             states, _ = mujoco.rollout.rollout(m, d, state0[None], forces[None, None], nstep=nstep,
                                                control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED)
             states = states[0]
-        wall = time.perf_counter() - start
+        elapsed = {"wall": time.perf_counter() - start, "cpu": time.process_time() - start_cpu}
         states = np.concatenate([state0[None], states])
         warnings = {mujoco.mjtWarning(i).name: (w.number, w.lastinfo) for i, w in enumerate(d.warning) if w.number}
-        return states[:, 0], states[:, 1:1 + m.nq], states[:, 1 + m.nq:1 + m.nq + m.nv], wall, warnings
+        return states[:, 0], states[:, 1:1 + m.nq], states[:, 1 + m.nq:1 + m.nq + m.nv], elapsed, warnings
 
     def _stepped(self, m, d, state0, forces, nstep, q0):
         """mj_step `nstep` times from state0 with applied forces that are laws of the state: MuJoCo's control

@@ -1,5 +1,5 @@
 """A report made again with nothing changed is the same, file for file, apart from the files named for
-their timings: wall times, which differ from run to run, go only there (issue 12)."""
+their timings: times, which differ from run to run, go only there (issue 12)."""
 
 from dataclasses import replace
 
@@ -19,12 +19,12 @@ def small_sweep(case):
 
 
 def slower(result, factor):
-    """The same result with every wall time multiplied by `factor`: what another run would measure."""
+    """The same result with every time multiplied by `factor`: what another run would measure."""
     def timed(frame):
         if frame is None:
             return None
         frame = frame.copy()
-        frame.attrs = {**frame.attrs, "wall": frame.attrs["wall"] * factor}
+        frame.attrs = {**frame.attrs, "wall": frame.attrs["wall"] * factor, "cpu": frame.attrs["cpu"] * factor}
         return frame
     runs = {source: replace(outcome, run=timed(outcome.run), twin=timed(outcome.twin)) if outcome.ok else outcome
             for source, outcome in result.runs.items()}
@@ -39,7 +39,7 @@ def files(folder):
             if path.is_file() and "results" not in path.parts}
 
 
-def test_only_the_timing_files_change_when_only_wall_times_do(results, tmp_path):
+def test_only_the_timing_files_change_when_only_times_do(results, tmp_path):
     import dyncheck
     case = dyncheck.load_case("spring_pendulum")  # with a program figure, findings and a sweep
     result = results["spring_pendulum"].with_studies({"work_precision": small_sweep(case), "stability": []})
@@ -54,10 +54,10 @@ def test_only_the_timing_files_change_when_only_wall_times_do(results, tmp_path)
                       "figures/spring_pendulum_work_precision_timing.png",
                       "figures/spring_pendulum_work_precision_timing.pdf"}
     page = (tmp_path / "a" / "spring_pendulum.md").read_text()
-    assert "wall time [s]" not in page and "wall [s]" not in page and " took " not in page
+    assert "wall time [s]" not in page and "CPU [s]" not in page and " took " not in page
     assert "(spring_pendulum_timing.md)" in page
     csv = pd.read_csv(tmp_path / "a" / "data" / "spring_pendulum_work_precision.csv", comment="#")
     assert not set(work_precision.TIMING_COLUMNS) & set(csv.columns)
     timing_csv = pd.read_csv(tmp_path / "a" / "data" / "spring_pendulum_work_precision_timing.csv", comment="#")
-    assert (timing_csv["wall_min"] <= timing_csv["wall"]).all() and (timing_csv["wall"] <= timing_csv["wall_max"]).all()
-    assert set(timing_csv["repeats"]) <= {2, work_precision.DECIDING_REPEATS}  # `repeat`, or deciding the wall-time table
+    assert (timing_csv["cpu_min"] <= timing_csv["cpu"]).all() and (timing_csv["cpu"] <= timing_csv["cpu_max"]).all()
+    assert set(timing_csv["repeats"]) <= {2, work_precision.DECIDING_REPEATS}  # `repeat`, or deciding the CPU-time table

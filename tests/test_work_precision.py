@@ -62,10 +62,10 @@ def test_sweep_rows_and_an_unstable_point(tmp_path):
     assert list(unstable["method"]) == ["explicit Euler"]
     assert np.isnan(unstable["error"]).all() and "t = 0.8" in unstable["detail"].iloc[0]
     assert (ok["error"] > 0).all() and (ok["error"] < 1e-2).all() and (ok["energy_error"] > 0).all()
-    assert (ok["wall"] > 0).all() and (ok["evaluations"] > 0).all()
-    assert (ok["wall_min"] <= ok["wall"]).all() and (ok["wall"] <= ok["wall_max"]).all() and (ok["repeats"] >= 1).all()
-    # the points that decide the wall-time table are timed DECIDING_REPEATS times, the others `repeat` times
-    table = work_precision.cheapest(frame, cost="wall")
+    assert (ok["cpu"] > 0).all() and (ok["evaluations"] > 0).all()
+    assert (ok["cpu_min"] <= ok["cpu"]).all() and (ok["cpu"] <= ok["cpu_max"]).all() and (ok["repeats"] >= 1).all()
+    # the points that decide the CPU-time table are timed DECIDING_REPEATS times, the others `repeat` times
+    table = work_precision.cheapest(frame, cost="cpu")
     deciding = {label for labels in table["points"] for label in labels} | set(table["runner_up"])
     assert deciding >= {"reference DOP853, rtol = 1e-06", "mujoco:RK4, dt = 0.005 s"}
     assert (ok["repeats"] == [work_precision.DECIDING_REPEATS if work_precision.point_label(r) in deciding else 2
@@ -78,7 +78,7 @@ def test_sweep_rows_and_an_unstable_point(tmp_path):
     for timing in (False, True):
         work_precision.write_csv(frame, tmp_path / "wp.csv", timing=timing)
         written = pd.read_csv(tmp_path / "wp.csv", comment="#")
-        assert len(written) == 3 and ("wall" in written) == timing
+        assert len(written) == 3 and ("cpu" in written) == timing
 
 
 def test_nothing_to_integrate():
@@ -95,20 +95,20 @@ def test_a_step_must_divide_the_output_step():
 
 
 def test_cheapest_picks_the_cheapest_point_that_reaches_each_level():
-    # source, method, error, wall time, evaluations: by evaluations b's first point is cheapest at 1e-2, by
-    # wall time too; at 1e-4 only b's second point is left
+    # source, method, error, CPU time, evaluations: by evaluations b's first point is cheapest at 1e-2, by
+    # CPU time too; at 1e-4 only b's second point is left
     rows = [("a", "RK4", 1e-3, 0.10, 400), ("b", "DOP853", 5e-3, 0.05, 300), ("b", "DOP853", 1e-5, 0.20, 900),
             ("c", "Euler", 1e-9, 0.01, 50)]  # c: within 10x of the reference's accuracy, unresolved
-    frame = pd.DataFrame([{"source": s, "method": m, "setting": "dt", "value": 0.1, "error": e, "wall": w,
-                           "wall_min": 0.9 * w, "wall_max": 1.1 * w, "wall_spread": 0.1 * w,
+    frame = pd.DataFrame([{"source": s, "method": m, "setting": "dt", "value": 0.1, "error": e, "cpu": w,
+                           "cpu_min": 0.9 * w, "cpu_max": 1.1 * w,
                            "evaluations": n, "status": "ok", "resolved": e > 1e-8} for s, m, e, w, n in rows]
                          + [{"source": "d", "method": "RK45", "setting": "rtol", "value": 1.0, "error": np.nan,
-                             "wall": np.nan, "evaluations": np.nan, "status": "unstable", "resolved": False}])
+                             "cpu": np.nan, "evaluations": np.nan, "status": "unstable", "resolved": False}])
     frame.attrs["reference"] = {"accuracy": 1e-9}
-    by_wall = work_precision.cheapest(frame, cost="wall", levels=(1e-2, 1e-4)).set_index("level")
-    assert by_wall.loc[1e-2, "cheapest"].startswith("b DOP853") and by_wall.loc[1e-2, "wall"] == 0.05
-    assert by_wall.loc[1e-2, "runner_up"].startswith("a RK4") and by_wall.loc[1e-2, "runner_up_wall"] == 0.10
-    frame.loc[1, "evaluations"] = 500  # now a's point is cheaper in evaluations, b's in wall time
+    by_cpu = work_precision.cheapest(frame, cost="cpu", levels=(1e-2, 1e-4)).set_index("level")
+    assert by_cpu.loc[1e-2, "cheapest"].startswith("b DOP853") and by_cpu.loc[1e-2, "cpu"] == 0.9 * 0.05  # fastest run
+    assert by_cpu.loc[1e-2, "runner_up"].startswith("a RK4") and by_cpu.loc[1e-2, "runner_up_cpu"] == 0.9 * 0.10
+    frame.loc[1, "evaluations"] = 500  # now a's point is cheaper in evaluations, b's in CPU time
     table = work_precision.cheapest(frame, levels=(1e-2, 1e-4, 1e-8, 1e-10)).set_index("level")
     assert table.loc[1e-2, "cheapest"].startswith("a RK4") and table.loc[1e-2, "evaluations"] == 400
     assert table.loc[1e-2, "runner_up"].startswith("b DOP853") and table.loc[1e-2, "runner_up_evaluations"] == 500
@@ -118,49 +118,37 @@ def test_cheapest_picks_the_cheapest_point_that_reaches_each_level():
 
 
 def synthetic(points):
-    """A resolved sweep frame from (source, method, error, evaluations, wall runs)."""
+    """A resolved sweep frame from (source, method, error, evaluations, CPU times of its runs)."""
     return pd.DataFrame([{"source": s, "method": m, "setting": "rtol", "value": 1e-6, "error": e, "evaluations": n,
-                          "wall": float(np.median(w)), "wall_min": min(w), "wall_max": max(w),
-                          "wall_spread": work_precision.spread(w), "repeats": len(w),
+                          "cpu": float(np.median(w)), "cpu_min": min(w), "cpu_max": max(w),
+                          "repeats": len(w),
                           "status": "ok", "resolved": True} for s, m, e, n, w in points])
 
 
-def test_spread_is_twice_the_median_absolute_deviation_and_ignores_two_stray_runs():
-    assert work_precision.spread([1.0, 1.05, 1.1, 1.15, 1.2]) == pytest.approx(0.1)
-    # two load spikes of five leave the median, and the spread is the other runs' farthest from it, 2 x 0.1
-    # (the interquartile range would grow to 0.95)
-    assert work_precision.spread([1.0, 1.05, 1.1, 2.0, 3.0]) == pytest.approx(0.2)
-    assert work_precision.spread([1.0]) == 0.0
-
-
-def test_cheapest_in_wall_time_only_beyond_the_spread_and_the_reproducibility():
-    # medians 1.1 and 1.6, spreads 0.2 and 0.1: 0.5 apart, beyond 0.2 + 0.1 + 10% of 1.1: a alone, b the
-    # runner-up; a's two stray runs (slower than all of b's) do not make a tie
-    apart = synthetic([("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 2.0, 2.5]),
-                       ("b", "DOP853", 1e-3, 200, [1.5, 1.55, 1.6, 1.65, 1.7])])
-    table = work_precision.cheapest(apart, cost="wall", levels=(1e-2,)).iloc[0]
+def test_cheapest_in_cpu_time_by_the_fastest_run_beyond_the_reproducibility():
+    # fastest runs 1.0 and 1.3: apart by more than 20% of 1.0: a alone, b the runner-up; a's three slowed runs of
+    # five (slower than all of b's) do not change that
+    apart = synthetic([("a", "LSODA", 1e-3, 300, [2.0, 1.0, 2.2, 1.05, 2.5]),
+                       ("b", "DOP853", 1e-3, 200, [1.3, 1.35, 1.4, 1.45, 1.5])])
+    table = work_precision.cheapest(apart, cost="cpu", levels=(1e-2,)).iloc[0]
     assert table["cheapest"] == "a LSODA, rtol = 1e-06" and table["points"] == ("a LSODA, rtol = 1e-06",)
-    assert table["runner_up"] == "b DOP853, rtol = 1e-06" and table["wall"] == 1.1
-    # 0.4 apart is within 0.2 + 0.1 + 0.11: a tie
-    apart.loc[1, "wall"] = 1.5
-    assert work_precision.cheapest(apart, cost="wall", levels=(1e-2,)).iloc[0]["methods"] == ("LSODA", "DOP853")
-    # medians 1.25 and 1.1, closer than the spreads' sum 0.2: a tie, both named in the sweep's order; c is
-    # beaten beyond the spread: the runner-up
-    close = synthetic([("b", "DOP853", 1e-3, 200, [1.15, 1.2, 1.25, 1.3, 1.35]),
-                       ("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 1.15, 1.2]), ("c", "RK45", 1e-3, 900, [2.0, 2.1, 2.2])])
-    table = work_precision.cheapest(close, cost="wall", levels=(1e-2,)).iloc[0]
-    assert table["cheapest"] == "b DOP853, rtol = 1e-06 or a LSODA, rtol = 1e-06 (tie within spread)"
+    assert table["runner_up"] == "b DOP853, rtol = 1e-06" and table["cpu"] == 1.0 and table["runner_up_cpu"] == 1.3
+    # fastest runs 1.1 and 1.0, within 20%: a tie, both named in the sweep's order; c is beyond it: the runner-up
+    close = synthetic([("b", "DOP853", 1e-3, 200, [1.1, 1.2, 1.25, 1.3, 1.35]),
+                       ("a", "LSODA", 1e-3, 300, [1.0, 1.05, 1.1, 1.15, 1.2]), ("c", "RK45", 1e-3, 900, [1.25, 2.1, 2.2])])
+    table = work_precision.cheapest(close, cost="cpu", levels=(1e-2,)).iloc[0]
+    assert table["cheapest"] == ("b DOP853, rtol = 1e-06 or a LSODA, rtol = 1e-06 (tie: fastest runs within 20%)")
     assert table["methods"] == ("DOP853", "LSODA") and table["runner_up"] == "c RK45, rtol = 1e-06"
-    assert table["wall"] == 1.1  # the cheapest's
-    # single runs have no spread: they tie within REPRODUCIBILITY of the faster, and are apart beyond it
-    single = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("b", "DOP853", 1e-3, 300, [1.09])])
-    assert work_precision.cheapest(single, cost="wall", levels=(1e-2,)).iloc[0]["methods"] == ("LSODA", "DOP853")
-    single.loc[1, "wall"] = 1.11
-    assert work_precision.cheapest(single, cost="wall", levels=(1e-2,)).iloc[0]["points"] == ("a LSODA, rtol = 1e-06",)
-    # a method stands by its point of fewest evaluations that reaches the level, whatever its wall time
+    assert table["cpu"] == 1.0  # the cheapest's fastest run
+    # single runs: within 20% of the faster they tie, beyond it they are apart
+    single = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("b", "DOP853", 1e-3, 300, [1.19])])
+    assert work_precision.cheapest(single, cost="cpu", levels=(1e-2,)).iloc[0]["methods"] == ("LSODA", "DOP853")
+    single.loc[1, "cpu_min"] = 1.21
+    assert work_precision.cheapest(single, cost="cpu", levels=(1e-2,)).iloc[0]["points"] == ("a LSODA, rtol = 1e-06",)
+    # a method stands by its point of fewest evaluations that reaches the level, whatever its CPU time
     two_points = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("a", "LSODA", 1e-4, 400, [0.9])])
-    assert work_precision.cheapest(two_points, cost="wall", levels=(1e-2,)).iloc[0]["wall"] == 1.0
-    # evaluations are counts: equal counts tie, whatever the wall times
+    assert work_precision.cheapest(two_points, cost="cpu", levels=(1e-2,)).iloc[0]["cpu"] == 1.0
+    # evaluations are counts: equal counts tie, whatever the CPU times
     table = work_precision.cheapest(single, levels=(1e-2,)).iloc[0]
     assert table["cheapest"] == "a LSODA, rtol = 1e-06 or b DOP853, rtol = 1e-06 (tie: equal counts)"
     assert table["runner_up"] == "" and table["evaluations"] == 300
@@ -171,7 +159,7 @@ def test_cheapest_in_wall_time_only_beyond_the_spread_and_the_reproducibility():
 
 
 def test_in_short_counts_the_levels_each_method_wins():
-    # evaluations: 1e-2 DOP853, 1e-4 LSODA in one, a tie at 1e-2 in two; wall time: LSODA at all three
+    # evaluations: 1e-2 DOP853, 1e-4 LSODA in one, a tie at 1e-2 in two; CPU time: LSODA at all three
     one = synthetic([("a", "LSODA", 1e-5, 300, [1.0]), ("b", "DOP853", 1e-3, 200, [2.0])])
     two = synthetic([("a", "LSODA", 1e-3, 300, [1.0]), ("b", "DOP853", 1e-3, 300, [2.0])])
     sweeps = {"one": one, "two": two, "none": pd.DataFrame(columns=work_precision.COLUMNS)}
@@ -179,7 +167,7 @@ def test_in_short_counts_the_levels_each_method_wins():
         "counted in right-hand-side evaluations, the cheapest method at each of the 3 accuracy levels (1e-02 to 1e-10)"
         " that the 2 integrated cases reach is an adaptive one: DOP853 at 2 of them and LSODA at 2; 1 level is a tie"
         " between methods (tie: equal counts), counted for each")
-    assert work_precision.in_short(sweeps, cost="wall").endswith("reach is an adaptive one: LSODA at 3 of them")
+    assert work_precision.in_short(sweeps, cost="cpu").endswith("reach is an adaptive one: LSODA at 3 of them")
 
 
 def test_readme_quotes_the_sentence_of_the_committed_sweeps():
