@@ -31,7 +31,7 @@ COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_erro
 # figure(..., cost="cpu")) carry them.
 TIMING_COLUMNS = ["cpu", "cpu_min", "cpu_max", "repeats"]
 COSTS = {"evaluations": "right-hand-side evaluations", "cpu": "CPU time [s], median (bars: fastest to slowest)"}
-COST_WORDS = {"evaluations": "right-hand-side evaluations", "cpu": "CPU time (medians of repeated runs)"}
+COST_WORDS = {"evaluations": "right-hand-side evaluations", "cpu": "CPU time (the fastest of repeated runs)"}
 NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no free coordinate), so it "
             "has no work-precision chart and no convergence check.")
 EVALUATIONS_NOTE = ("Cost is counted in right-hand-side evaluations (MuJoCo's RK4: 4 a step, its Euler: 1), "
