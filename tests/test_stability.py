@@ -87,6 +87,7 @@ def test_semi_implicit_euler_blows_up_at_2_over_omega_within_the_bisection(stiff
     assert wall < 20
 
 
+@pytest.mark.full  # its fixture runs the 6 s step study
 def test_below_k_crit_the_exact_solution_runs_away_too(stiff_spring):
     result, _, _ = stiff_spring
     data = result.data

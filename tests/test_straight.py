@@ -63,7 +63,7 @@ def models_and_states(draw, name):
 
 
 @pytest.mark.parametrize("name", CASES)
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=25, deadline=None)
 @given(data=st.data())
 def test_the_straight_line_code_gives_the_plain_code_s_numbers(name, data):
     assert_same(*data.draw(models_and_states(name)))
