@@ -37,7 +37,7 @@ NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no 
 EVALUATIONS_NOTE = ("Cost is counted in right-hand-side evaluations (MuJoCo's RK4: 4 a step, its Euler: 1), "
                     "which compare the methods whatever steps them.")
 CPU_NOTE = ("MuJoCo steps in C (its rollout) and every other method in Python around its right-hand side, so "
-             "across engines CPU time measures the harness as much as the method.")
+            "across engines CPU time measures the harness as much as the method.")
 # A point whose error is within this factor of the reference solution's verified accuracy cannot be
 # told apart from the reference's own error: it is drawn hollow and never counts as reaching a level.
 RESOLUTION = 10.0

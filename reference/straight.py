@@ -63,7 +63,10 @@ def _binary(a, operator, b):
     tape = a.tape if isinstance(a, Value) else b.tape
     if operator == "*" and (_is(a, 0) or _is(b, 0)):
         for x in (a, b):  # a zero where the other factor is finite, which the code checks
-            tape.guarded.add(x.name) if _traced(x) else _atom(x)
+            if _traced(x):
+                tape.guarded.add(x.name)
+            else:
+                _atom(x)  # a constant factor must be a finite float or int, as anywhere else
         return tape.zero
     if (operator in "+-" and _is(b, 0)) or (operator in "*/" and _is(b, 1)):
         return a
