@@ -296,15 +296,17 @@ class Case:
         return (np.array([self.value(x) for x in ic["q"]]), np.array([self.value(x) for x in ic["v"]]),
                 self.value(ic["t_end"]))
 
-    def sample_states(self):
-        """The pointwise check's seeded random states: a list of (t, q, v)."""
+    def sample_states(self, count=None):
+        """The pointwise check's seeded random states: a list of (t, q, v); with `count`, the first `count` of them
+        (each state is drawn after the one before, so the first ones do not depend on how many follow)."""
         s = self.spec["sample"]
         rng = np.random.default_rng(s["seed"])
         bounds = lambda ranges: np.array([[self.value(lo), self.value(hi)] for lo, hi in ranges]).reshape(-1, 2)
         q_bounds, v_bounds = bounds(s["q"]), bounds(s["v"])
         t_lo, t_hi = self.value(s["t"][0]), self.value(s["t"][1])
+        count = s["count"] if count is None else min(count, s["count"])
         return [(rng.uniform(t_lo, t_hi), rng.uniform(q_bounds[:, 0], q_bounds[:, 1]),
-                 rng.uniform(v_bounds[:, 0], v_bounds[:, 1])) for _ in range(s["count"])]
+                 rng.uniform(v_bounds[:, 0], v_bounds[:, 1])) for _ in range(count)]
 
     @property
     def integration(self):

@@ -881,9 +881,12 @@ def transition(samples, period, rtol, omega):
     coefficients = np.fft.rfft(samples, axis=0) / count
     coefficients[1:(count + 1) // 2] *= 2  # each harmonic below the Nyquist frequency stands for its conjugate too
     frequencies = 2j * math.pi * np.arange(len(coefficients)) / period
+    # A(t) = sum_k coefficients[k] exp(frequencies[k] t) as np.tensordot(np.exp(frequencies * t), coefficients,
+    # axes=1) computes it (a row times the coefficients flattened, one np.dot), without its set-up at every evaluation
+    flattened, shape = coefficients.reshape(len(coefficients), -1), coefficients.shape[1:]
 
     def variational(t, y):
-        a = np.tensordot(np.exp(frequencies * t), coefficients, axes=1).real
+        a = np.dot(np.exp(frequencies * t).reshape(1, -1), flattened).reshape(shape).real
         return np.concatenate([(a @ y[:-sources].reshape(sources, size, size)).ravel(),
                                np.trace(a, axis1=1, axis2=2)])
 

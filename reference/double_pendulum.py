@@ -74,7 +74,7 @@ class Reference:
 
     def _solve(self, q, v):
         """(T1, T2, theta1'', theta2'') from (1.27)-(1.28) in the book's matrix form."""
-        state = [float(x) for x in (*q, *v)]
+        state = printed.floats(q, v)
         return _linear_solution(self._evaluate["A"](*state), self._evaluate["b"](*state))
 
     def accelerations(self, t, q, v):
@@ -109,11 +109,12 @@ class Reference:
         p = self.p
         t1, t2 = q
         w1, w2 = v
+        c1, c12 = np.cos(t1), np.cos(t1 + t2)
         # Velocities in I from the book's 1.9.1 (4): v_B = w1 k x l1, v_A = v_B + (w1 + w2) k x l2.
-        vb = p["l1"] * w1 * np.array([np.cos(t1), np.sin(t1)])
-        va = vb + p["l2"] * (w1 + w2) * np.array([np.cos(t1 + t2), np.sin(t1 + t2)])
-        y1 = -p["l1"] * np.cos(t1)
-        y2 = y1 - p["l2"] * np.cos(t1 + t2)
+        vb = p["l1"] * w1 * np.array([c1, np.sin(t1)])
+        va = vb + p["l2"] * (w1 + w2) * np.array([c12, np.sin(t1 + t2)])
+        y1 = -p["l1"] * c1
+        y2 = y1 - p["l2"] * c12
         return (0.5 * p["m1"] * vb @ vb + 0.5 * p["m2"] * va @ va
                 + p["g"] * (p["m1"] * y1 + p["m2"] * y2))
 
@@ -148,11 +149,15 @@ class Book(Reference):
     CLOSED_FORMS = ("T1", "T2", "theta1_acc", "theta2_acc")
 
     def _solve(self, q, v, keys=CLOSED_FORMS):
-        state = [float(x) for x in (*q, *v)]
+        state = printed.floats(q, v)
         return np.array([self._evaluate[key](*state) for key in keys])
 
     def accelerations(self, t, q, v):
         return self._solve(q, v, self.CLOSED_FORMS[2:])  # (1.31)-(1.32): the tensions would cost as much again
+
+    def reactions(self, t, q, v):
+        T1, T2 = self._solve(q, v, self.CLOSED_FORMS[:2])  # (1.29)-(1.30): the accelerations would cost as much again
+        return {"T1": T1, "T2": T2}
 
     def printed_rows(self, t, q, v, acc, reactions):
         """Newton's law for each mass as printed before it is solved, left side minus right side: in I,

@@ -94,7 +94,7 @@ a_eq110_z, a_d2dt2 and the energy are right.  The corrected vector in B1, by eit
 
 which is also what the B1 form of (1.10) printed at the end of 1.6 gives directly
 (B1 omega' x B1 r + B1 omega x (B1 omega x B1 r) + 2 B1 omega x d/dt(B1 r) + d2/dt2(B1 r)).
-`Reference.point_accelerations` computes a_eq110 as the vector sum of the five terms
+`Reference._acceleration` computes a_eq110 as the vector sum of the five terms
 (numpy cross products in I, then T), and a_d2dt2 from (1.23) -- two independent routes.
 """
 
@@ -171,12 +171,18 @@ class Book:
 
     def point_accelerations(self, t, q, v):
         """Absolute acceleration of the mass, components in B1, by the book's two routes."""
-        return printed.evaluate(self.PRINTED, self.symbols(t), ("a_d2dt2", "a_eq110"))
+        names = self.symbols(t)
+        return {route: self._acceleration(names, route) for route in ("a_d2dt2", "a_eq110")}
+
+    def _acceleration(self, names, route):
+        """The mass's acceleration in B1 by `route`, "a_d2dt2" or "a_eq110", at the symbols `names`."""
+        return printed.evaluate(self.PRINTED, names, (route,))[route]
 
     def _force(self, t):
-        """Force of the arm on the mass in B1: m a - m g, gravity (0, 0, -g)."""
-        a = self.point_accelerations(t, (), ())[self._reaction_route]
-        return printed.evaluate(self.PRINTED, {**self.symbols(t), "a": a}, ("F",))["F"]
+        """Force of the arm on the mass in B1: m a - m g, gravity (0, 0, -g); only the route it takes is evaluated."""
+        names = self.symbols(t)
+        a = self._acceleration(names, self._reaction_route)
+        return printed.evaluate(self.PRINTED, {**names, "a": a}, ("F",))["F"]
 
     def reactions(self, t, q, v):
         F = self._force(t)
@@ -219,14 +225,15 @@ class Book:
 class Reference(Book):
     """Right: (1.24) replaced by the vector sum of the five terms of (1.10); the rest is the book's."""
 
-    def point_accelerations(self, t, q, v):
-        """I a_B = I a_A + I omega' x I L + I omega x (I omega x I L) + 2 I omega x I v_Rel + I a_Rel, with the
-        book's vectors (c), (d), (1.17), (1.22) (PRINTED)."""
-        names = self.symbols(t)
+    def _acceleration(self, names, route):
+        """a_eq110: I a_B = I a_A + I omega' x I L + I omega x (I omega x I L) + 2 I omega x I v_Rel + I a_Rel, with
+        the book's vectors (c), (d), (1.17), (1.22) (PRINTED), turned into B1; a_d2dt2: the book's (1.23)."""
+        if route != "a_eq110":
+            return super()._acceleration(names, route)
         book = printed.evaluate(self.PRINTED, names, ("omega", "omega_dot", "r", "v_rel", "a_rel"))
         omega, r = book["omega"], book["r"]
         a_A = np.zeros(3)                     # origin fixed
         # spinning_base.cross: numpy's cross costs more than the rest on 3-vectors, and gives the same numbers
         five_terms = (a_A + np.array(cross(book["omega_dot"], r)) + np.array(cross(omega, cross(omega, r)))
                       + 2 * np.array(cross(omega, book["v_rel"])) + book["a_rel"])
-        return {**super().point_accelerations(t, q, v), "a_eq110": T_z(names["th"]) @ five_terms}
+        return T_z(names["th"]) @ five_terms

@@ -3,6 +3,8 @@ evaluates them here, so that the strings dyncheck searches for edits are the cod
 
 import functools
 
+import numpy as np
+
 
 @functools.cache
 def _compiled(expression):
@@ -19,6 +21,12 @@ def function(expression, arguments, names):
     """The printed expression as a Python function of the symbols `arguments`, its other symbols bound
     to `names`: where a model evaluates it at every step, rebuilding the names costs more than it."""
     return eval(f"lambda {', '.join(arguments)}: {expression}", {"__builtins__": {}, **names})
+
+
+def floats(q, v):
+    """A state's coordinates and rates as one list of Python floats, for `Functions`: arithmetic and math's functions
+    cost less on them than on numpy's scalars, and an array's tolist makes them at once."""
+    return np.asarray(q, dtype=float).tolist() + np.asarray(v, dtype=float).tolist()
 
 
 class Functions:

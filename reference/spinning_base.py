@@ -7,8 +7,6 @@ B2 r_CD = (0, r, h), B3 r_DE = (0, 0, -L), L the length DE (l in 1.8.1-2, l0 + l
 The arm and the disk turn at constant rates, Omega = alpha' + beta'; gravity is -Z.
 """
 
-import functools
-
 import numpy as np
 
 from reference import printed, straight
@@ -154,18 +152,6 @@ def _chain(p, t, psi, psi_rate, psi_acc, length, length_rate, length_acc, turns)
     return position, v, a, gravity, w, w_dot
 
 
-def last_state(method):
-    """Remember a model method's result for the last (t, q, v): an integrator asks a model for its
-    accelerations and then its drive power at the same state, and both come from one calculation."""
-    @functools.wraps(method)
-    def remembered(self, t, q, v):
-        key = (t, tuple(q), tuple(v))
-        if getattr(self, "_last", (None,))[0] != key:
-            self._last = (key, method(self, t, q, v))
-        return self._last[1]
-    return remembered
-
-
 class ParticleOnBase:
     """The numerical Newton-Euler of a particle on the spinning base (1.8.1-3) behind the model interface, at
     one state or at many.  A subclass's `_motion(t, q, v)` gives the accelerations, and I r_OE, B3 v_E and the
@@ -175,16 +161,20 @@ class ParticleOnBase:
     def __init__(self, params):
         self.p = dict(params)
 
-    @last_state
     def _at(self, t, q, v):
-        """`_motion` at one state, on floats (numpy's scalars cost more): run as the straight-line code traced from
-        it for this model's parameters at the first call (reference/straight.py: the same floats, a fraction of
-        the time), or as itself where it cannot be traced."""
-        if "_straight_motion" not in self.__dict__:
-            n = len(q)
-            self._straight_motion = straight.compiled(lambda t, *x: self._motion(t, list(x[:n]), list(x[n:])),
-                                                      ["t", *(f"q{i}" for i in range(n)), *(f"v{i}" for i in range(n))])
-        return self._straight_motion(float(t), *[float(x) for x in q], *[float(x) for x in v])
+        """`_motion` at one state, on floats (numpy's scalars cost more), remembered for the last state: an integrator
+        asks a model for its accelerations and then its drive power at the same state, and both come from one
+        calculation.  Run as the straight-line code traced from it for this model's parameters at the first call
+        (reference/straight.py: the same floats, a fraction of the time), or as itself where it cannot be traced."""
+        state = (float(t), *printed.floats(q, v))
+        last = self.__dict__.get("_last")
+        if last is None or last[0] != state:
+            if "_straight_motion" not in self.__dict__:
+                n = len(q)
+                self._straight_motion = straight.compiled(lambda t, *x: self._motion(t, list(x[:n]), list(x[n:])),
+                                                          ["t", *(f"q{i}" for i in range(n)), *(f"v{i}" for i in range(n))])
+            self._last = last = (state, self._straight_motion(*state))
+        return last[1]
 
     def _at_many(self, t, q, v):
         """`_motion` at many states: t of shape (N,), q and v (N, n); and the columns of q and v."""

@@ -280,7 +280,7 @@ class Book:
 
     # -- model interface -------------------------------------------------------
     def accelerations(self, t, q, v):
-        state = [float(x) for x in (q[0], q[1], *v)]
+        state = printed.floats(q[:2], v)
         return np.array([self._evaluate[key](*state) for key in COORD_ACCS])
 
     # The transposes of the book's frames (spinning_base.FRAMES), T_z(a)^T and T_x(a)^T, laid out by rows as

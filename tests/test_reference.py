@@ -90,3 +90,44 @@ def test_every_printed_expression_is_the_code_that_runs(name, monkeypatch):
                 if table.get(key) == expression:
                     patch.setitem(table, key, f"2*({expression})")
             assert not np.array_equal(outputs(), before), f"{name}: Book.PRINTED[{key!r}] is evaluated by no model"
+
+
+@pytest.mark.parametrize("name", ["rotating_particle", "rotating_pendulum", "spring_pendulum"])
+def test_the_remembered_state_is_the_state_asked(name):
+    """ParticleOnBase._at remembers the last state's motion (accelerations, then drive power, at one state): the same
+    state given as arrays or lists is the one calculation, and another state, or the first again, is not stale."""
+    case = dyncheck.load_case(name)
+    model = case.model("reference")
+    states = case.sample_states(3)
+    plain = [model._motion(float(t), [float(x) for x in q], [float(x) for x in v]) for t, q, v in states]
+    for (t, q, v), expected in zip(states + states[:1], plain + plain[:1]):
+        got = model._at(t, q, v)
+        assert model._at(float(t), list(q), list(v)) is got  # remembered: no second calculation
+        np.testing.assert_array_equal(np.hstack([np.ravel(x) for x in got]), np.hstack([np.ravel(x) for x in expected]))
+
+
+def test_the_sample_s_first_states_do_not_depend_on_how_many_are_drawn():
+    case = dyncheck.load_case("spinning_top")
+    first, every = case.sample_states(7), case.sample_states()
+    assert len(first) == 7 and len(every) == case.spec["sample"]["count"]
+    for a, b in zip(first, every):
+        np.testing.assert_array_equal(np.hstack(a), np.hstack(b))
+
+
+@pytest.mark.parametrize("source", ["book", "reference"])
+def test_the_piston_s_force_is_newton_s_law_with_the_acceleration_of_its_route(source):
+    """_force evaluates only the acceleration its route takes: the same numbers as point_accelerations gives for it."""
+    case = dyncheck.load_case("piston")
+    model, p = case.model(source), case.params
+    for t, q, v in case.sample_states(5):
+        a = model.point_accelerations(t, q, v)[model._reaction_route]
+        expected = p["m"] * a + np.array([0.0, 0.0, p["m"] * p["g"]])
+        assert list(model.reactions(t, q, v).values()) == expected.tolist()
+
+
+def test_the_double_pendulum_book_s_tensions_are_the_listing_s():
+    """Book.reactions evaluates (1.29)-(1.30) alone: the same numbers as the listing's four expressions give."""
+    case = dyncheck.load_case("double_pendulum")
+    book, program = case.model("book"), case.model("program")
+    for t, q, v in case.sample_states(10):
+        assert book.reactions(t, q, v) == program.reactions(t, q, v)
