@@ -1,9 +1,12 @@
 """Issue 10: every integration is bounded, and valid numeric input gives rows or exit 2, never a traceback."""
 
+import math
 import shutil
 
 import numpy as np
 import pytest
+from hypothesis import example, given
+from hypothesis import strategies as st
 
 from dyncheck import simulate as sim
 from dyncheck.case import load_case
@@ -43,15 +46,25 @@ def test_a_run_past_its_wall_budget_gives_up(monkeypatch):
 
 
 def test_stepping_scipy_here_gives_solve_ivps_outputs():
+    # the same floats as scipy's own driver on the plain right-hand side: every state column and the work
     from scipy.integrate import solve_ivp
     case = load_case("spring_pendulum")
     model, (q0, v0) = case.model("book"), case.initial[:2]
-    run = simulate(model, (q0, v0), 0.2, "DOP853", rtol=1e-10, output_step=1e-2, work=False,
+    run = simulate(model, (q0, v0), 0.2, "DOP853", rtol=1e-10, output_step=1e-2, work=True,
                    omega=fastest_frequency(case))
-    sol = solve_ivp(lambda t, y: np.concatenate([y[2:4], model.accelerations(t, y[:2], y[2:4]), [0.0]]), (0, 0.2),
-                    np.concatenate([q0, v0, [0.0]]), method="DOP853", rtol=1e-10, atol=1e-10,
+    rates = lambda t, y: np.concatenate([y[2:4], model.accelerations(t, y[:2], y[2:4]),
+                                         [model.drive_power(t, y[:2], y[2:4])]])
+    sol = solve_ivp(rates, (0, 0.2), np.concatenate([q0, v0, [0.0]]), method="DOP853", rtol=1e-10, atol=1e-10,
                     t_eval=np.linspace(0, 0.2, 21))
-    assert np.array_equal(run["psi"].to_numpy(), sol.y[0])
+    assert np.array_equal(run[["psi", "l", "psi_rate", "l_rate", "work"]].to_numpy().T, sol.y)
+
+
+@given(st.lists(st.floats(), max_size=8))
+@example([1e308, 1e308])  # a sum that overflows: finite numbers all the same
+@example([math.inf, -math.inf])
+@example([1e308, 1e308, math.nan])
+def test_finite_is_numpys_isfinite(values):
+    assert sim.finite(values) == np.isfinite(np.array(values, dtype=float)).all()
 
 
 def test_scipy_failing_before_its_first_output_is_an_unstable_row():
