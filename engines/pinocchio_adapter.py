@@ -366,8 +366,8 @@ class PinocchioModel:
     def _book_accelerations(self, q, v, acc):
         """The accelerations of the case's coordinates from Pinocchio's, acc (nv,) at one state (q, v) or (N, nv)
         at many, q and v (N, n)."""
-        if not self._balls:  # the case's coordinates are one-dof joints' positions
-            return acc[..., self._coord_dofs]
+        if not self._balls:  # the case's coordinates are one-dof joints' positions (take: a third of indexing's cost)
+            return acc.take(self._coord_dofs, axis=-1)
         q, v = np.asarray(q), np.asarray(v)
         out = np.zeros(q.shape)
         for kind, (_, _, iv), idx in self._coord_joints:
