@@ -18,9 +18,9 @@ from xml.etree import ElementTree
 import mujoco
 import mujoco.rollout
 import numpy as np
-from scipy.linalg import lapack
 
 from engines import euler, scene as scene_rules
+from engines.linalg import linear_solution
 from engines.loops import MujocoLoops
 from engines.scene import Body
 
@@ -301,7 +301,7 @@ class MujocoModel:
         if len(self.free) and not self.loops.loops:
             force = smooth - (mass @ qacc[..., None])[..., 0]
             free_block = mass[..., self.free[:, None], self.free]
-            qacc[..., self.free] = _linear_solution(free_block, force[..., self.free])
+            qacc[..., self.free] = linear_solution(free_block, force[..., self.free])
         return qvel, mass, smooth, qacc
 
     def _inverse(self, t, q, v):
@@ -655,18 +655,6 @@ class MujocoModel:
                 q[:, idx] = euler.angles(qpos[:, qadr:qadr + 4], q0[idx])
                 v[:, idx] = euler.euler_rates(q[:, idx], qvel[:, dof:dof + 3])
         return q, v
-
-
-def _linear_solution(matrix, rhs):
-    """x of matrix x = rhs, one system (n, n) or many stacked (..., n, n): one by LAPACK's dgesv itself, the
-    routine np.linalg.solve calls, without numpy's checks around it, which cost more than the solve of a few
-    dofs (the same numbers)."""
-    if matrix.ndim > 2:
-        return np.linalg.solve(matrix, rhs[..., None])[..., 0]
-    _, _, x, info = lapack.dgesv(matrix, rhs)
-    if info > 0:
-        raise np.linalg.LinAlgError("Singular matrix")
-    return x
 
 
 def _name(m, kind, i):

@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from engines import euler, scene as scene_rules
+from engines.linalg import linear_solution
 from engines.loops import PinocchioLoops
 from engines.scene import Body
 
@@ -126,7 +127,10 @@ class PinocchioModel:
         # CRBA fills the upper triangle of M: M[i, j] for i > j is read at [j, i].
         every = np.arange(self.m.nv)
         self._whole = np.minimum.outer(every, every), np.maximum.outer(every, every)
-        self._free_columns = np.minimum.outer(every, self.free), np.maximum.outer(every, self.free)
+        # M[:, free] and its rows M[free, free], as indices into M and into M[:, free] flat (C order): `take` of
+        # them costs a third of fancy indexing
+        self._free_columns = (np.minimum.outer(every, self.free) * self.m.nv + np.maximum.outer(every, self.free))
+        self._free_block = self.free[:, None] * len(self.free) + np.arange(len(self.free))
 
     def _complete_mjcf(self, document, scene):
         """What Pinocchio's MJCF parser leaves out: the file's gravity and joints' springs and dampers, which it
@@ -278,9 +282,9 @@ class PinocchioModel:
             states = [self._engine_state(*state) for state in zip(t.tolist(), q.tolist(), v.tolist())]
             return np.array([c for c, _ in states]), np.array([w for _, w in states])
         config, velocity = np.tile(self.neutral, (len(t), 1)), np.zeros((len(t), self._nv))
-        # t**2 by libm's pow, as Python's (`_engine_state`): numpy's t**2 of an array is t * t, which rounds
-        # otherwise at times
-        squared = np.power(t, np.full_like(t, 2.0)) if self._driven_joints else None
+        # t**2 by Python's float power, as `_engine_state`'s: numpy's power of an array (t * t, or its SIMD pow of an
+        # array exponent) rounds otherwise at times, and a driven joint's position with it
+        squared = np.array([time ** 2 for time in t.tolist()]) if self._driven_joints else None
         one_dof = [(nq, iq, iv, q[:, i], v[:, i]) for nq, iq, iv, i in self._scalars] + [
             (nq, iq, iv, q0 + rate * t + 0.5 * acc * squared, rate + acc * t)
             for (nq, iq, iv), (q0, rate, acc) in self._driven_joints]
@@ -326,8 +330,8 @@ class PinocchioModel:
         acc = self._driven_acc.copy()
         tau = pin.rnea(self.m, self.d, config, velocity, acc).copy()  # the free joints' bias
         if len(self.free):
-            columns = pin.crba(self.m, self.d, config)[self._free_columns]  # M[:, free]
-            acc[self.free] = np.linalg.solve(columns[self.free], force[self.free] - tau[self.free])
+            columns = pin.crba(self.m, self.d, config).take(self._free_columns)  # M[:, free]
+            acc[self.free] = linear_solution(columns.take(self._free_block), force[self.free] - tau[self.free])
             tau += columns @ acc[self.free]
         return acc, tau
 
@@ -362,8 +366,8 @@ class PinocchioModel:
     def _book_accelerations(self, q, v, acc):
         """The accelerations of the case's coordinates from Pinocchio's, acc (nv,) at one state (q, v) or (N, nv)
         at many, q and v (N, n)."""
-        if not self._balls:  # the case's coordinates are one-dof joints' positions
-            return acc[..., self._coord_dofs]
+        if not self._balls:  # the case's coordinates are one-dof joints' positions (take: a third of indexing's cost)
+            return acc.take(self._coord_dofs, axis=-1)
         q, v = np.asarray(q), np.asarray(v)
         out = np.zeros(q.shape)
         for kind, (_, _, iv), idx in self._coord_joints:
@@ -373,12 +377,36 @@ class PinocchioModel:
                 out[..., idx] = euler.euler_accelerations(q[..., idx], v[..., idx], acc[..., iv:iv + 3])
         return out
 
+    def _dynamics_of_states(self, t, q, v):
+        """`_dynamics` of many states, t (N,), q and v (N, n), one after another (an iterator), the same numbers: the
+        book's coordinates made Pinocchio's in numpy (`engine_states`), the engine step state by state.  A scene with
+        loops goes through `_dynamics` state by state, as one-state calls do: each closing starts from the last, and
+        the loops' solver shares its data between closing the loops and their forces."""
+        t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
+        if self.loops.loops:
+            return map(self._dynamics, t, q, v)
+        configs, velocities = self.engine_states(t, q, v)
+        applied = map(self._applied_at, t, q, v) if self.varying else [self.applied] * len(t)
+        return ((config, velocity, *self.engine_dynamics(config, velocity, forces))
+                for config, velocity, forces in zip(configs, velocities, applied))
+
     def reactions(self, t, q, v):
-        config, velocity, acc, tau = self._dynamics(t, q, v)
-        pin.forwardKinematics(self.m, self.d, config)
-        loop_forces = self.loops.constrained(config, velocity, tau)[1] if self.loops.loops else []
-        # fills data.f: force of each joint's parent on its subtree, the loops' forces on the bodies external to it
-        pin.rnea(self.m, self.d, config, velocity, acc, self._loop_wrenches(loop_forces))
+        return self._reactions_of(*self._dynamics(t, q, v))
+
+    def reactions_many(self, t, q, v):
+        """`reactions` at many states, t (N,), q and v (N, n): {name: array (N,)}, the same numbers."""
+        each = [self._reactions_of(*dynamics) for dynamics in self._dynamics_of_states(t, q, v)]
+        return {name: np.array([reactions[name] for reactions in each]) for name in self.reaction_names}
+
+    def _reactions_of(self, config, velocity, acc, tau):
+        """`reactions` at a state's configuration, velocity, accelerations and inverse-dynamics forces."""
+        if self.loops.loops:  # their forces on the bodies: external to the tree, at anchors placed by data.oMi
+            pin.forwardKinematics(self.m, self.d, config)
+            loop_forces = self.loops.constrained(config, velocity, tau)[1]
+            pin.rnea(self.m, self.d, config, velocity, acc, self._loop_wrenches(loop_forces))
+        else:  # rnea reads no data.oMi (its joints' forces the same to the bit)
+            pin.rnea(self.m, self.d, config, velocity, acc)
+        # data.f: the force of each joint's parent on its subtree
         pin.forwardKinematics(self.m, self.d, config)  # rnea leaves data.oMi stale (Pinocchio 4.1)
         out = {}
         for name, (joint, axis, frame, quantity) in self.reaction_specs.items():
@@ -501,9 +529,17 @@ class PinocchioModel:
         return scene_rules.case_mass_matrix(mass, [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints], q)
 
     def energy(self, t, q, v):
-        config, velocity = self.engine_state(t, q, v)
-        kinetic = pin.computeKineticEnergy(self.m, self.d, config, velocity)
-        potential = pin.computePotentialEnergy(self.m, self.d, config)
+        return self._energy_of(*self.engine_state(t, q, v))
+
+    def energy_many(self, t, q, v):
+        """`energy` at many states, t (N,), q and v (N, n): an array (N,), the same numbers, the book's coordinates
+        made Pinocchio's in numpy (`engine_states`)."""
+        return np.array([self._energy_of(config, velocity) for config, velocity in zip(*self.engine_states(t, q, v))])
+
+    def _energy_of(self, config, velocity):
+        """`energy` at Pinocchio's configuration and velocity: the kinematics once for both energies."""
+        pin.forwardKinematics(self.m, self.d, config, velocity)
+        kinetic, potential = pin.computeKineticEnergy(self.m, self.d), pin.computePotentialEnergy(self.m, self.d)
         springs = sum(0.5 * k * (config[iq] - rest) ** 2 for iq, _, k, rest, _ in self.passive)
         return float(kinetic + potential + springs)
 
