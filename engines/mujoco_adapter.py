@@ -32,6 +32,8 @@ mujoco.set_mju_user_warning(lambda message: None)
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
                "RK4": mujoco.mjtIntegrator.mjINT_RK4}
+CLOSURES = 4096
+"""How many closures of a scene's loops from its assembly a model keeps (`_close`)."""
 
 
 class MujocoModel:
@@ -98,6 +100,7 @@ class MujocoModel:
                                       else ("loop", self.loop_names.index(spec["sensor"])), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
         self.independent = [(joint, self._joint(joint)) for kind, joint, _ in scene["layout"] if kind == "scalar"]
+        self._closures = {}  # `_assembled`'s
         self.dependent_joints = [(joint, self._joint(joint)) for joint in scene.get("dependent", [])]
         self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
@@ -261,8 +264,20 @@ class MujocoModel:
         for i in np.ndindex(qpos.shape[:-1]):
             positions = {joint: qpos[i][qadr] for joint, (qadr, _) in self.independent}
             rates = {joint: qvel[i][dof] for joint, (_, dof) in self.independent}
-            qpos[i], qvel[i] = self.loops.close(positions, rates, start)
+            qpos[i], qvel[i] = (self._assembled(positions, rates) if start is None
+                                else self.loops.close(positions, rates, start))
             start = qpos[i]
+
+    def _assembled(self, positions, rates):
+        """self.loops.close(positions, rates) from the assembly, the last CLOSURES kept by their values' bits: a
+        state's accelerations, reactions and energy, each evaluated on its own, close it alike, from the assembly
+        (a twin, `approximations_doubled`, shares them with its loops)."""
+        key = np.array([*positions.values(), *rates.values()]).tobytes()
+        if key not in self._closures:
+            if len(self._closures) == CLOSURES:
+                del self._closures[next(iter(self._closures))]  # the oldest
+            self._closures[key] = self.loops.close(positions, rates)
+        return self._closures[key]
 
     def _set_state(self, t, q, v, d=None):
         d = self.d if d is None else d

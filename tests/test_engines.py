@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 import dyncheck
 from dyncheck.case import CASES_DIR, Case
 from dyncheck.checks import compare, evaluate
-from engines import euler
+from engines import euler, mujoco_adapter
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 TOL = 1e-9  # the cases' pointwise tolerance (see case.toml for its derivation)
@@ -208,6 +208,31 @@ def test_mujoco_skips_only_stages_that_change_no_number(name, folder, monkeypatc
     reactions, plain_reactions = model.reactions_many(t, q, v), plain.reactions_many(t, q, v)
     for name in case.scene["reactions"]:
         np.testing.assert_array_equal(reactions[name], plain_reactions[name], err_msg=name)
+
+
+def test_a_kept_closure_of_the_loops_gives_the_numbers_of_a_fresh_one(monkeypatch):
+    """A scene with loops keeps its last closures from the assembly (`_assembled`): a state's quantities, with some
+    closures kept and some dropped, are a fresh model's, to the bit; the oldest is dropped first."""
+    monkeypatch.setattr(mujoco_adapter, "CLOSURES", 3)
+    case = dyncheck.load_case("slider_crank", EXAMPLES)
+    states = case.sample_states()[:5]
+    model = case.model("mujoco")
+    values = lambda x: np.array(list(x.values()) if isinstance(x, dict) else x)
+    for quantity in ("accelerations", "reactions", "energy", "drive_power"):
+        for state in states:
+            kept, fresh = (getattr(source, quantity)(*state) for source in (model, case.with_params().model("mujoco")))
+            np.testing.assert_array_equal(values(kept), values(fresh), err_msg=quantity)
+    closures, close = [], model.loops.close
+
+    def counted(*args):
+        closures.append(args)
+        return close(*args)
+
+    monkeypatch.setattr(model.loops, "close", counted)
+    model.energy(*states[2])  # kept (the last three: 2, 3, 4)
+    assert not closures
+    model.energy(*states[1])  # dropped
+    assert len(closures) == 1 and len(model._closures) == 3
 
 
 @pytest.mark.parametrize("engine", ["mujoco", "pinocchio"])
