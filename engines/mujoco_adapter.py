@@ -12,6 +12,7 @@ cancel every digit of the scene's ~1 J.
 """
 
 import copy
+import math
 import time
 from xml.etree import ElementTree
 
@@ -31,6 +32,8 @@ mujoco.set_mju_user_warning(lambda message: None)
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
                "RK4": mujoco.mjtIntegrator.mjINT_RK4}
+CLOSURES = 4096
+"""How many closures of a scene's loops from its assembly a model keeps (`_close`)."""
 
 
 class MujocoModel:
@@ -77,6 +80,10 @@ class MujocoModel:
             raise scene_rules.refusal(self.path, "MJCF", *unmodelled)
         if self.loops.loops:
             self._refuse_unclosable(scene)
+        if not self.m.neq:
+            # No constraint row can arise but a loop's (`_unmodelled` refuses contacts, joint limits, friction loss,
+            # tendons): MuJoCo's constraint stage, a sixth of an RK4 step here, would find none.  The same numbers.
+            self.m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
         for (_, dof), _ in self.driven:  # the evaluation model imposes these exactly: no armature
             self.m.dof_armature[dof] = 0.0
         self.forces = [(self._joint(joint)[1], force) for joint, force in scene["applied"].items()]
@@ -93,6 +100,7 @@ class MujocoModel:
                                       else ("loop", self.loop_names.index(spec["sensor"])), spec["axis"], spec["frame"])
                                for name, spec in scene["reactions"].items()}
         self.independent = [(joint, self._joint(joint)) for kind, joint, _ in scene["layout"] if kind == "scalar"]
+        self._closures = {}  # `_assembled`'s
         self.dependent_joints = [(joint, self._joint(joint)) for joint in scene.get("dependent", [])]
         self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
@@ -256,8 +264,20 @@ class MujocoModel:
         for i in np.ndindex(qpos.shape[:-1]):
             positions = {joint: qpos[i][qadr] for joint, (qadr, _) in self.independent}
             rates = {joint: qvel[i][dof] for joint, (_, dof) in self.independent}
-            qpos[i], qvel[i] = self.loops.close(positions, rates, start)
+            qpos[i], qvel[i] = (self._assembled(positions, rates) if start is None
+                                else self.loops.close(positions, rates, start))
             start = qpos[i]
+
+    def _assembled(self, positions, rates):
+        """self.loops.close(positions, rates) from the assembly, the last CLOSURES kept by their values' bits: a
+        state's accelerations, reactions and energy, each evaluated on its own, close it alike, from the assembly
+        (a twin, `approximations_doubled`, shares them with its loops)."""
+        key = np.array([*positions.values(), *rates.values()]).tobytes()
+        if key not in self._closures:
+            if len(self._closures) == CLOSURES:
+                del self._closures[next(iter(self._closures))]  # the oldest
+            self._closures[key] = self.loops.close(positions, rates)
+        return self._closures[key]
 
     def _set_state(self, t, q, v, d=None):
         d = self.d if d is None else d
@@ -286,23 +306,35 @@ class MujocoModel:
         ones imposed, free ones solved from M_ff; with qvel, the mass matrix and the smooth forces.
         Leaves self.d at the (last) state."""
         qpos, qvel = self._engine_states(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
-        applied = self._applied_many(t, q, v)
         nv, states = self.m.nv, qvel.shape[:-1]
-        mass, smooth = np.zeros(states + (nv, nv)), np.empty(states + (nv,))
-        qacc = np.empty(states + (nv,))
-        qacc[...] = self._driven_qacc
-        for i in np.ndindex(states):
-            self.d.qpos[:], self.d.qvel[:], self.d.qfrc_applied[:] = qpos[i], qvel[i], applied[i]
+        count = math.prod(states)
+        mass, smooth, qacc = np.zeros((count, nv, nv)), np.empty((count, nv)), np.empty((count, nv))
+        qacc[:] = self._driven_qacc
+        smooth_forces = self.d.qfrc_smooth
+        for i in self._each_state(qpos, qvel, self._applied_many(t, q, v)):
             mujoco.mj_forward(self.m, self.d)
             mujoco.mj_fullM(self.m, self.d, mass[i])
-            smooth[i] = self.d.qfrc_smooth
+            smooth[i] = smooth_forces
             if self.loops.loops:  # MuJoCo's rigid loop, not its soft one (no prescribed joints: refused)
                 qacc[i] = self.loops.constrained(self.d)[0]
+        mass, smooth, qacc = (x.reshape(states + x.shape[1:]) for x in (mass, smooth, qacc))
         if len(self.free) and not self.loops.loops:
             force = smooth - (mass @ qacc[..., None])[..., 0]
             free_block = mass[..., self.free[:, None], self.free]
             qacc[..., self.free] = linear_solution(free_block, force[..., self.free])
         return qvel, mass, smooth, qacc
+
+    def _each_state(self, qpos, qvel, applied=None):
+        """Put each state (rows of qpos, qvel and applied: (..., n)) into self.d in turn, yielding its index in the
+        states taken as a flat list.  The views of self.d's arrays are taken once: one costs a sixth of mj_forward."""
+        position, velocity, forces = self.d.qpos, self.d.qvel, self.d.qfrc_applied
+        qpos, qvel = qpos.reshape(-1, self.m.nq), qvel.reshape(-1, self.m.nv)
+        applied = None if applied is None else applied.reshape(-1, self.m.nv)
+        for i in range(len(qpos)):
+            position[:], velocity[:] = qpos[i], qvel[i]
+            if applied is not None:
+                forces[:] = applied[i]
+            yield i
 
     def _inverse(self, t, q, v):
         """self.d at the book's state with its accelerations and the sensors of its forces; with loops, MuJoCo's
@@ -346,39 +378,43 @@ class MujocoModel:
 
     def reactions(self, t, q, v):
         self._inverse(t, q, v)
-        return self._sensed_reactions()
+        reactions = self._sensed_reactions(self.d.sensordata, self.d.site_xmat,
+                                           self.loop_forces if self.loops.loops else None)
+        return {name: float(value) for name, value in reactions.items()}
 
-    def _sensed_reactions(self):
-        """The reactions that self.d's sensors (or loop forces) hold."""
+    def _sensed_reactions(self, sensordata, site_xmat, loop_forces):
+        """The reactions in MuJoCo's sensor readings (sensordata), with its sites' frames (site_xmat) and its loop
+        forces (`_inverse`), at one state or many (arrays of shape (..., n)): {name: (...)}.  A frame's rotation
+        by matmul, one gufunc, which does at many states the arithmetic it does at one."""
         out = {}
         for name, ((adr, site), axis, frame) in self.reaction_specs.items():
             if adr == "loop":  # world axes: the force on the <connect>'s body1 at its anchor
-                out[name] = float(self.loop_forces[site][axis])
+                out[name] = loop_forces[..., site, axis]
                 continue
-            force = self.d.sensordata[adr:adr + 3].copy()
+            force = sensordata[..., adr:adr + 3]
             if frame == "world":
-                force = self.d.site_xmat[site].reshape(3, 3) @ force
-            out[name] = float(force[axis])
+                rotation = site_xmat[..., site, :].reshape(force.shape[:-1] + (3, 3))
+                force = (rotation @ force[..., None])[..., 0]
+            out[name] = force[..., axis].copy()
         return out
 
     def reactions_many(self, t, q, v):
         """`reactions` at many states, the same numbers: t of shape (N,), q and v (N, n) -> {name: (N,)}.  The
-        accelerations of all states solved at once (`_solve`), then mj_inverse state by state; with loops, state
-        by state as `reactions` (each closed from the assembly)."""
+        accelerations of all states solved at once (`_solve`), then mj_inverse state by state, the sensors of all
+        read at once; with loops, state by state as `reactions` (each closed from the assembly)."""
         t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
         if self.loops.loops:
             rows = [self.reactions(*state) for state in zip(t, q, v)]
-        else:
-            qpos, _ = self._engine_states(t, q, v)
-            qvel, _, _, qacc = self._solve(t, q, v)
-            applied = self._applied_many(t, q, v)
-            rows = []
-            for i in range(len(t)):
-                self.d.qpos[:], self.d.qvel[:], self.d.qfrc_applied[:] = qpos[i], qvel[i], applied[i]
-                self.d.qacc[:] = qacc[i]
-                mujoco.mj_inverse(self.m, self.d)
-                rows.append(self._sensed_reactions())
-        return {name: np.array([row[name] for row in rows]) for name in self.reaction_names}
+            return {name: np.array([row[name] for row in rows]) for name in self.reaction_names}
+        qpos, _ = self._engine_states(t, q, v)
+        qvel, _, _, qacc = self._solve(t, q, v)
+        sensordata, site_xmat = np.empty((len(t), self.m.nsensordata)), np.empty((len(t), self.m.nsite, 9))
+        acceleration, readings, frames = self.d.qacc, self.d.sensordata, self.d.site_xmat
+        for i in self._each_state(qpos, qvel, self._applied_many(t, q, v)):
+            acceleration[:] = qacc[i]
+            mujoco.mj_inverse(self.m, self.d)
+            sensordata[i], site_xmat[i] = readings, frames
+        return self._sensed_reactions(sensordata, site_xmat, None)
 
     def point_accelerations(self, t, q, v):
         """The named bodies' kinematics, in their own or the world frame: the absolute acceleration
@@ -436,8 +472,7 @@ class MujocoModel:
             return np.array([self.energy(*state) for state in zip(t, q, v)])
         qpos, qvel = self._engine_states(t, q, v)
         out = np.empty(len(t))
-        for i in range(len(t)):
-            self.d.qpos[:], self.d.qvel[:] = qpos[i], qvel[i]
+        for i in self._each_state(qpos, qvel):
             out[i] = self._energy()
         return out
 
@@ -572,6 +607,7 @@ class MujocoModel:
         m.dof_armature[:] = self.armature
         m.opt.timestep = dt
         m.opt.integrator = INTEGRATORS[integrator]
+        m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_SENSOR  # a run's sensor readings are never read
         d = mujoco.MjData(m)
         self._set_state(0.0, q0, v0, d)
         spec = mujoco.mjtState.mjSTATE_FULLPHYSICS

@@ -1,6 +1,8 @@
 """Engines against the reference, with default and overridden parameters, and the scene-file guard."""
 
+import copy
 import shutil
+from pathlib import Path
 
 import mujoco
 import mujoco.rollout
@@ -11,10 +13,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck.case import Case
+from dyncheck.case import CASES_DIR, Case
 from dyncheck.checks import compare, evaluate
-from engines import euler
+from engines import euler, mujoco_adapter
 
+EXAMPLES = Path(__file__).parent.parent / "examples"
 TOL = 1e-9  # the cases' pointwise tolerance (see case.toml for its derivation)
 
 
@@ -167,6 +170,69 @@ def test_mujoco_ball_joint_quaternions_are_mujoco_rollout():
     quaternions = case.model("mujoco").ball_joint_quaternions(q0, v0, nstep * dt, dt, "RK4")
     assert quaternions.shape == (nstep + 1, 4)
     assert_close(np.vstack([start, states[0]])[:, 1:1 + m.nq], quaternions)  # time, qpos, qvel, ...
+
+
+SKIPPED = {"constraint": int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT), "sensor": int(mujoco.mjtDisableBit.mjDSBL_SENSOR)}
+
+
+@pytest.mark.parametrize("name, folder", [(name, CASES_DIR) for name in dyncheck.case_names()]
+                         + [(name, EXAMPLES) for name in ("slider_crank", "forced_cart_pendulum")])  # a loop; laws
+def test_mujoco_skips_only_stages_that_change_no_number(name, folder, monkeypatch):
+    """MuJoCo's runs skip their sensors, and a scene without loops skips the constraint stage in its runs and its
+    evaluations: a run, and the drive power, reactions and energy at its states, are those of the scene with every
+    stage on, to the bit."""
+    case = dyncheck.load_case(name, folder)
+    q0, v0, _ = case.initial
+    dt = case.integration["mujoco_step"]
+    model = case.model("mujoco")
+    assert bool(model.m.opt.disableflags & SKIPPED["constraint"]) == (not model.loops.loops)
+    plain = copy.copy(model)
+    plain.m = copy.copy(model.m)
+    plain.m.opt.disableflags &= ~SKIPPED["constraint"]
+    plain.d = mujoco.MjData(plain.m)
+
+    def every_stage(*args):
+        m, d, start, forces = model.stepping(*args)
+        assert m.opt.disableflags & SKIPPED["sensor"]
+        m.opt.disableflags &= ~(SKIPPED["constraint"] | SKIPPED["sensor"])
+        return m, d, start, forces
+
+    monkeypatch.setattr(plain, "stepping", every_stage)
+    run, plain_run = (source._rollout(q0, v0, 200 * dt, dt, "RK4") for source in (model, plain))
+    t, qpos, qvel = run[:3]
+    np.testing.assert_array_equal(qpos, plain_run[1])
+    np.testing.assert_array_equal(qvel, plain_run[2])
+    q, v = model._book_states(qpos, qvel, q0)
+    np.testing.assert_array_equal(model.drive_powers(t, q, v), plain.drive_powers(t, q, v))
+    np.testing.assert_array_equal(model.energy_many(t, q, v), plain.energy_many(t, q, v))
+    reactions, plain_reactions = model.reactions_many(t, q, v), plain.reactions_many(t, q, v)
+    for name in case.scene["reactions"]:
+        np.testing.assert_array_equal(reactions[name], plain_reactions[name], err_msg=name)
+
+
+def test_a_kept_closure_of_the_loops_gives_the_numbers_of_a_fresh_one(monkeypatch):
+    """A scene with loops keeps its last closures from the assembly (`_assembled`): a state's quantities, with some
+    closures kept and some dropped, are a fresh model's, to the bit; the oldest is dropped first."""
+    monkeypatch.setattr(mujoco_adapter, "CLOSURES", 3)
+    case = dyncheck.load_case("slider_crank", EXAMPLES)
+    states = case.sample_states()[:5]
+    model = case.model("mujoco")
+    values = lambda x: np.array(list(x.values()) if isinstance(x, dict) else x)
+    for quantity in ("accelerations", "reactions", "energy", "drive_power"):
+        for state in states:
+            kept, fresh = (getattr(source, quantity)(*state) for source in (model, case.with_params().model("mujoco")))
+            np.testing.assert_array_equal(values(kept), values(fresh), err_msg=quantity)
+    closures, close = [], model.loops.close
+
+    def counted(*args):
+        closures.append(args)
+        return close(*args)
+
+    monkeypatch.setattr(model.loops, "close", counted)
+    model.energy(*states[2])  # kept (the last three: 2, 3, 4)
+    assert not closures
+    model.energy(*states[1])  # dropped
+    assert len(closures) == 1 and len(model._closures) == 3
 
 
 @pytest.mark.parametrize("engine", ["mujoco", "pinocchio"])
