@@ -48,12 +48,24 @@ def _digest(paths, root, digest):
 
 @functools.cache
 def code_version():
-    """A hash of the code that computes a solution (the harness, the derivations, the engine adapters) and of
-    the libraries it runs on."""
+    """A hash of the code that computes a solution (the harness, the derivations, the engine adapters), of
+    the libraries it runs on and of the kernels they run (`kernels`)."""
     root = Path(sys.modules["dyncheck"].__file__).parent.parent
     digest = _digest([p for package in CODE for p in (root / package).rglob("*.py")], root, hashlib.sha256())
-    digest.update(repr((sys.version, platform.machine(), [version(name) for name in LIBRARIES])).encode())
+    digest.update(repr((sys.version, platform.machine(), [version(name) for name in LIBRARIES], kernels())).encode())
     return digest.hexdigest()[:16]
+
+
+def kernels():
+    """What picks numpy's and OpenBLAS's loops, which round differently: the processor features numpy dispatches on
+    (those NPY_DISABLE_CPU_FEATURES leaves on) and the kernel OpenBLAS is told to use (OPENBLAS_CORETYPE; else
+    it picks by the same processor).  A solution made on AVX-512 kernels differs in its last digits from one made
+    on AVX2 kernels: a cache folder shared by two machines, or a run with other settings, must not mix them."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__ as features
+    except ImportError:  # a numpy that keeps them elsewhere: the processor's name stands for them
+        features = {platform.processor(): True}
+    return sorted(name for name, enabled in features.items() if enabled), os.environ.get("OPENBLAS_CORETYPE")
 
 
 def imported_code():

@@ -49,7 +49,7 @@ def test_a_cached_solution_is_what_simulate_computes_bit_for_bit(folder, monkeyp
     assert again.attrs == computed.attrs
 
 
-@pytest.mark.parametrize("change", ["parameter", "span", "case file", "code"])
+@pytest.mark.parametrize("change", ["parameter", "span", "case file", "code", "kernels"])
 def test_anything_the_solution_depends_on_makes_a_new_key(folder, monkeypatch, tmp_path, change):
     own = tmp_path / "cases"
     shutil.copytree(CASES / "rotating_pendulum", own / "rotating_pendulum")
@@ -62,7 +62,13 @@ def test_anything_the_solution_depends_on_makes_a_new_key(folder, monkeypatch, t
         file.write_text(file.read_text() + "\n# edited\n")
     elif change == "code":
         monkeypatch.setattr(cache, "code_version", lambda: "another version")
+    elif change == "kernels":  # as a run with OPENBLAS_CORETYPE set, or on another processor, has them
+        kernels = cache.kernels()
+        monkeypatch.setattr(cache, "kernels", lambda: (kernels[0], "Haswell" if kernels[1] != "Haswell" else None))
+        cache.code_version.cache_clear()  # memoised: the kernels are fixed once numpy has loaded
     solve(case, 0.06 if change == "span" else 0.05)
+    if change == "kernels":
+        cache.code_version.cache_clear()  # not to keep the patched kernels' version
     assert len(entries(folder)) == 2
 
 
