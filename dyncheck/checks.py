@@ -17,7 +17,7 @@ from dyncheck.localise import localise, values_at
 from dyncheck.messages import suggest
 from dyncheck.results import OWN_WORDS, CaseResult, Finding, Outcome, Pair, Status, no_number, row
 from dyncheck.simulate import (ERROR_EXPONENT, Escape, Unstable, at_many_states, energy_residual, fastest_frequency,
-                               simulate, state_columns)
+                               richardson_factor, simulate, state_columns)
 from dyncheck.stability.long_runs import agreement_horizon
 from dyncheck.work_precision import convergence
 
@@ -286,8 +286,14 @@ def tight_step(case):
 
 def error_estimate(outcome):
     """Estimated error of `run`, per column, from its tighter twin (Richardson for RK4)."""
-    factor = 16 / 15 if outcome.run.attrs["method"] == "mujoco:RK4" else 1.0
-    return factor * (outcome.run - outcome.twin).abs()
+    return twin_factor(outcome) * (outcome.run - outcome.twin).abs()
+
+
+def twin_factor(outcome):
+    """What a run's difference from its twin is multiplied by to estimate the run's error: 1 for an adaptive
+    twin (its error is far below the run's), Richardson's for MuJoCo's RK4 (simulate.richardson_factor)."""
+    run, twin = outcome.run.attrs, outcome.twin.attrs
+    return richardson_factor(run["dt"], twin["dt"]) if run["method"] == "mujoco:RK4" else 1.0
 
 
 def approximations_effect(outcome):
@@ -376,9 +382,7 @@ def energy(case, runs):
             continue
         scale = max(run["energy"].abs().max(), run["work"].abs().max()) or 1.0  # at rest: in joules
         residual = energy_residual(run)
-        estimate = (residual - energy_residual(twin)).abs().max()
-        if run.attrs["method"] == "mujoco:RK4":
-            estimate *= 16 / 15
+        estimate = (residual - energy_residual(twin)).abs().max() * twin_factor(runs[source])
         approximated = runs[source].approximations  # the scene's approximations' effect, as in `trajectory`
         effect = 0.0 if approximated is None else (energy_residual(approximated) - residual).abs().max()
         rows.append(row("energy", quantity, label, residual.abs().max() / scale,

@@ -94,6 +94,16 @@ def state_columns(case):
     return [c for name in case.coords for c in (name, name + "_rate")]
 
 
+RK4_ORDER = 4
+
+
+def richardson_factor(step, twin_step, order=RK4_ORDER):
+    """What |x(step) - x(twin_step)|, the difference between a fixed-step run and its twin, is multiplied by to
+    estimate the run's error, for a method whose error goes as C step^order (Richardson): 1 / |(twin_step /
+    step)^order - 1|.  For RK4, 16/15 with the twin at half the step, 1/15 at twice it."""
+    return 1 / abs((twin_step / step) ** order - 1)
+
+
 def energy_residual(run):
     """E(t) - E(0) - W(t): zero for exact dynamics (W = 0 when nothing is driven)."""
     return run["energy"] - run["energy"].iloc[0] - run["work"]

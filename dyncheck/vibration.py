@@ -36,7 +36,7 @@ from scipy.integrate import DOP853
 
 from dyncheck import ceilings, expressions, store
 from dyncheck.results import Status, no_number, row
-from dyncheck.simulate import Unstable, fastest_frequency, scipy_budget, simulate
+from dyncheck.simulate import Unstable, fastest_frequency, richardson_factor, scipy_budget, simulate
 
 EPS = np.finfo(float).eps
 # Central differences extrapolated once (Richardson: fourth order): truncation ~h^4 f^(5) and rounding eps f / h
@@ -48,6 +48,10 @@ NEWTON_ITERATIONS = 50
 NEWTON_TOLERANCE = ceilings.ROUNDING_FLOOR
 SAFETY = 10.0  # on first-order estimates (of a difference quotient's error, of an eigenvalue's perturbation)
 RUNS_PER_PERIOD = 64  # outputs per period of a mode's run: its phase is fitted, not interpolated
+# MuJoCo's step error in a mode's or a stroboscopic run comes from its twin at twice the step (Richardson,
+# simulate.richardson_factor): on these small motions, linear and far from chaos, RK4's error goes as dt^4 at both
+# steps (omega dt <= 0.02 in the book's cases), and the twin costs half the run where one at half the step costs two.
+MUJOCO_TWIN = 2
 
 
 class NoEquilibrium(ValueError):
@@ -414,8 +418,8 @@ def mode_run(case, model, source, eq, modes, i, amplitude, periods, method, dt=N
     lam = modes.eigenvalues[i]
     start = eq.state + amplitude * along(modes.right[:, i], n)
     period = 2 * math.pi / lam.imag
-    mujoco_step = case.integration["mujoco_step"]
-    output_step = mujoco_step * max(1, round(period / RUNS_PER_PERIOD / mujoco_step))
+    coarsest = MUJOCO_TWIN * case.integration["mujoco_step"]  # MuJoCo's twin's step: the outputs fall on both runs' steps
+    output_step = coarsest * max(1, round(period / RUNS_PER_PERIOD / coarsest))
     t_end = output_step * round(periods * period / output_step)
     options = {"dt": dt} if dt else {"rtol": case.integration["tight_rtol"], "max_step": period / 20,
                                      "omega": abs(lam)}
@@ -619,7 +623,7 @@ def motion_checks(case, scene, eq, modes, table):
                                                                    own[source][2], scale * amplitude, periods,
                                                                    method, step)
         runs = [run("reference", "DOP853"), run("pinocchio", "DOP853"), run("mujoco", "mujoco:RK4", step=dt),
-                run("reference", "DOP853", 2.0), run("mujoco", "mujoco:RK4", step=dt / 2)]
+                run("reference", "DOP853", 2.0), run("mujoco", "mujoco:RK4", step=MUJOCO_TWIN * dt)]
         motions += runs
         shift.append(abs(runs[3].exponent - runs[0].exponent) if runs[0].ok and runs[3].ok else math.inf)
     return motions, shift
@@ -628,7 +632,7 @@ def motion_checks(case, scene, eq, modes, table):
 def motion_rows(case, modes, motions, shift):
     """Each source's lambda = growth + i frequency in its run against its own linearisation's eigenvalue,
     relative to |lambda|: allowed SAFETY times the nonlinear shift at the amplitude, plus MuJoCo's step error
-    (RK4 at dt and dt/2: their difference is 15/16 of the error at dt), plus the eigenvalue's own bound; the
+    (RK4 at dt and at twice it: their difference is 15 times the error at dt), plus the eigenvalue's own bound; the
     ceiling: a shift above ceilings.MOTION of |lambda| hides a term of that size."""
     rows = []
     reference = modes["reference"]
@@ -644,7 +648,7 @@ def motion_rows(case, modes, motions, shift):
                 continue
             j = match(reference, modes[source])[i]
             lam = modes[source].eigenvalues[j]
-            step_error = (abs(motion.exponent - mujoco_twin.exponent) * 16 / 15
+            step_error = (abs(motion.exponent - mujoco_twin.exponent) * richardson_factor(1, MUJOCO_TWIN)
                           if source == "mujoco" and mujoco_twin.ok else 0.0)
             allowed = SAFETY * (shift[k] + step_error + modes[source].bounds[j]) / abs(lam) + ceilings.ROUNDING_FLOOR
             rows.append(row("vibration", label, (source,), abs(motion.exponent - lam) / abs(lam), allowed,
@@ -730,7 +734,7 @@ class Floquet:
     orbit: np.ndarray  # the derivation's states over one period from t = 0, at 2 SAMPLES + 1 equal steps
     iterations: int  # of shooting Newton-Raphson
     monodromy: dict  # {source: Monodromy}
-    motions: tuple  # of Motion: (reference, pinocchio, mujoco, reference at twice the amplitude, mujoco at dt/2)
+    motions: tuple  # of Motion: (reference, pinocchio, mujoco, reference at twice the amplitude, mujoco at twice the step)
     shift: float  # the nonlinear shift of the largest multiplier at the amplitude
     rows: tuple
     failure: str = ""  # why there is no analysis (T not a period of the equations, no orbit)
@@ -972,12 +976,13 @@ def multiplier_text(mu):
 def stroboscopic_checks(case, start, monodromy, table):
     """The largest multiplier of the derivation measured in runs from the orbit's x0 displaced by the amplitude along
     each source's own eigenvector: the derivation and Pinocchio by DOP853 at the case's tight rtol, MuJoCo by its RK4
-    at the longest step no longer than the case's that divides T (its states at the multiples of T: a `--set` of the
-    disk's rate moves T off the case's steps), and the twins: the derivation at twice the amplitude, MuJoCo at half
-    the step.  Returns (motions, the nonlinear shift of mu at the amplitude, from the
+    at the longest step no longer than the case's whose double divides T (its states, and its twin's, at the
+    multiples of T: a `--set` of the disk's rate moves T off the case's steps), and the twins: the derivation at twice
+    the amplitude, MuJoCo at twice the step (MUJOCO_TWIN).  Returns (motions, the nonlinear shift of mu at the amplitude, from the
     derivation's twin: as `motion_checks`'s)."""
     amplitude, periods, period = table["amplitude"], table["periods"], table["period"]
-    dt = period / math.ceil(period / case.integration["mujoco_step"] * (1 - 1e-9))  # T / dt a whole number
+    twins = math.ceil(period / (MUJOCO_TWIN * case.integration["mujoco_step"]) * (1 - 1e-9))  # twin steps in T
+    dt = period / (MUJOCO_TWIN * twins)
     reference = monodromy["reference"]
     i = reference.largest()
 
@@ -987,7 +992,7 @@ def stroboscopic_checks(case, start, monodromy, table):
                                 period, method, step)
 
     motions = [run("reference", "DOP853"), run("pinocchio", "DOP853"), run("mujoco", "mujoco:RK4", step=dt),
-               run("reference", "DOP853", 2.0), run("mujoco", "mujoco:RK4", step=dt / 2)]
+               run("reference", "DOP853", 2.0), run("mujoco", "mujoco:RK4", step=MUJOCO_TWIN * dt)]
     shift = abs(multiplier(motions[3], period) - multiplier(motions[0], period)) if motions[0].ok and motions[3].ok \
         else math.inf
     return motions, shift
@@ -1019,7 +1024,7 @@ def multiplier(motion, period):
 
 def stroboscopic_rows(case, monodromy, motions, shift, period):
     """Each source's measured multiplier against its own largest one, relative to |mu|: allowed SAFETY times the
-    nonlinear shift, MuJoCo's step error (RK4 at dt and dt/2: their difference is 15/16 of the error at dt) and the
+    nonlinear shift, MuJoCo's step error (RK4 at dt and at twice it: their difference is 15 times the error at dt) and the
     multiplier's bound; the ceiling that of a mode's run (ceilings.MOTION)."""
     rows = []
     mujoco_twin = motions[4]
@@ -1032,7 +1037,7 @@ def stroboscopic_rows(case, monodromy, motions, shift, period):
         own = monodromy[source]
         mu, bound = own.multipliers[motion.mode], own.bounds[motion.mode]
         measured = multiplier(motion, period)
-        step_error = (abs(measured - multiplier(mujoco_twin, period)) * 16 / 15
+        step_error = (abs(measured - multiplier(mujoco_twin, period)) * richardson_factor(1, MUJOCO_TWIN)
                       if source == "mujoco" and mujoco_twin.ok else 0.0)
         rows.append(row("vibration", label, (source,), abs(measured - mu) / abs(mu),
                         SAFETY * (shift + step_error + bound) / abs(mu) + ceilings.ROUNDING_FLOOR,

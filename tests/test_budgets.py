@@ -59,6 +59,22 @@ def test_stepping_scipy_here_gives_solve_ivps_outputs():
     assert np.array_equal(run[["psi", "l", "psi_rate", "l_rate", "work"]].to_numpy().T, sol.y)
 
 
+@pytest.mark.parametrize("ratio", [0.5, 2.0])
+def test_richardsons_factor_gives_rk4s_own_error_from_a_twin_at_half_or_twice_the_step(ratio):
+    # The book's spring pendulum, 0.5 s by RK4 at omega dt = 0.05 (and its twin), against DOP853 at 1e-13: the
+    # estimate is the error to within its h^5 remainder, a few per cent here; a wrong factor (16/15 for a twin
+    # at twice the step, 1/15 at half) is off by 16 times.
+    case = load_case("spring_pendulum")
+    model, ic, dt = case.model("book"), case.initial[:2], 5e-4
+    runs = [simulate(model, ic, 0.5, "RK4", dt=h, output_step=1e-2) for h in (dt, ratio * dt)]
+    exact = simulate(model, ic, 0.5, "DOP853", rtol=1e-13, max_step=1e-3, output_step=1e-2,
+                     omega=fastest_frequency(case))
+    columns = ["psi", "l", "psi_rate", "l_rate"]
+    error = (runs[0][columns] - exact[columns]).abs().max()
+    estimate = sim.richardson_factor(dt, ratio * dt) * (runs[0][columns] - runs[1][columns]).abs().max()
+    assert np.allclose(estimate, error, rtol=0.1)
+
+
 @given(st.lists(st.floats(), max_size=8))
 @example([1e308, 1e308])  # a sum that overflows: finite numbers all the same
 @example([math.inf, -math.inf])
