@@ -355,12 +355,8 @@ class PinocchioModel:
         coordinates become Pinocchio's state (`engine_states`), and its accelerations the book's, in numpy over all
         the states; the engine step alone goes state by state."""
         t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
-        configs, velocities = self.engine_states(t, q, v)
-        # the laws of the state given t as a Python float, as by `_dynamics`
-        applied = ([self._applied_at(*state) for state in zip(t.tolist(), q, v)] if self.varying
-                   else [self.applied] * len(t))
         # the answers' bytes joined: a quarter of numpy's cost of concatenating as many small arrays
-        acc = np.frombuffer(b"".join([dofs for dofs, _ in map(self.engine_dynamics, configs, velocities, applied)]))
+        acc = np.frombuffer(b"".join([dofs for _, _, dofs, _ in self._dynamics_of_states(t, q, v)]))
         return self._book_accelerations(q, v, acc.reshape(len(t), self._nv))
 
     def _book_accelerations(self, q, v, acc):
@@ -383,10 +379,11 @@ class PinocchioModel:
         loops goes through `_dynamics` state by state, as one-state calls do: each closing starts from the last, and
         the loops' solver shares its data between closing the loops and their forces."""
         t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
+        times = t.tolist()  # Python floats, as `engine_states` squares them: a law of t rounds alike
         if self.loops.loops:
-            return map(self._dynamics, t, q, v)
+            return map(self._dynamics, times, q, v)
         configs, velocities = self.engine_states(t, q, v)
-        applied = map(self._applied_at, t, q, v) if self.varying else [self.applied] * len(t)
+        applied = map(self._applied_at, times, q, v) if self.varying else [self.applied] * len(t)
         return ((config, velocity, *self.engine_dynamics(config, velocity, forces))
                 for config, velocity, forces in zip(configs, velocities, applied))
 
