@@ -176,7 +176,11 @@ class MujocoModel:
         when it compiles; mj_setConst redoes what follows), the armature that holds the prescribed
         motions halved (they drift by torque x time / armature), and the softness of the loops' constraints
         doubled (MujocoLoops.softness_doubled: the only thing by which MuJoCo's own stepping of a loop departs
-        from the rigid loop; the evaluations, rigid, keep this scene's MujocoLoops)."""
+        from the rigid loop; the evaluations, rigid, keep this scene's MujocoLoops).  A scene with none of them is
+        its own twin: this model itself."""
+        if not (self.loops.loops or len(self._driven_dofs) or any(factor != 1.0 for pair in scales.values()
+                                                                 for factor in pair)):
+            return self
         twin = copy.copy(self)
         twin.m = self.loops.softness_doubled() if self.loops.loops else copy.copy(self.m)
         twin.armature = self.armature.copy()
