@@ -20,7 +20,7 @@ from PIL import Image
 
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.results import Frames, heading
-from dyncheck.style import MIN_FONT, embed, plt
+from dyncheck.style import MIN_FONT, embed, pyplot
 
 MAX_FRAMES = 100
 MIN_INTERVAL = 0.05  # s between frames: 20 per second at most, so that the GIF plays about in real time
@@ -159,7 +159,7 @@ class Animator:
         self.low, self.high, self.used = bounds(self.panels)
         self.gl = gl
         count = len(self.panels) + bool(graph)
-        self.fig = plt.figure(figsize=(WIDTH * count / DPI, HEIGHT / DPI), dpi=DPI, layout="none")  # axes placed by add_axes
+        self.fig = pyplot().figure(figsize=(WIDTH * count / DPI, HEIGHT / DPI), dpi=DPI, layout="none")  # axes placed by add_axes
         self.title = heading(case.spec)
         self.heading = self.fig.suptitle("", fontsize=MIN_FONT + 1)
         self.updates = []  # functions of the frame's index that move the artists
@@ -297,7 +297,7 @@ def write_gif(result, case, path, gl=None):
     Returns the number of frames and the time each is shown (ms)."""
     animator = Animator(result, case, gl)
     images = [animator.frame(i) for i in range(len(animator.times))]
-    plt.close(animator.fig)
+    pyplot().close(animator.fig)
     # One palette from the first, middle and last frames side by side: every colour drawn, every path grown.
     sample = [images[0], images[len(images) // 2], images[-1]]
     montage = Image.new("RGB", (sample[0].width * 3, sample[0].height))

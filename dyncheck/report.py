@@ -31,7 +31,7 @@ from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, con
                               inside_or_outside, load_result, reason, save_results)
 from dyncheck.simulate import energy_residual, state_columns
 from dyncheck.style import SOURCE_STYLE as STYLE
-from dyncheck.style import TEXT_HEIGHT, TEXT_WIDTH, along, embed, legend_below, log_range, panels, plt, save, thin, title
+from dyncheck.style import TEXT_HEIGHT, TEXT_WIDTH, along, embed, legend_below, log_range, panels, pyplot, save, thin, title
 
 ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
 
@@ -187,7 +187,7 @@ def figure_scene(result, case, path, *, words):
     paths = paths.reshape(len(case.scene["paths"]), len(tight), 3).transpose(1, 0, 2)  # (time, body, xyz)
     paths = thin(paths)
     planar = np.ptp(np.concatenate([paths[..., 2].ravel(), origins[:, 2]])) < 1e-12
-    fig = plt.figure(figsize=(TEXT_WIDTH, 4.6))
+    fig = pyplot().figure(figsize=(TEXT_WIDTH, 4.6))
     ax = fig.add_subplot(projection=None if planar else "3d")
     dims = 2 if planar else 3
     chain = np.vstack([np.zeros(3), origins])  # body 0 is the world origin
@@ -448,7 +448,7 @@ def book_axes(ax, item, x, y):
     shown = np.isfinite(x) & np.isfinite(y)  # a run that blew up is drawn up to where it went
     (x0, x1), (y0, y1) = (item.get(key, (v[shown].min(), v[shown].max())) for key, v in (("xlim", x), ("ylim", y)))
     if "xlim" in item or "ylim" in item:
-        ax.add_patch(plt.Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ls="--", lw=0.8, color="0.4", zorder=0))
+        ax.add_patch(pyplot().Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ls="--", lw=0.8, color="0.4", zorder=0))
     for v, low, high, setter in ((x, x0, x1, ax.set_xlim), (y, y0, y1, ax.set_ylim)):
         low, high = min(low, v[shown].min()), max(high, v[shown].max())
         setter(low - 0.04 * (high - low), high + 0.04 * (high - low))

@@ -4,18 +4,18 @@ plotting backend (files only, no display), and how every figure is saved and sho
 A figure is drawn for print: at most `TEXT_WIDTH` wide (an A4 page's text width), every font at least
 `MIN_FONT` points, saved as a PNG at `DPI` (the page) with a vector PDF twin beside it (print), both
 byte-for-byte the same when drawn again from the same data. On a page every figure has a caption
-under it (`embed`)."""
+under it (`embed`).
 
+matplotlib is imported with the first figure (`pyplot`), not with this module: the checks and the
+studies' computations import this module but draw nothing, and `dyncheck run` never loads matplotlib
+(a quarter of a second of its start-up)."""
+
+import functools
 import textwrap
 from pathlib import Path
 
-import matplotlib
 import numpy as np
 from PIL import Image
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
-from matplotlib.text import Text  # noqa: E402
 
 TEXT_WIDTH = 6.3  # inches: A4 (210 mm) less two 25 mm margins, 160 mm
 TEXT_HEIGHT = 9.0  # inches: A4's text height (247 mm) less room for the caption under the figure
@@ -23,12 +23,24 @@ MIN_FONT = 8.0  # points, at TEXT_WIDTH: the smallest size a printed page keeps 
 DPI = 200  # the PNG's resolution; 1260 pixels across at TEXT_WIDTH
 
 # Defaults that comply: a figure drawn without font sizes of its own reads at A4 width.
-plt.rcParams.update({
+RC_PARAMS = {
     "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "figure.titlesize": 9.5,
     "xtick.labelsize": 8, "ytick.labelsize": 8, "legend.fontsize": 8, "legend.title_fontsize": 8,
     "figure.figsize": (TEXT_WIDTH, 3.6), "figure.constrained_layout.use": True, "savefig.dpi": DPI,
     "axes.grid": True, "grid.alpha": 0.3, "lines.markersize": 4, "pdf.compression": 9,
-})
+}
+
+
+@functools.cache
+def pyplot():
+    """matplotlib.pyplot on the Agg backend (files only, no display) with RC_PARAMS: every figure is made
+    through it (or `panels`), so that matplotlib is imported with the first figure and only then."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # after choosing the backend
+    plt.rcParams.update(RC_PARAMS)
+    return plt
+
 
 # A source's curves over time, told apart in grey as well as in colour: a line style and a marker per
 # source (markers spaced along the line, each source's shifted so that coinciding curves show all of
@@ -73,7 +85,7 @@ def save(fig, path):
             paletted = image.convert("RGB").quantize(256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
         paletted.save(path, optimize=True)
     finally:
-        plt.close(fig)
+        pyplot().close(fig)
 
 
 def check_size(fig, path):
@@ -87,6 +99,7 @@ def check_size(fig, path):
 
 def check_text(fig, path):
     """ValueError unless every text of `fig`, as last drawn, is at least MIN_FONT and inside the figure."""
+    from matplotlib.text import Text  # matplotlib is loaded: `fig` is a figure (see pyplot)
     fig.draw_without_rendering()  # at the figure's own resolution, which the extents below are in
     renderer = fig.canvas.get_renderer()
     canvas = fig.bbox.padded(1.0)  # a pixel of slack for rounding
@@ -112,9 +125,9 @@ def title(name, what):
 
 
 def panels(rows=1, cols=1, height=3.6, **options):
-    """A figure of rows x cols axes at the page's text width, `height` inches tall (plt.subplots's
+    """A figure of rows x cols axes at the page's text width, `height` inches tall (pyplot().subplots's
     options); the axes always as a 2-D array."""
-    return plt.subplots(rows, cols, figsize=(TEXT_WIDTH, height), squeeze=False, **options)
+    return pyplot().subplots(rows, cols, figsize=(TEXT_WIDTH, height), squeeze=False, **options)
 
 
 def legend_below(fig, handles=None, labels=None, ncol=3, **options):
@@ -185,5 +198,5 @@ def method_style(label):
     return {} if method is None else dict(color=METHOD_COLOUR[method], marker=METHOD_MARKER[method])
 
 
-__all__ = ["plt", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check_size", "check_text", "embed", "title", "panels", "legend_below",
+__all__ = ["pyplot", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check_size", "check_text", "embed", "title", "panels", "legend_below",
            "unique_handles", "thin", "log_range", "SOURCE_STYLE", "along", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]

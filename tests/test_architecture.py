@@ -115,6 +115,34 @@ def test_rendering_saved_results_needs_no_engine(results, tmp_path):
     assert not differ, differ
 
 
+def test_loading_the_cases_for_a_run_imports_no_matplotlib():
+    """What `dyncheck run` does before its checks start (the command line and the checks imported, every case
+    of cases/ and examples/ loaded with its models, studies and own study module) imports no matplotlib: only
+    figures need it (dyncheck.style.pyplot), and it would be a quarter of a second of the run's start-up."""
+    code = ("import sys\nfrom pathlib import Path\n"
+            "from dyncheck.cli import select_cases\n"
+            "import dyncheck.checks\n"
+            f"for folder in {[str(ROOT / 'cases'), str(ROOT / 'examples')]!r}:\n"
+            "    select_cases([], [], Path(folder))\n"
+            "print(sorted(m for m in sys.modules if m.partition('.')[0] == 'matplotlib'))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]", done.stdout
+
+
+@pytest.mark.full
+def test_a_whole_run_imports_no_matplotlib(tmp_path):
+    """`dyncheck run` of every case imports no matplotlib, in its own process or in any of its workers (their
+    imports reach the shared stderr through -X importtime)."""
+    code = "import sys\nfrom dyncheck.cli import main\nsys.exit(main(['run']))\n"
+    done = subprocess.run([sys.executable, "-X", "importtime", "-c", code], capture_output=True, text=True,
+                          cwd=tmp_path)
+    assert done.returncode == 0, done.stdout[-2000:]
+    imported = [line.rpartition("|")[2].strip() for line in done.stderr.splitlines() if line.startswith("import time:")]
+    assert "dyncheck.checks" in imported  # the imports are reported
+    assert not [m for m in imported if m.partition(".")[0] == "matplotlib"]
+
+
 def doc_example():
     """The four files of docs/model-interface.md's complete example, from its code blocks in order: the
     example a user copies is the one this test runs."""

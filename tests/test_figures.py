@@ -43,7 +43,7 @@ def test_save_refuses_a_figure_that_would_not_print(tmp_path):
     axes[0, 0].set_ylabel("too small to read", fontsize=6)
     with pytest.raises(ValueError, match="'too small to read' is 6 pt"):
         style.save(fig, tmp_path / "small.png")
-    fig = style.plt.figure(figsize=(9.0, 3.0))
+    fig = style.pyplot().figure(figsize=(9.0, 3.0))
     with pytest.raises(ValueError, match="9 in wide"):
         style.save(fig, tmp_path / "wide.png")
     assert not list(tmp_path.iterdir())
