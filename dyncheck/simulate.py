@@ -192,6 +192,8 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
         t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound)
     elif method in FIXED_METHODS + MUJOCO_METHODS:
         every = round(output_step / dt)  # steps per output
+        if every < 1:
+            raise ValueError(f"output_step = {output_step!r} s is shorter than the step dt = {dt!r} s")
         budget = Budget(method, t_end, every * n_out, f"{every * n_out} steps of {dt:g} s")
         run = _fixed if method in FIXED_METHODS else _mujoco
         t, q, v, w, cost = run(model, q0, v0, grid, method, dt, every, work, budget, bound)
@@ -305,53 +307,80 @@ def _escape_within_step(solver, bound, method, step, coordinates):
 
 
 def _fixed(model, q0, v0, grid, method, dt, every, work, budget, bound):
-    """Fixed-step integration; the work W' = P rides along with the scheme's own update."""
-    nstep = every * (len(grid) - 1)
+    """Fixed-step integration (FIXED_STEPS); the work W' = P rides along with the scheme's own update.  The state
+    is stepped as lists of Python floats, made arrays only for the model: on so few numbers each numpy operation
+    costs more than its arithmetic, and each number goes through the same operations in the same order as in
+    numpy's elementwise ones (`_plus_times`), so the floats are the same.  The budget is checked once a step."""
     n = len(q0)
-    evaluations = 0
-    step = 0
+    steps = every * (len(grid) - 1)
 
-    def rates(t, q, v):  # the accelerations and the drive power
-        nonlocal evaluations
-        evaluations += 1
-        budget.check(t, step)
+    def rates(t, q, v):  # the accelerations (a list) and the drive power at the state of floats q, v, at `step`
+        q, v = np.array(q), np.array(v)
         try:
-            return model.accelerations(t, q, v), model.drive_power(t, q, v) if work else 0.0
+            acc = model.accelerations(t, q, v)
+            power = model.drive_power(t, q, v) if work else 0.0
         except Exception as error:
             raise _model_failure(method, t, step, error) from None
+        return np.asarray(acc, dtype=float).tolist(), power
+
+    advance = FIXED_STEPS[method]
+    q, v, w = q0.tolist(), v0.tolist(), 0.0
+    # The states at the outputs one after another, in flat lists: floats, which the garbage collector does not
+    # count, where a list per output would set off more of its passes.
+    out_q, out_v, out_w = q.copy(), v.copy(), [w]
+    elapsed = stopwatch()
+    with np.errstate(all="ignore"):  # for the model's numpy arithmetic
+        for output in range(1, len(grid)):
+            for step in range((output - 1) * every, output * every):
+                t = step * dt
+                budget.check(t, step)
+                q, v, w = advance(rates, t, dt, q, v, w)
+                if not _finite_numbers(q + v):
+                    raise Unstable(method, (step + 1) * dt, step + 1, "state is not finite")
+                check_bound(bound, method, (step + 1) * dt, step + 1, q)
+            out_q += q
+            out_v += v
+            out_w.append(w)
+    return grid, np.array(out_q).reshape(len(grid), n), np.array(out_v).reshape(len(grid), n), np.array(out_w), \
+        {**elapsed(), "evaluations": METHODS[method].evaluations * steps, "steps": steps}
+
+
+def _plus_times(x, h, y):
+    """x + h y, elementwise on lists of floats: numpy's x + h * y, number by number."""
+    return [xi + h * yi for xi, yi in zip(x, y)]
+
+
+def _explicit_euler(rates, t, dt, q, v, w):
+    """One step of the explicit Euler of the book's Matlab program: q advances with the step's starting v."""
+    acc, power = rates(t, q, v)
+    return _plus_times(q, dt, v), _plus_times(v, dt, acc), w + dt * power
+
+
+def _semi_implicit_euler(rates, t, dt, q, v, w):
+    """One step of the semi-implicit Euler of the book's Pascal programs: q advances with the new v."""
+    acc, power = rates(t, q, v)
+    v_new = _plus_times(v, dt, acc)
+    return _plus_times(q, dt, v_new), v_new, w + dt * power
+
+
+def _rk4(rates, t, dt, q, v, w):
+    """One step of classical RK4 of y = (q, v, w)."""
+    n = len(q)
 
     def derivative(t, y):
         acc, power = rates(t, y[:n], y[n:2 * n])
-        return np.concatenate([y[n:2 * n], acc, [power]])
+        return y[n:2 * n] + acc + [power]
 
-    q, v, w = q0.copy(), v0.copy(), 0.0
-    out_q, out_v, out_w = [q.copy()], [v.copy()], [w]
-    elapsed = stopwatch()
-    with np.errstate(all="ignore"):
-        for step in range(nstep):
-            t = step * dt
-            if method == "RK4":
-                y = np.concatenate([q, v, [w]])
-                k1 = derivative(t, y)
-                k2 = derivative(t + dt / 2, y + dt / 2 * k1)
-                k3 = derivative(t + dt / 2, y + dt / 2 * k2)
-                k4 = derivative(t + dt, y + dt * k3)
-                y = y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-                q, v, w = y[:n], y[n:2 * n], y[-1]
-            else:
-                acc, power = rates(t, q, v)
-                v_new = v + dt * acc
-                q = q + dt * (v_new if method == "semi-implicit Euler" else v)
-                v, w = v_new, w + dt * power
-            if not _finite_numbers(q.ravel().tolist() + v.ravel().tolist()):
-                raise Unstable(method, (step + 1) * dt, step + 1, "state is not finite")
-            check_bound(bound, method, (step + 1) * dt, step + 1, q)
-            if (step + 1) % every == 0:
-                out_q.append(q.copy())
-                out_v.append(v.copy())
-                out_w.append(w)
-    return grid, np.array(out_q).reshape(len(grid), n), np.array(out_v).reshape(len(grid), n), np.array(out_w), \
-        {**elapsed(), "evaluations": evaluations, "steps": nstep}
+    y = q + v + [w]
+    k1 = derivative(t, y)
+    k2 = derivative(t + dt / 2, _plus_times(y, dt / 2, k1))
+    k3 = derivative(t + dt / 2, _plus_times(y, dt / 2, k2))
+    k4 = derivative(t + dt, _plus_times(y, dt, k3))
+    y = _plus_times(y, dt / 6, [a + 2 * b + 2 * c + d for a, b, c, d in zip(k1, k2, k3, k4)])
+    return y[:n], y[n:2 * n], y[-1]
+
+
+FIXED_STEPS = {"explicit Euler": _explicit_euler, "semi-implicit Euler": _semi_implicit_euler, "RK4": _rk4}
 
 
 def _mujoco(model, q0, v0, grid, method, dt, every, work, budget, bound):

@@ -204,6 +204,20 @@ class Reference(ParticleOnBase):
         return super()._drive_power(q, v, motion) + self.p["k"] * q[1] * v[1]
 
 
+def _tz_t(turn, x, y, z):
+    """The 1.8.3 listing's Talfa' or Tbeta', [cos sin 0; -sin cos 0; 0 0 1]' * [x; y; z], for turn = (cos, sin)
+    of the angle."""
+    c, s = turn
+    return c * x - s * y, s * x + c * y, z
+
+
+def _tx_t(turn, x, y, z):
+    """The 1.8.3 listing's Tpsi', [1 0 0; 0 cos sin; 0 -sin cos]' * [x; y; z], for turn = (cos, sin) of the
+    angle."""
+    c, s = turn
+    return x, c * y - s * z, s * y + c * z
+
+
 class Program:
     """The 1.8.3 Matlab listing (i), transcribed line by line, slips kept.
 
@@ -284,18 +298,13 @@ class Program:
     def _roe(self, alfa, beta, psi, l):
         """roe = Iroa + Talfa'*B1rab + Talfa'*Tbeta'*(B2rbc+B2rcd) + Talfa'*Tbeta'*Tpsi'*B3rde."""
         p = self.p
-
-        def tz_t(angle, x, y, z):  # [cos sin 0; -sin cos 0; 0 0 1]' * [x; y; z]
-            c, s = math.cos(angle), math.sin(angle)
-            return c * x - s * y, s * x + c * y, z
-
-        def tx_t(angle, x, y, z):  # [1 0 0; 0 cos sin; 0 -sin cos]' * [x; y; z]
-            c, s = math.cos(angle), math.sin(angle)
-            return x, c * y - s * z, s * y + c * z
-
-        x1, y1, z1 = tz_t(alfa, 0.0, p["b"], 0.0)
-        x2, y2, z2 = tz_t(alfa, *tz_t(beta, 0.0, p["r"], p["c"] + p["h"]))  # B2rbc+B2rcd
-        x3, y3, z3 = tz_t(alfa, *tz_t(beta, *tx_t(psi, 0.0, 0.0, -(p["l0"] + l))))
+        # each angle's (cos, sin), computed once: Talfa' turns three vectors, Tbeta' two
+        talfa = math.cos(alfa), math.sin(alfa)
+        tbeta = math.cos(beta), math.sin(beta)
+        tpsi = math.cos(psi), math.sin(psi)
+        x1, y1, z1 = _tz_t(talfa, 0.0, p["b"], 0.0)
+        x2, y2, z2 = _tz_t(talfa, *_tz_t(tbeta, 0.0, p["r"], p["c"] + p["h"]))  # B2rbc+B2rcd
+        x3, y3, z3 = _tz_t(talfa, *_tz_t(tbeta, *_tx_t(tpsi, 0.0, 0.0, -(p["l0"] + l))))
         return x1 + x2 + x3, y1 + y2 + y3, p["a"] + z1 + z2 + z3  # Iroa = [0; 0; a]
 
     # -- the model interface ------------------------------------------------------------------
