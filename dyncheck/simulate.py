@@ -21,15 +21,17 @@ class Method:
     #               step dt, MuJoCo's own integrator stepping its own scene
     engine_name: str  # the stepper's name for it: scipy's solver, MuJoCo's integrator
     evaluations: int = 1  # right-hand sides per step (fixed steps)
+    order: int = 0  # a fixed step's order: the run's error goes as C dt^order (0: adaptive, to rtol)
 
 
 METHODS = {m.name: m for m in (
     Method("RK45", "scipy", "RK45"), Method("DOP853", "scipy", "DOP853"), Method("Radau", "scipy", "Radau"),
     Method("LSODA", "scipy", "LSODA"),
-    Method("explicit Euler", "python", "explicit Euler"),  # the book's programs use the Eulers
-    Method("semi-implicit Euler", "python", "semi-implicit Euler"), Method("RK4", "python", "RK4", evaluations=4),
-    Method("mujoco:Euler", "mujoco", "Euler"), Method("mujoco:implicitfast", "mujoco", "implicitfast"),
-    Method("mujoco:RK4", "mujoco", "RK4"))}
+    Method("explicit Euler", "python", "explicit Euler", order=1),  # the book's programs use the Eulers
+    Method("semi-implicit Euler", "python", "semi-implicit Euler", order=1),
+    Method("RK4", "python", "RK4", evaluations=4, order=4),
+    Method("mujoco:Euler", "mujoco", "Euler", order=1), Method("mujoco:implicitfast", "mujoco", "implicitfast", order=1),
+    Method("mujoco:RK4", "mujoco", "RK4", order=4))}
 SCIPY_METHODS, FIXED_METHODS, MUJOCO_METHODS = (tuple(n for n, m in METHODS.items() if m.stepper == stepper)
                                                 for stepper in ("scipy", "python", "mujoco"))
 SCIPY_SOLVERS = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "LSODA": LSODA}
@@ -94,14 +96,12 @@ def state_columns(case):
     return [c for name in case.coords for c in (name, name + "_rate")]
 
 
-RK4_ORDER = 4
-
-
-def richardson_factor(step, twin_step, order=RK4_ORDER):
-    """What |x(step) - x(twin_step)|, the difference between a fixed-step run and its twin, is multiplied by to
-    estimate the run's error, for a method whose error goes as C step^order (Richardson): 1 / |(twin_step /
-    step)^order - 1|.  For RK4, 16/15 with the twin at half the step, 1/15 at twice it."""
-    return 1 / abs((twin_step / step) ** order - 1)
+def richardson_factor(method, step, twin_step):
+    """What |x(step) - x(twin_step)|, the difference between a run of a fixed-step `method` and its twin, is
+    multiplied by to estimate the run's error, the method's error going as C step^order (Richardson):
+    1 / |(twin_step / step)^order - 1|.  RK4: 16/15 with the twin at half the step, 1/15 at twice it; a first-order
+    method: 2 and 1."""
+    return 1 / abs((twin_step / step) ** METHODS[method].order - 1)
 
 
 def energy_residual(run):

@@ -52,6 +52,7 @@ RUNS_PER_PERIOD = 64  # outputs per period of a mode's run: its phase is fitted,
 # simulate.richardson_factor): on these small motions, linear and far from chaos, RK4's error goes as dt^4 at both
 # steps (omega dt <= 0.02 in the book's cases), and the twin costs half the run where one at half the step costs two.
 MUJOCO_TWIN = 2
+MUJOCO_TWIN_FACTOR = richardson_factor("mujoco:RK4", 1, MUJOCO_TWIN)  # 1/15: the run's error per twin difference
 
 
 class NoEquilibrium(ValueError):
@@ -629,6 +630,16 @@ def motion_checks(case, scene, eq, modes, table):
     return motions, shift
 
 
+def unmeasured(motion, mujoco_twin):
+    """Why a source's run measures nothing (it failed; MuJoCo's twin failed, so that its step error is unknown),
+    or None."""
+    if not motion.ok:
+        return motion.why
+    if motion.source == "mujoco" and not mujoco_twin.ok:
+        return f"its step error is unknown: its twin at twice the step failed ({mujoco_twin.why})"
+    return None
+
+
 def motion_rows(case, modes, motions, shift):
     """Each source's lambda = growth + i frequency in its run against its own linearisation's eigenvalue,
     relative to |lambda|: allowed SAFETY times the nonlinear shift at the amplitude, plus MuJoCo's step error
@@ -643,13 +654,13 @@ def motion_rows(case, modes, motions, shift):
         for motion in runs[:3]:
             source = motion.source
             label = f"mode {k + 1} by motion (growth + i frequency)"
-            if not motion.ok:
-                rows.append(no_number("vibration", label, (source,), motion.why))
+            why = unmeasured(motion, mujoco_twin)
+            if why:
+                rows.append(no_number("vibration", label, (source,), why))
                 continue
             j = match(reference, modes[source])[i]
             lam = modes[source].eigenvalues[j]
-            step_error = (abs(motion.exponent - mujoco_twin.exponent) * richardson_factor(1, MUJOCO_TWIN)
-                          if source == "mujoco" and mujoco_twin.ok else 0.0)
+            step_error = abs(motion.exponent - mujoco_twin.exponent) * MUJOCO_TWIN_FACTOR if source == "mujoco" else 0.0
             allowed = SAFETY * (shift[k] + step_error + modes[source].bounds[j]) / abs(lam) + ceilings.ROUNDING_FLOOR
             rows.append(row("vibration", label, (source,), abs(motion.exponent - lam) / abs(lam), allowed,
                             f"run {motion.growth:.3g} + {motion.frequency:.10g} i, linear {lam.real:.3g} + "
@@ -1031,14 +1042,14 @@ def stroboscopic_rows(case, monodromy, motions, shift, period):
     for motion in motions[:3]:
         source = motion.source
         label = "largest Floquet multiplier, stroboscopic run"
-        if not motion.ok:
-            rows.append(no_number("vibration", label, (source,), motion.why))
+        why = unmeasured(motion, mujoco_twin)
+        if why:
+            rows.append(no_number("vibration", label, (source,), why))
             continue
         own = monodromy[source]
         mu, bound = own.multipliers[motion.mode], own.bounds[motion.mode]
         measured = multiplier(motion, period)
-        step_error = (abs(measured - multiplier(mujoco_twin, period)) * richardson_factor(1, MUJOCO_TWIN)
-                      if source == "mujoco" and mujoco_twin.ok else 0.0)
+        step_error = abs(measured - multiplier(mujoco_twin, period)) * MUJOCO_TWIN_FACTOR if source == "mujoco" else 0.0
         rows.append(row("vibration", label, (source,), abs(measured - mu) / abs(mu),
                         SAFETY * (shift + step_error + bound) / abs(mu) + ceilings.ROUNDING_FLOOR,
                         f"run {multiplier_text(measured)}, linear {multiplier_text(mu)}; amplitude {motion.amplitude:g}, "

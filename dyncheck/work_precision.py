@@ -18,7 +18,7 @@ from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.messages import plural
 from dyncheck.results import heading, no_number, row
 from dyncheck.schema import MAX_OUTPUTS
-from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
+from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
                                energy_residual, fastest_frequency, simulate, state_columns)
 from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
 
@@ -42,8 +42,7 @@ CPU_NOTE = ("MuJoCo steps in C (its rollout) and every other method in Python ar
 # told apart from the reference's own error: it is drawn hollow and never counts as reaching a level.
 RESOLUTION = 10.0
 LEVELS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
-EXPECTED_ORDER = {"explicit Euler": 1, "semi-implicit Euler": 1, "RK4": 4,
-                  "mujoco:Euler": 1, "mujoco:implicitfast": 1, "mujoco:RK4": 4}
+EXPECTED_ORDER = {name: method.order for name, method in METHODS.items() if method.order}  # the fixed steps
 ENGINES = ("pinocchio", "mujoco")  # a sweep's engine sources, named in its chart's legend
 GLYPHS = {"o": "\u25cb", "s": "\u25a1", "^": "\u25b3", "-": "\u2014", "--": "- -", ":": "\u00b7\u00b7\u00b7"}  # legend title
 SWEEP_METHODS = {"reference": SCIPY_METHODS + FIXED_METHODS, "pinocchio": SCIPY_METHODS, "mujoco": MUJOCO_METHODS}

@@ -71,7 +71,7 @@ def test_richardsons_factor_gives_rk4s_own_error_from_a_twin_at_half_or_twice_th
                      omega=fastest_frequency(case))
     columns = ["psi", "l", "psi_rate", "l_rate"]
     error = (runs[0][columns] - exact[columns]).abs().max()
-    estimate = sim.richardson_factor(dt, ratio * dt) * (runs[0][columns] - runs[1][columns]).abs().max()
+    estimate = sim.richardson_factor("RK4", dt, ratio * dt) * (runs[0][columns] - runs[1][columns]).abs().max()
     assert np.allclose(estimate, error, rtol=0.1)
 
 

@@ -106,6 +106,25 @@ def test_no_equilibrium_in_either_is_not_applicable(monkeypatch):
     assert [r.status for r in vib.rows] == [Status.NOT_APPLICABLE] and "neither has one" in vib.rows[0].detail
 
 
+def test_a_mujoco_run_whose_twin_failed_is_no_number_naming_the_twin(monkeypatch):
+    # Without its twin at twice the step MuJoCo's step error is unknown: its row says so rather than allow none.
+    case = dyncheck.load_case("double_pendulum")
+    twin_step = vibration.MUJOCO_TWIN * case.integration["mujoco_step"]
+    real = vibration.mode_run
+
+    def twin_fails(case, model, source, eq, modes, i, amplitude, periods, method, dt=None):
+        if dt == twin_step:
+            return vibration.Motion(source, i, amplitude, None, None, "mujoco:RK4: unstable at t = 0.1 s (step 500)")
+        return real(case, model, source, eq, modes, i, amplitude, periods, method, dt)
+
+    monkeypatch.setattr(vibration, "mode_run", twin_fails)
+    rows = [r for r in vibration.analyse(case).rows if "by motion" in r.quantity]
+    mujoco = [r for r in rows if r.sources == ("mujoco",)]
+    assert len(mujoco) == 2 and all(r.status == Status.UNSTABLE and "its twin at twice the step failed" in r.detail
+                                    for r in mujoco)
+    assert all(r.status == Status.PASS for r in rows if r.sources != ("mujoco",))
+
+
 def edited_case(tmp_path, folder, *edits):
     """The case `folder` copied into tmp_path, each edit (file, old, new) made where `old` stands once, and loaded."""
     copy = tmp_path / folder.name
