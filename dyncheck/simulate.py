@@ -80,7 +80,12 @@ def check_bound(bound, method, t, step, q):
 
 def finite(values):
     """Whether every value is finite."""
-    return _finite_numbers(np.asarray(values, dtype=float).ravel().tolist())
+    return _finite_numbers(_floats(values))
+
+
+def _floats(values):
+    """`values` (any shape) as a flat list of Python floats: what the integrators step and test."""
+    return np.asarray(values, dtype=float).ravel().tolist()
 
 
 def _finite_numbers(numbers):
@@ -288,7 +293,7 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
 def _finite(values, what):
     """`values` as a list of floats (flattened), raising ArithmeticError at once where one is not finite: a solver
     shrinks its step on NaN until the budget ends."""
-    numbers = np.asarray(values, dtype=float).ravel().tolist()
+    numbers = _floats(values)
     if not _finite_numbers(numbers):
         raise ArithmeticError(f"{what} {values} are not finite")
     return numbers
@@ -321,7 +326,7 @@ def _fixed(model, q0, v0, grid, method, dt, every, work, budget, bound):
             power = model.drive_power(t, q, v) if work else 0.0
         except Exception as error:
             raise _model_failure(method, t, step, error) from None
-        return np.asarray(acc, dtype=float).tolist(), power
+        return _floats(acc), power
 
     advance = FIXED_STEPS[method]
     q, v, w = q0.tolist(), v0.tolist(), 0.0

@@ -56,3 +56,26 @@ def test_an_output_step_shorter_than_the_step_is_refused():
     case = load_case("spring_pendulum")
     with pytest.raises(ValueError, match="shorter than the step"):
         simulate(case.model("book"), case.initial[:2], 0.1, "RK4", dt=0.01, output_step=0.001)
+
+
+class AsColumn:
+    """A model whose accelerations come as a column (n, 1), as a researcher's matrix algebra may leave them."""
+
+    def __init__(self, model):
+        self.model = model
+
+    def __getattr__(self, name):
+        return getattr(self.model, name)
+
+    def accelerations(self, t, q, v):
+        return np.reshape(self.model.accelerations(t, q, v), (-1, 1))
+
+
+@pytest.mark.parametrize("method", FIXED_METHODS + ("DOP853",))
+def test_accelerations_as_a_column_step_as_a_flat_vector(method):
+    # every integrator takes a model's answer flattened (simulate._floats): the same floats as the flat answer
+    case = load_case("spring_pendulum")
+    model, ic = case.model("book"), case.initial[:2]
+    options = {"rtol": 1e-8} if method == "DOP853" else {"dt": 1e-3}
+    flat, column = (simulate(m, ic, 0.05, method, output_step=1e-2, **options) for m in (model, AsColumn(model)))
+    assert flat.equals(column)
