@@ -592,10 +592,9 @@ class MujocoModel:
         t, q = np.asarray(t, dtype=float), np.asarray(q, dtype=float)
         if self.loops.loops:
             return np.array([self.points(*state)[0] for state in zip(t, q)]).reshape(len(t), len(self.paths), 3)
-        qpos, _ = self._engine_states(t, q, np.zeros_like(q))
+        qpos, qvel = self._engine_states(t, q, np.zeros_like(q))
         out = np.empty((len(t), len(self.paths), 3))
-        for i in range(len(t)):
-            self.d.qpos[:] = qpos[i]
+        for i in self._each_state(qpos, qvel):  # mj_kinematics reads the positions alone
             mujoco.mj_kinematics(self.m, self.d)
             out[i] = self.d.xipos[self.paths]
         return out
