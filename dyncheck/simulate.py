@@ -35,6 +35,7 @@ METHODS = {m.name: m for m in (
 SCIPY_METHODS, FIXED_METHODS, MUJOCO_METHODS = (tuple(n for n, m in METHODS.items() if m.stepper == stepper)
                                                 for stepper in ("scipy", "python", "mujoco"))
 SCIPY_SOLVERS = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "LSODA": LSODA}
+LANDING = ("RK45", "DOP853", "Radau")  # the solvers that read their t_bound afresh at every step (LSODA's Fortran does not)
 
 
 class Unstable(Exception):
@@ -165,12 +166,13 @@ def fastest_frequency(case):
 
 
 def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True, max_step=np.inf, omega=None,
-             bound=None):
+             bound=None, land_on_outputs=False):
     """Integrate `model` from ic = (q0, v0) over [0, t_end].
 
     method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol` and steps of at
     most `max_step`, within a budget of steps from the scene's fastest frequency `omega`, see
-    scipy_budget),
+    scipy_budget; with `land_on_outputs`, a step ends at every output time, so that each output is a step's
+    end, where the solver controls its error, rather than read from its dense output between them),
     FIXED_METHODS (driven by model.accelerations at step `dt`: the explicit Euler of the book's
     Matlab program, the semi-implicit Euler of its Pascal programs, classical RK4), or
     MUJOCO_METHODS (MuJoCo's own mj_step at step `dt`; the model must be a MujocoModel).
@@ -193,8 +195,11 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
         raise ValueError(f"t_end = {t_end!r} s is not a whole number of output steps of {output_step!r} s")
     grid = np.linspace(0.0, t_end, n_out + 1)
     if method in SCIPY_METHODS:
-        budget = scipy_budget(method, t_end, rtol, max_step, omega)
-        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound)
+        if land_on_outputs and method not in LANDING:
+            raise ValueError(f"{method} cannot land its steps on the outputs; {', '.join(LANDING)} can")
+        # landing, a run takes at least a step per output
+        budget = scipy_budget(method, t_end, rtol, min(max_step, output_step) if land_on_outputs else max_step, omega)
+        t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound, land_on_outputs)
     elif method in FIXED_METHODS + MUJOCO_METHODS:
         every = round(output_step / dt)  # steps per output
         if every < 1:
@@ -230,7 +235,7 @@ def _arithmetic(method, t, step, call, *args):
         raise _model_failure(method, t, step, error) from None
 
 
-def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
+def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound, land_on_outputs):
     """scipy's solver stepped here rather than by solve_ivp (the same steps and outputs), so that the
     budget is checked at every step and right-hand side.  A model whose `native` is not None is integrated
     in the engine's own coordinates (`native.state`, `native.rates`) and answered in the book's
@@ -238,7 +243,9 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
     cost the engine no conversion at each evaluation.  atol = rtol holds for every component as ever: on a
     quaternion's components (at most 1) it bounds a step's rotation error to about 2 atol, where on an Euler
     angle it is atol + rtol |angle|.  The run's error then differs (the book's top at rtol 1e-10: 13 times
-    the Euler-angle run's, in a quarter fewer evaluations); its twin at tight_rtol measures it alike."""
+    the Euler-angle run's, in a quarter fewer evaluations); its twin at tight_rtol measures it alike.
+    `land_on_outputs`: the solver's t_bound (a documented attribute, which these solvers clip every step to)
+    is the next output time, moved on, and the solver set running again, each time a step ends there."""
     n = len(q0)
     evaluations = steps = 0
     native = getattr(model, "native", None)
@@ -269,8 +276,11 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
     elapsed = stopwatch()
     outputs, done = [], 0  # the states at grid[:done]
     with np.errstate(all="ignore"):
-        solver = SCIPY_SOLVERS[method](rhs, grid[0], np.append(y0, 0.0), grid[-1], rtol=rtol, atol=rtol,
-                                       max_step=max_step)
+        y0 = np.append(y0, 0.0)
+        if land_on_outputs:
+            outputs, done = [y0[None]], 1
+        solver = SCIPY_SOLVERS[method](rhs, grid[0], y0, grid[done] if land_on_outputs else grid[-1], rtol=rtol,
+                                       atol=rtol, max_step=max_step)
         while solver.status == "running":
             message = solver.step()
             steps += 1
@@ -281,10 +291,16 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound):
             if bound is not None and abs(coordinates(solver.y)[bound[1]]) > bound[2]:
                 _escape_within_step(solver, bound, method, steps, coordinates)
             budget.check(solver.t, steps)
-            reached = np.searchsorted(grid, solver.t, side="right")
-            if reached > done:
-                outputs.append(solver.dense_output()(grid[done:reached]).T)
-                done = reached
+            if not land_on_outputs:
+                reached = np.searchsorted(grid, solver.t, side="right")
+                if reached > done:
+                    outputs.append(solver.dense_output()(grid[done:reached]).T)
+                    done = reached
+            elif solver.status == "finished":  # the step ended at grid[done]
+                outputs.append(solver.y[None])
+                done += 1
+                if done < len(grid):
+                    solver.t_bound, solver.status = grid[done], "running"
         y = np.vstack(outputs)
         q, v = book(y[:, :-1], q0)
     return grid, q, v, y[:, -1], {**elapsed(), "evaluations": evaluations, "steps": steps}

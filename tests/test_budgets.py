@@ -59,6 +59,24 @@ def test_stepping_scipy_here_gives_solve_ivps_outputs():
     assert np.array_equal(run[["psi", "l", "psi_rate", "l_rate", "work"]].to_numpy().T, sol.y)
 
 
+def test_landing_on_the_outputs_gives_step_ends_not_the_dense_outputs_error():
+    # Two pendulums under g = 1 m/s^2, 1 s at rtol 1e-12: the controller's steps are about 5 ms, five outputs each.
+    # Read from DOP853's dense output they are off by 6e-12 of the largest value, against a run at 1e-13 landed
+    # on 1 ms steps; landed on the outputs (one step each), by 3e-15.
+    case = load_case("double_pendulum", g=1.0)
+    model, ic = case.model("reference"), case.initial[:2]
+    options = dict(output_step=1e-3, work=False, omega=fastest_frequency(case))
+    exact = simulate(model, ic, 1.0, "DOP853", rtol=1e-13, max_step=1e-3, land_on_outputs=True, **options)
+    columns = sim.state_columns(case)
+    error = lambda run: max((run[c] - exact[c]).abs().max() / exact[c].abs().max() for c in columns)
+    dense = simulate(model, ic, 1.0, "DOP853", rtol=1e-12, **options)
+    landed = simulate(model, ic, 1.0, "DOP853", rtol=1e-12, land_on_outputs=True, **options)
+    assert landed.attrs["steps"] >= 1000 > 5 * dense.attrs["steps"]
+    assert error(landed) < 1e-13 < 1e-12 < error(dense)
+    with pytest.raises(ValueError, match="LSODA cannot land"):
+        simulate(model, ic, 1.0, "LSODA", rtol=1e-8, land_on_outputs=True, **options)
+
+
 @pytest.mark.parametrize("ratio", [0.5, 2.0])
 def test_richardsons_factor_gives_rk4s_own_error_from_a_twin_at_half_or_twice_the_step(ratio):
     # The book's spring pendulum, 0.5 s by RK4 at omega dt = 0.05 (and its twin), against DOP853 at 1e-13: the
