@@ -256,21 +256,26 @@ def run_sources(case, bound=None):
             runs[source] = Outcome(simulate(case.model(source), (q0, v0), t_end, "DOP853", rtol=setting["rtol"],
                                             **options),
                                    cache.solution(case, source, (q0, v0), t_end, "DOP853", rtol=setting["tight_rtol"],
-                                                  **(tight_steps(case) if source == "reference" else {}), **options))
+                                                  **(tight_steps(case) if source == "reference" else TWIN), **options))
         except Unstable as failure:
             runs[source] = Outcome(failure=failure.failure)
     dt = setting["mujoco_step"]
-    mujoco_run = lambda model, h: simulate(model, (q0, v0), t_end, "mujoco:RK4", dt=h, output_step=out_step,
-                                           work=case.driven, bound=bound)
+    mujoco_run = lambda model, h, **twin: simulate(model, (q0, v0), t_end, "mujoco:RK4", dt=h, output_step=out_step,
+                                                   work=case.driven, bound=bound, **twin)
     model, doubled = case.model("mujoco"), case.approximations_doubled()
     try:
         run = mujoco_run(model, dt)
         # a scene without approximations is its own doubled scene, whose run would repeat this one bit for bit
-        runs["mujoco"] = Outcome(run, mujoco_run(model, dt / 2),
-                                 approximations=run if doubled is model else mujoco_run(doubled, dt))
+        runs["mujoco"] = Outcome(run, mujoco_run(model, dt / 2, **TWIN),
+                                 approximations=run if doubled is model else mujoco_run(doubled, dt, **TWIN))
     except Unstable as failure:
         runs["mujoco"] = Outcome(failure=failure.failure)
     return runs
+
+
+# A twin of a source's run, and MuJoCo's run with its approximations doubled, give an error estimate of the run's
+# states and energy (trajectory, energy): nothing reads their reactions.
+TWIN = {"quantities": ("energy",)}
 
 
 def tight_steps(case):
@@ -653,13 +658,13 @@ def program_run_checks(case, program):
     listing = with_paths(case, program.run(q0, v0).iloc[::every])
     t_end = (len(listing) - 1) * every * program.dt
     book = case.model("book")
-    same = lambda q, dt: simulate(book, (q, v0), t_end, program.integrator, dt=dt,
-                                  output_step=every * program.dt, work=False)
+    same = lambda q, dt, **twin: simulate(book, (q, v0), t_end, program.integrator, dt=dt,
+                                          output_step=every * program.dt, work=False, **twin)
     # Richardson's twin at half the step: a listing's step may be far from the asymptotic range (the book's explicit
     # Euler grows 1.8.3's spring twofold), and a twin at twice it would stray further, or blow up where the listing does not
-    twin_runs = {"same": same(q0, program.dt), "half": same(q0, program.dt / 2)}
+    twin_runs = {"same": same(q0, program.dt), "half": same(q0, program.dt / 2, quantities=())}
     # Rounding: the same run from a start moved by a few ulps shows how the motion amplifies them.
-    twin_runs["nudged"] = same(q0 + 4 * EPS * np.maximum(np.abs(q0), 1.0), program.dt)
+    twin_runs["nudged"] = same(q0 + 4 * EPS * np.maximum(np.abs(q0), 1.0), program.dt, quantities=())
     tight = with_paths(case, cache.solution(case, "reference", (q0, v0), t_end, "DOP853",
                                             rtol=case.integration["tight_rtol"], output_step=every * program.dt,
                                             work=False, omega=fastest_frequency(case)))

@@ -158,6 +158,9 @@ def scipy_budget(method, t_end, rtol, max_step, omega):
                   f"{t_end:g} s at rtol = {rtol:g}")
 
 
+QUANTITIES = ("reactions", "energy")  # what a run's frame holds at its outputs beside the state and the work
+
+
 def fastest_frequency(case):
     """The case's fastest frequency in rad/s (its [work_precision.convergence] omega, an expression of the
     parameters), from which the budget of an adaptive run follows; None for a case without one."""
@@ -166,7 +169,7 @@ def fastest_frequency(case):
 
 
 def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True, max_step=np.inf, omega=None,
-             bound=None, land_on_outputs=False):
+             bound=None, land_on_outputs=False, quantities=QUANTITIES):
     """Integrate `model` from ic = (q0, v0) over [0, t_end].
 
     method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol` and steps of at
@@ -179,7 +182,8 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
     Returns a DataFrame indexed by t: coordinates, their rates, reactions, energy (where the model has it), and the work
     of the prescribed motions, applied forces and dampers so far (`work`; pass work=False for a scene where
     nothing does work, to skip the drive power; absent where work is asked of a model without drive_power),
-    with the cost in `.attrs`.
+    with the cost in `.attrs`.  `quantities`: which of QUANTITIES the frame holds, fewer for a run of which
+    nothing reads them (a twin's reactions, a mode's run): each costs a model call per output.
     Raises Unstable (when, which method, which step) for a run that blows up, whose model's arithmetic
     fails, or that goes past its Budget; a fixed-step run longer than MAX_STEPS is not started.  With
     `bound` = (coordinate name, its index, limit), raises Escaped at the first step that ends with the
@@ -209,7 +213,8 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
         t, q, v, w, cost = run(model, q0, v0, grid, method, dt, every, work, budget, bound)
     else:
         raise ValueError(f"unknown method '{method}'; methods are {', '.join(METHODS)}")
-    return _frame(model, t, q, v, None if unknown_work else w, {"method": method, "rtol": rtol, "dt": dt, **cost})
+    return _frame(model, t, q, v, None if unknown_work else w, {"method": method, "rtol": rtol, "dt": dt, **cost},
+                  quantities)
 
 
 def stopwatch():
@@ -453,17 +458,18 @@ def check_mujoco_run(run, method, dt, bound=None):
         raise Unstable(method, t[-1], run["steps"], warned)
 
 
-def _frame(model, t, q, v, work, attrs):
+def _frame(model, t, q, v, work, attrs, quantities):
     method = attrs["method"]
     columns = {}
     for i, name in enumerate(model.coords):
         columns[name] = q[:, i]
         columns[name + "_rate"] = v[:, i]
     with np.errstate(all="ignore"):
-        reactions = _at_every_state(model, "reactions", method, t, q, v)
-        for name in model.reaction_names:
-            columns[name] = reactions[name] if isinstance(reactions, dict) else [r[name] for r in reactions]
-        if hasattr(model, "energy"):  # optional of a derivation (docs/model-interface.md)
+        if "reactions" in quantities:
+            reactions = _at_every_state(model, "reactions", method, t, q, v)
+            for name in model.reaction_names:
+                columns[name] = reactions[name] if isinstance(reactions, dict) else [r[name] for r in reactions]
+        if "energy" in quantities and hasattr(model, "energy"):  # optional of a derivation (docs/model-interface.md)
             columns["energy"] = _at_every_state(model, "energy", method, t, q, v)
     if work is not None:
         columns["work"] = work

@@ -426,7 +426,8 @@ def mode_run(case, model, source, eq, modes, i, amplitude, periods, method, dt=N
                                      "omega": abs(lam)}
     try:
         with np.errstate(all="ignore"):
-            run = simulate(model, (start[:n], start[n:]), t_end, method, output_step=output_step, work=False, **options)
+            run = simulate(model, (start[:n], start[n:]), t_end, method, output_step=output_step, work=False,
+                           quantities=(), **options)
     except (Unstable, ArithmeticError, np.linalg.LinAlgError) as error:
         return Motion(source, i, amplitude, None, None, f"{method}: {error}")
     t = run.index.to_numpy()
@@ -830,7 +831,7 @@ def orbit_run(case, model, x, period, rtol):
     n = len(case.coords)
     with np.errstate(all="ignore"):
         run = simulate(model, (x[:n], x[n:]), period, "DOP853", rtol=rtol, output_step=period / (2 * SAMPLES),
-                       work=False, omega=fastest_frequency(case))
+                       work=False, omega=fastest_frequency(case), quantities=())
     return run[state_names(case.coords)].to_numpy()
 
 
@@ -1019,7 +1020,7 @@ def stroboscopic_run(case, source, start, monodromy, j, amplitude, periods, peri
     try:
         with np.errstate(all="ignore"):
             run = simulate(case.model(source), (displaced[:n], displaced[n:]), periods * period, method,
-                           output_step=period, work=False, **options)
+                           output_step=period, work=False, quantities=(), **options)
     except (Unstable, ArithmeticError, np.linalg.LinAlgError) as error:
         return Motion(source, j, amplitude, None, None, f"{method}: {error}")
     left = monodromy.left[:, j].conj()
@@ -1215,7 +1216,8 @@ def either_side(case, scene, table, parameter, boundary, side, stable_above):
     try:
         with np.errstate(all="ignore"):
             run = simulate(model, (start[:n], start[n:]), t_end, "DOP853", rtol=case.integration["rtol"],
-                           output_step=output_step, work=False, max_step=period / 20, omega=2 * math.pi / period)
+                           output_step=output_step, work=False, max_step=period / 20, omega=2 * math.pi / period,
+                           quantities=())
         # the coordinates at rest in the equilibrium: a cyclic one's angle drifts at a changed rate, and stays one
         resting = eq.v == 0
         q = (run[list(case.coords)].to_numpy() - (eq.q + np.outer(run.index.to_numpy(), eq.v)))[:, resting]

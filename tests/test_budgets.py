@@ -59,6 +59,19 @@ def test_stepping_scipy_here_gives_solve_ivps_outputs():
     assert np.array_equal(run[["psi", "l", "psi_rate", "l_rate", "work"]].to_numpy().T, sol.y)
 
 
+@pytest.mark.parametrize("method", ["DOP853", "RK4", "mujoco:RK4"])
+def test_a_run_without_its_quantities_has_the_same_states(method):
+    case = load_case("spring_pendulum")
+    source = "mujoco" if method.startswith("mujoco") else "book"
+    options = dict(output_step=1e-2, omega=fastest_frequency(case), **({"rtol": 1e-8} if method == "DOP853" else {"dt": 1e-3}))
+    run = lambda **only: simulate(case.model(source), case.initial[:2], 0.2, method, **options, **only)
+    full, energy, states = run(), run(quantities=("energy",)), run(quantities=())
+    assert list(states.columns) == sim.state_columns(case) + ["work"]
+    assert list(energy.columns) == sim.state_columns(case) + ["energy", "work"]
+    assert set(case.reaction_names) <= set(full.columns)
+    assert full[energy.columns].equals(energy) and full[states.columns].equals(states)
+
+
 def test_landing_on_the_outputs_gives_step_ends_not_the_dense_outputs_error():
     # Two pendulums under g = 1 m/s^2, 1 s at rtol 1e-12: the controller's steps are about 5 ms, five outputs each.
     # Read from DOP853's dense output they are off by 6e-12 of the largest value, against a run at 1e-13 landed
