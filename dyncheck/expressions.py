@@ -17,7 +17,7 @@ import numpy as np
 
 from dyncheck.messages import suggest
 
-FUNCTIONS = ("sin", "cos", "tan", "arctan", "sqrt", "abs", "max", "min")  # numpy's, by these names
+FUNCTIONS = ("sin", "cos", "tan", "arctan", "sqrt", "abs", "ceil", "max", "min")  # numpy's, by these names
 CALLABLE = FUNCTIONS + ("first",)  # and first(condition), see `namespace`
 # The case files' longest expression has 53 characters and the deepest syntax tree 8 levels (ast's
 # nodes, operators included); these bounds leave room for any formula of a page, and keep the parse

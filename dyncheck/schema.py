@@ -249,7 +249,8 @@ def check_values(spec, file, value):
     steps = values["integration.output_step"] / values["integration.mujoco_step"]
     if round(steps) < 1 or abs(steps - round(steps)) > 1e-9 * steps:
         raise _error(file, "integration.output_step", setting["output_step"],
-                     f"is not a multiple of integration.mujoco_step = {setting['mujoco_step']!r}")
+                     f"is not a multiple of integration.mujoco_step = {setting['mujoco_step']!r}"
+                     + (f" = {values['integration.mujoco_step']:g}" if isinstance(setting["mujoco_step"], str) else ""))
     if values["integration.tight_rtol"] >= values["integration.rtol"]:
         raise _error(file, "integration.tight_rtol", setting["tight_rtol"],
                      f"is not below integration.rtol = {setting['rtol']!r}: the tight twin must be tighter")
@@ -653,7 +654,7 @@ MEANINGS = {
     "integration.rtol": "The relative and absolute tolerance of scipy's DOP853 for the runs of reference, book and "
                         "Pinocchio.",
     "integration.tight_rtol": "The tolerance of the tight solution the runs are compared with; below rtol.",
-    "integration.mujoco_step": "MuJoCo's fixed time step.",
+    "integration.mujoco_step": "MuJoCo's fixed time step; an expression of the parameters may make it follow the scene's fastest motion (the longest step that divides an output_step of 1 ms with omega dt at most c: \"1e-3 / max(1, ceil(omega / c))\", omega written out in the parameters).",
     "tolerance": "The allowed errors of the checks, each with its argument.",
     "tolerance.pointwise": "The pointwise check: every source at the random states.",
     "tolerance.pointwise.value": f"The largest allowed relative error (at most {ceilings.POINTWISE:g}, above which "

@@ -72,8 +72,11 @@ BAD_CASE_FILES = [
      "params.a.value = 0.06 as the book's text shows it, every digit 0 lost ('.6')"),
     ("spring_pendulum", "rtol = 1e-10", "rtol = inf", "integration.rtol = inf is not finite"),
     ("spring_pendulum", "output_step = 1e-3", "output_step = 0.0", "integration.output_step = 0.0 must be > 0"),
-    ("spring_pendulum", "output_step = 1e-3", "output_step = 1.5e-4",
+    ("piston", "output_step = 1e-3", "output_step = 1.5e-4",
      "integration.output_step = 0.00015 is not a multiple of integration.mujoco_step = 0.0001"),
+    ("spring_pendulum", "output_step = 1e-3", "output_step = 1.5e-4",  # a step that follows omega: its value too
+     "integration.output_step = 0.00015 is not a multiple of integration.mujoco_step = '1e-3 / min(max(1, ceil(sqrt(k/m "
+     "+ max(alpha_rate**2, (alpha_rate + beta_rate)**2)) / 10.5)), 166)' = 0.0001"),
     ("spring_pendulum", "tight_rtol = 1e-12", "tight_rtol = 1e-8",
      "integration.tight_rtol = 1e-08 is not below integration.rtol"),
     ("spring_pendulum", 'q = ["pi/6", 0.0]', 'q = ["pi/6"]',

@@ -83,3 +83,37 @@ def test_a_whole_run_with_valid_overrides_exits_0(name, data):
 @given(data=st.data())
 def test_many_whole_runs_with_valid_overrides_exit_0(name, data):
     check_whole_run(name, data)
+
+
+# A lecturer's --set beyond the ranges that speeds up the fastest motion: MuJoCo's step follows omega
+# (the case files' mujoco_step), so that its page is as true as the book's.  At the case file's fixed
+# step of 1e-4 s, m2 = 3.7 kg (omega 55 -> 151 rad/s) left four MuJoCo trajectory rows inconclusive: RK4
+# off by 1e-3, its tolerance above the ceiling.
+FASTER = [("double_pendulum", {"m2": 3.7}, 5.6e-3, 1e-4), ("spring_pendulum", {"k": 3000.0}, 0.0105, 1e-4),
+          ("rotating_pendulum", {"beta_rate": -40.0}, 2.6e-3, 2.5e-4)]
+
+
+@pytest.mark.parametrize("name, override, most, book_step", FASTER)
+def test_mujocos_step_follows_the_fastest_motion(name, override, most, book_step):
+    assert dyncheck.load_case(name).integration["mujoco_step"] == book_step  # the book's pages unchanged
+    case = dyncheck.load_case(name, **override)
+    dt, output_step = case.integration["mujoco_step"], case.integration["output_step"]
+    assert most / 1.1 < fastest_frequency(case) * dt <= most  # the longest step within the bound ...
+    assert abs(output_step / dt - round(output_step / dt)) < 1e-9  # ... whose multiple the outputs are
+
+
+@pytest.mark.full
+def test_a_heavier_second_pendulum_gives_a_passing_page():
+    result = run_case(dyncheck.load_case("double_pendulum", m2=3.7), localise=False)
+    failing = [f"{r.check} {r.quantity} {' vs '.join(r.sources)}: {r.status}" for r in result.rows if not r.status.ok]
+    assert not failing, failing
+
+
+@pytest.mark.parametrize("name, override", [("double_pendulum", {"m2": 1e4}), ("spring_pendulum", {"k": 1e9}),
+                                            ("rotating_pendulum", {"l": 1e-6})])
+def test_mujocos_step_stops_following_where_its_twin_would_outrun_a_run(name, override):
+    # far beyond the book: the case still loads (its other checks run; MuJoCo's rows say how far off its step is),
+    # and the twin at half the step keeps within the steps one run may take
+    from dyncheck.simulate import MAX_STEPS
+    case = dyncheck.load_case(name, **override)
+    assert MAX_STEPS / 2 < 2 * case.initial[2] / case.integration["mujoco_step"] <= MAX_STEPS
