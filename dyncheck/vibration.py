@@ -609,25 +609,45 @@ def mode_label(modes, i):
     return f"mode {modes.oscillating().index(i) + 1}"
 
 
+HALVINGS = 6  # of the case's amplitude at most (settled_amplitude): its nonlinear shift falls 4,096-fold
+
+
+def settled_amplitude(amplitude, size, reference_runs, shift_of):
+    """The amplitude of a vibration check's runs, the reference's runs at it and at twice it, and the nonlinear shift
+    they show (`shift_of(run, twin)`; inf where either failed): the case's amplitude, halved while SAFETY times the
+    shift is above a tenth of ceilings.MOTION of `size` (|lambda|, |mu|), at most HALVINGS times.  At the book's
+    numbers the case's amplitude keeps its share under that; off them (a faster disk, a lighter bob) it can put
+    every source's row above its ceiling, inconclusive, where a smaller displacement measures the same linear
+    motion.  `reference_runs(amplitude)`: the reference's runs at it and at twice it."""
+    for halvings in range(HALVINGS + 1):
+        run, twin = reference_runs(amplitude)
+        shift = shift_of(run, twin) if run.ok and twin.ok else math.inf
+        if halvings == HALVINGS or not (math.isfinite(shift) and SAFETY * shift > ceilings.MOTION / 10 * size):
+            return amplitude, (run, twin), shift
+        amplitude /= 2
+
+
 def motion_checks(case, scene, eq, modes, table):
-    """Every oscillating mode of the reference run in each source at the case's amplitude: its runs (Motion),
-    and per mode the nonlinear shift of lambda = growth + i frequency at the amplitude, estimated by the
-    reference's run at twice it: their difference is three times the shift for a shift quadratic in the
+    """Every oscillating mode of the reference run in each source at the case's amplitude (settled_amplitude): its
+    runs (Motion), and per mode the nonlinear shift of lambda = growth + i frequency at the amplitude, estimated by
+    the reference's run at twice it: their difference is three times the shift for a shift quadratic in the
     amplitude (a frequency's), once it for a linear one (a decay rate's may be), so it bounds both."""
-    amplitude, periods = table["amplitude"], table["periods"]
+    periods = table["periods"]
     dt = case.integration["mujoco_step"]
     ref = modes["reference"]
     motions, shift = [], []
     for i in ref.oscillating():
         # each source displaced along, and measured by, its own mode: its run tests its own linearisation
         own = {source: (scene.model(source), modes[source], match(ref, modes[source])[i]) for source in modes}
-        run = lambda source, method, scale=1.0, step=None: mode_run(case, own[source][0], source, eq, own[source][1],
-                                                                   own[source][2], scale * amplitude, periods,
-                                                                   method, step)
-        runs = [run("reference", "DOP853"), run("pinocchio", "DOP853"), run("mujoco", "mujoco:RK4", step=dt),
-                run("reference", "DOP853", 2.0), run("mujoco", "mujoco:RK4", step=MUJOCO_TWIN * dt)]
-        motions += runs
-        shift.append(abs(runs[3].exponent - runs[0].exponent) if runs[0].ok and runs[3].ok else math.inf)
+        run = lambda source, method, amplitude, step=None: mode_run(case, own[source][0], source, eq, own[source][1],
+                                                                   own[source][2], amplitude, periods, method, step)
+        amplitude, (reference, twin), mode_shift = settled_amplitude(
+            table["amplitude"], abs(ref.eigenvalues[i]),
+            lambda a: (run("reference", "DOP853", a), run("reference", "DOP853", 2 * a)),
+            lambda at, doubled: abs(doubled.exponent - at.exponent))
+        motions += [reference, run("pinocchio", "DOP853", amplitude), run("mujoco", "mujoco:RK4", amplitude, dt),
+                    twin, run("mujoco", "mujoco:RK4", amplitude, MUJOCO_TWIN * dt)]
+        shift.append(mode_shift)
     return motions, shift
 
 
@@ -986,28 +1006,30 @@ def multiplier_text(mu):
 
 
 def stroboscopic_checks(case, start, monodromy, table):
-    """The largest multiplier of the derivation measured in runs from the orbit's x0 displaced by the amplitude along
+    """The largest multiplier of the derivation measured in runs from the orbit's x0 displaced by the amplitude
+    (settled_amplitude) along
     each source's own eigenvector: the derivation and Pinocchio by DOP853 at the case's tight rtol, MuJoCo by its RK4
     at the longest step no longer than the case's whose double divides T (its states, and its twin's, at the
     multiples of T: a `--set` of the disk's rate moves T off the case's steps), and the twins: the derivation at twice
     the amplitude, MuJoCo at twice the step (MUJOCO_TWIN).  Returns (motions, the nonlinear shift of mu at the amplitude, from the
     derivation's twin: as `motion_checks`'s)."""
-    amplitude, periods, period = table["amplitude"], table["periods"], table["period"]
+    periods, period = table["periods"], table["period"]
     twins = math.ceil(period / (MUJOCO_TWIN * case.integration["mujoco_step"]) * (1 - 1e-9))  # twin steps in T
     dt = period / (MUJOCO_TWIN * twins)
     reference = monodromy["reference"]
     i = reference.largest()
 
-    def run(source, method, scale=1.0, step=None):
+    def run(source, method, amplitude, step=None):
         own = monodromy[source]
-        return stroboscopic_run(case, source, start, own, match(reference, own)[i], scale * amplitude, periods,
+        return stroboscopic_run(case, source, start, own, match(reference, own)[i], amplitude, periods,
                                 period, method, step)
 
-    motions = [run("reference", "DOP853"), run("pinocchio", "DOP853"), run("mujoco", "mujoco:RK4", step=dt),
-               run("reference", "DOP853", 2.0), run("mujoco", "mujoco:RK4", step=MUJOCO_TWIN * dt)]
-    shift = abs(multiplier(motions[3], period) - multiplier(motions[0], period)) if motions[0].ok and motions[3].ok \
-        else math.inf
-    return motions, shift
+    amplitude, (run_at, twin), shift = settled_amplitude(
+        table["amplitude"], abs(reference.multipliers[i]),
+        lambda a: (run("reference", "DOP853", a), run("reference", "DOP853", 2 * a)),
+        lambda at, doubled: abs(multiplier(doubled, period) - multiplier(at, period)))
+    return [run_at, run("pinocchio", "DOP853", amplitude), run("mujoco", "mujoco:RK4", amplitude, dt), twin,
+            run("mujoco", "mujoco:RK4", amplitude, MUJOCO_TWIN * dt)], shift
 
 
 def stroboscopic_run(case, source, start, monodromy, j, amplitude, periods, period, method, dt=None):
