@@ -612,19 +612,21 @@ def mode_label(modes, i):
 HALVINGS = 6  # of the case's amplitude at most (settled_amplitude): its nonlinear shift falls 4,096-fold
 
 
-def settled_amplitude(amplitude, size, reference_runs, shift_of):
+def settled_amplitude(amplitude, size, reference_run, shift_of):
     """The amplitude of a vibration check's runs, the reference's runs at it and at twice it, and the nonlinear shift
     they show (`shift_of(run, twin)`; inf where either failed): the case's amplitude, halved while SAFETY times the
     shift is above a tenth of ceilings.MOTION of `size` (|lambda|, |mu|), at most HALVINGS times.  At the book's
     numbers the case's amplitude keeps its share under that; off them (a faster disk, a lighter bob) it can put
     every source's row above its ceiling, inconclusive, where a smaller displacement measures the same linear
-    motion.  `reference_runs(amplitude)`: the reference's runs at it and at twice it."""
+    motion.  `reference_run(amplitude)`: the reference's run at it; a halving's run at twice its amplitude is the
+    last one's run."""
+    doubled = reference_run(2 * amplitude)
     for halvings in range(HALVINGS + 1):
-        run, twin = reference_runs(amplitude)
-        shift = shift_of(run, twin) if run.ok and twin.ok else math.inf
+        run = reference_run(amplitude)
+        shift = shift_of(run, doubled) if run.ok and doubled.ok else math.inf
         if halvings == HALVINGS or not (math.isfinite(shift) and SAFETY * shift > ceilings.MOTION / 10 * size):
-            return amplitude, (run, twin), shift
-        amplitude /= 2
+            return amplitude, (run, doubled), shift
+        amplitude, doubled = amplitude / 2, run
 
 
 def motion_checks(case, scene, eq, modes, table):
@@ -642,8 +644,7 @@ def motion_checks(case, scene, eq, modes, table):
         run = lambda source, method, amplitude, step=None: mode_run(case, own[source][0], source, eq, own[source][1],
                                                                    own[source][2], amplitude, periods, method, step)
         amplitude, (reference, twin), mode_shift = settled_amplitude(
-            table["amplitude"], abs(ref.eigenvalues[i]),
-            lambda a: (run("reference", "DOP853", a), run("reference", "DOP853", 2 * a)),
+            table["amplitude"], abs(ref.eigenvalues[i]), lambda a: run("reference", "DOP853", a),
             lambda at, doubled: abs(doubled.exponent - at.exponent))
         motions += [reference, run("pinocchio", "DOP853", amplitude), run("mujoco", "mujoco:RK4", amplitude, dt),
                     twin, run("mujoco", "mujoco:RK4", amplitude, MUJOCO_TWIN * dt)]
@@ -1025,8 +1026,7 @@ def stroboscopic_checks(case, start, monodromy, table):
                                 period, method, step)
 
     amplitude, (run_at, twin), shift = settled_amplitude(
-        table["amplitude"], abs(reference.multipliers[i]),
-        lambda a: (run("reference", "DOP853", a), run("reference", "DOP853", 2 * a)),
+        table["amplitude"], abs(reference.multipliers[i]), lambda a: run("reference", "DOP853", a),
         lambda at, doubled: abs(multiplier(doubled, period) - multiplier(at, period)))
     return [run_at, run("pinocchio", "DOP853", amplitude), run("mujoco", "mujoco:RK4", amplitude, dt), twin,
             run("mujoco", "mujoco:RK4", amplitude, MUJOCO_TWIN * dt)], shift

@@ -16,16 +16,22 @@ class _Run:  # a run's measured exponent, as a Motion gives it
 @pytest.mark.parametrize("power, halvings", [(2, 2), (1, 4)])
 def test_the_amplitude_is_halved_until_its_shift_is_a_tenth_of_the_ceiling(power, halvings):
     # A shift of 1.5e-5 |lambda| at the case's amplitude, quadratic or linear in it: 10 x the shift must come within
-    # a tenth of the ceiling 1e-4, i.e. the shift within 1e-6: two halvings (9.4e-7) or four (9.4e-7).
+    # a tenth of the ceiling 1e-4, i.e. the shift within 1e-6: two halvings (9.4e-7) or four (9.4e-7).  Each
+    # amplitude is run once: a halving's run at twice its amplitude is the last one's.
     size, asked = 50.0, []
-    pair = lambda a: asked.append(a) or (_Run(0.0), _Run(1.5e-5 * size * (a / 1e-3) ** power))
-    amplitude, runs, shift = vibration.settled_amplitude(1e-3, size, pair, lambda at, doubled: doubled.exponent - at.exponent)
-    assert amplitude == 1e-3 / 2**halvings and asked == [1e-3 / 2**k for k in range(halvings + 1)]
-    assert shift == runs[1].exponent and vibration.SAFETY * shift <= ceilings.MOTION / 10 * size
+    exponent = lambda a: 1.5e-5 * size * (a / 1e-3) ** power / (2**power - 1)  # run(2a) - run(a): 1.5e-5 size at 1e-3
+    run = lambda a: asked.append(a) or _Run(exponent(a))
+    amplitude, runs, shift = vibration.settled_amplitude(1e-3, size, run, lambda at, doubled: doubled.exponent - at.exponent)
+    assert amplitude == 1e-3 / 2**halvings and asked == [2e-3] + [1e-3 / 2**k for k in range(halvings + 1)]
+    assert [r.exponent for r in runs] == [exponent(amplitude), exponent(2 * amplitude)]
+    assert vibration.SAFETY * shift <= ceilings.MOTION / 10 * size < vibration.SAFETY * 2**power * shift
 
 
 def test_a_failed_or_hopeless_run_is_not_halved_forever():
-    failed = lambda a: (_Run(None, ok=False), _Run(0.0))
+    failed = lambda a: _Run(None, ok=a < 2e-3)  # the run at twice the amplitude fails
     assert vibration.settled_amplitude(1e-3, 1.0, failed, None)[::2] == (1e-3, math.inf)
-    large = lambda a: (_Run(0.0), _Run(1.0))  # a shift no amplitude removes: the case's amplitude / 2^HALVINGS
-    assert vibration.settled_amplitude(1e-3, 1.0, large, lambda at, d: d.exponent)[0] == 1e-3 / 2**vibration.HALVINGS
+    asked = []
+    hopeless = lambda a: asked.append(a) or _Run(1.0 if a > 1.5e-3 else 0.0)  # a shift no halving removes
+    shift_of = lambda at, doubled: 1.0
+    assert vibration.settled_amplitude(1e-3, 1.0, hopeless, shift_of)[0] == 1e-3 / 2**vibration.HALVINGS
+    assert len(asked) == vibration.HALVINGS + 2
