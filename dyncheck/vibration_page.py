@@ -126,10 +126,15 @@ def frequency_lines(vib, case):
         shape = ref.shape(i, n)
         entry["shape"] = ", ".join(f"{c} {_shape_entry(x)}" for c, x in zip(case.coords, shape))
         table.append(entry)
-    amplitude = vib.motions[0].amplitude if vib.motions else None
-    lines = ["**Natural frequencies** (imaginary parts of the eigenvalues of A; the runs: the frequency of the modal "
-             f"coordinate in a run from the equilibrium displaced along the mode by {amplitude:g} in its largest "
-             "coordinate, MuJoCo by its RK4, the others by DOP853):", "",
+    # each mode's amplitude, the case's or halved (vibration.settled_amplitude): one number where they agree
+    amplitudes = {k + 1: runs[(i, "reference")].amplitude for k, i in enumerate(ref.oscillating())
+                  if (i, "reference") in runs}
+    amplitude = (f"{next(iter(amplitudes.values())):g}" if len(set(amplitudes.values())) == 1 else
+                 ", ".join(f"{a:g} (mode {k})" for k, a in amplitudes.items()))
+    runs_words = (f"the frequency of the modal coordinate in a run from the equilibrium displaced along the mode by "
+                  f"{amplitude} in its largest coordinate, MuJoCo by its RK4, the others by DOP853" if amplitudes else
+                  "none: an unstable equilibrium is left by every run")
+    lines = [f"**Natural frequencies** (imaginary parts of the eigenvalues of A; the runs: {runs_words}):", "",
              pd.DataFrame(table).to_markdown(index=False, disable_numparse=True), "",
              stability_line("**Stability**", vib.modes, case, VERDICT_WORDS), ""]
     return lines

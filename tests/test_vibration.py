@@ -12,7 +12,7 @@ import pytest
 import scipy.linalg
 
 import dyncheck
-from dyncheck import vibration
+from dyncheck import vibration, vibration_page
 from dyncheck.results import Status
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
@@ -98,6 +98,8 @@ def test_a_soft_spring_finds_only_the_unstable_equilibrium_through_the_hinge():
     assert all(r.status == Status.PASS for r in about_equilibrium[:-1])
     last = about_equilibrium[-1]
     assert last.status == Status.NOT_APPLICABLE and "unstable equilibrium" in last.detail
+    # its page says that no mode was run (it raised a TypeError, formatting the amplitude of no run)
+    assert "the runs: none: an unstable equilibrium is left by every run" in vibration_page.frequency_lines(vib, case)[0]
 
 
 def test_no_equilibrium_in_either_is_not_applicable(monkeypatch):
