@@ -222,6 +222,9 @@ def step_lines(number, step, case, result, tmp):
             lines += style.embed(drawn[0], f"{case.title}: {figure}", caption)
         elif figure == "animation":  # `dyncheck report --no-animations`, or results without frames
             lines += ["(The animation is not in this report: the case page says why.)", ""]
+        elif not result.runs["reference"].ok:  # it blew up or ran away (a --set): the case page draws nothing along it
+            lines += [f"(The figure '{figure}' is not in this report: it is drawn along the reference run, which "
+                      "did not reach its end; the case page says why.)", ""]
         else:
             raise ValueError(f"{case.file}: course.steps: figure {figure!r}: the case page drew no "
                              f"figures/{case.name}_{figure}.png")
