@@ -180,6 +180,11 @@ class Equilibrium:
         return np.concatenate([self.q, self.v])
 
 
+def state_words(names, x):
+    """A state for a sentence, each variable to 6 decimals: "psi = 1.526623, psi_rate = -102.132058"."""
+    return ", ".join(f"{name} = {round(float(value), 6)}" for name, value in zip(names, x))
+
+
 def equilibrium(model, t, q, v, solve, coords):
     """Newton-Raphson on the accelerations for the state variables `solve` (names of coordinates and rates),
     the others held; least-squares steps (a cyclic coordinate's equation is identically zero), halved while
@@ -204,6 +209,10 @@ def equilibrium(model, t, q, v, solve, coords):
             return Equilibrium(t, x[:n].copy(), x[n:].copy(), float(np.max(np.abs(residual)) / scale), float(scale),
                                iteration)
         step = np.linalg.lstsq(jac, -residual, rcond=None)[0]
+        # at most a scale a step (a radian, a metre, a radian per second): far from the equilibrium the linear model
+        # can send a step many turns away, to another equilibrium or a local minimum of |q''| (two pendulums with
+        # m2 = 80 m1 stalled at theta1 = -187 rad from the guess 0.1 rad)
+        step = step / max(1.0, float(np.max(np.abs(step) / scales_of(x[unknown]))))
         for _ in range(30):
             trial = accelerations(x[unknown] + step)
             if np.all(np.isfinite(trial)) and np.max(np.abs(trial)) < np.max(np.abs(residual)):
@@ -211,9 +220,9 @@ def equilibrium(model, t, q, v, solve, coords):
             step = step / 2
         x[unknown] += step
         residual = trial
-    raise NoEquilibrium(f"Newton-Raphson for {', '.join(solve)} from {dict(zip(names, np.round(np.concatenate([q, v]), 6)))} "
+    raise NoEquilibrium(f"Newton-Raphson for {', '.join(solve)} from {state_words(names, np.concatenate([q, v]))} "
                         f"did not converge in {NEWTON_ITERATIONS} iterations: the largest |q''| left is "
-                        f"{np.max(np.abs(residual)):.3g} at {dict(zip(names, np.round(x, 6)))}")
+                        f"{np.max(np.abs(residual)):.3g} at {state_words(names, x)}")
 
 
 def steady(model, eq, times):
@@ -527,7 +536,7 @@ def without_equilibrium(scene, table, why):
                          Status.NOT_APPLICABLE)
     else:
         row_ = no_number("vibration", "equilibrium", ("reference", "mujoco"),
-                         f"MuJoCo has one at {dict(zip(state_names(scene.coords), np.round(found.state, 6)))}, the "
+                         f"MuJoCo has one at {state_words(state_names(scene.coords), found.state)}, the "
                          f"derivation none: {why}", Status.FAIL)
     return Vibration(table["why"], table["overrides"], None, {}, {}, (), (), (row_,), why)
 
@@ -879,11 +888,17 @@ def periodic_orbit(case, source, guess, period):
         # from a quarter of the samples: the Jacobian's error (1e-10) is far below what slows Newton's convergence
         samples, _ = state_matrices(case, source, states[:-1:4], period)
         jacobian_, _ = transition(samples[:, None], period, integration["rtol"], fastest_frequency(case))
-        x = x - np.linalg.solve(jacobian_[0] - np.eye(len(x)), states[-1] - x)
+        try:
+            x = x - np.linalg.solve(jacobian_[0] - np.eye(len(x)), states[-1] - x)
+        except np.linalg.LinAlgError:  # a multiplier at 1: the orbit is not isolated, shooting cannot pick one
+            names = state_names(case.coords)
+            raise NoOrbit(f"shooting Newton-Raphson on the {source} stopped at iteration {iteration + 1}: Phi(T) - I is "
+                          f"singular at {state_words(names, x)} (a multiplier at 1: no isolated periodic "
+                          f"motion there); |x(T) - x(0)| left {residual:.3g} (relative)") from None
     names = state_names(case.coords)
-    raise NoOrbit(f"shooting Newton-Raphson on the {source} from {dict(zip(names, np.round(guess, 6)))} did not converge in "
+    raise NoOrbit(f"shooting Newton-Raphson on the {source} from {state_words(names, guess)} did not converge in "
                   f"{NEWTON_ITERATIONS} iterations: |x(T) - x(0)| left {residual:.3g} (relative) at "
-                  f"{dict(zip(names, np.round(x, 6)))}")
+                  f"{state_words(names, x)}")
 
 
 def without_orbit(case, guess, period, why):
@@ -895,7 +910,7 @@ def without_orbit(case, guess, period, why):
         return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
                          f"neither has one near the guess: {why}", Status.NOT_APPLICABLE)
     return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
-                     f"MuJoCo has one from {dict(zip(state_names(case.coords), np.round(found, 6)))}, the derivation "
+                     f"MuJoCo has one from {state_words(state_names(case.coords), found)}, the derivation "
                      f"none: {why}", Status.FAIL)
 
 

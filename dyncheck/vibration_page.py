@@ -63,13 +63,17 @@ def section(result, case, tmp):
     lines += linear_equations(vib, case)
     lines += frequency_lines(vib, case)
     files = []
-    chart = f"figures/{case.name}_modes.png"
-    figure_modes(vib, case, tmp / chart)
-    files.append(chart)
-    lines += embed(chart, "mode shapes",
-                   "The mode shapes: each mode's coordinate displacements, scaled so that the largest is 1, from each "
-                   "source's linearisation (bars side by side: colour and hatch per source).  Coinciding bars are "
-                   "the check: the rows `mode shape` above give the largest difference.")
+    if vib.modes["reference"].oscillating():
+        chart = f"figures/{case.name}_modes.png"
+        figure_modes(vib, case, tmp / chart)
+        files.append(chart)
+        lines += embed(chart, "mode shapes",
+                       "The mode shapes: each mode's coordinate displacements, scaled so that the largest is 1, from "
+                       "each source's linearisation (bars side by side: colour and hatch per source).  Coinciding bars "
+                       "are the check: the rows `mode shape` above give the largest difference.")
+    else:  # every eigenvalue real: nothing oscillates, no shape to draw
+        lines += ["No mode oscillates about this equilibrium (every eigenvalue of A is real): no mode shapes to draw.",
+                  ""]
     lines += floquet_lines(vib, case)
     sweep = (result.studies or {}).get("vibration")
     if sweep is not None:
@@ -133,7 +137,8 @@ def frequency_lines(vib, case):
                  ", ".join(f"{a:g} (mode {k})" for k, a in amplitudes.items()))
     runs_words = (f"the frequency of the modal coordinate in a run from the equilibrium displaced along the mode by "
                   f"{amplitude} in its largest coordinate, MuJoCo by its RK4, the others by DOP853" if amplitudes else
-                  "none: an unstable equilibrium is left by every run")
+                  "none: no mode oscillates" if not ref.oscillating() else
+                  "none: the equilibrium is unstable, and every run leaves it")
     lines = [f"**Natural frequencies** (imaginary parts of the eigenvalues of A; the runs: {runs_words}):", "",
              pd.DataFrame(table).to_markdown(index=False, disable_numparse=True), "",
              stability_line("**Stability**", vib.modes, case, VERDICT_WORDS), ""]

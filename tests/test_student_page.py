@@ -91,12 +91,15 @@ def test_a_course_naming_an_unknown_expression_is_refused(tmp_path):
 def test_a_figure_not_drawn_because_the_reference_run_ran_away_is_said_so(tmp_path):
     # `dyncheck report spring_pendulum --set k=100`: the spring too soft for the spin, the run leaves its bound and
     # the case page draws nothing along it; the student page said so by a ValueError (a traceback, no report)
-    case = dyncheck.load_case("spring_pendulum")
+    case = dyncheck.load_case("spring_pendulum", k=100.0)
     step = SimpleNamespace(title="The scene", text="", shown=(), vibration=False, figures=(("scene", "the scene"),))
     ran_away = SimpleNamespace(runs={"reference": SimpleNamespace(ok=False)}, rows=())
     assert "(The figure 'scene' is not in this report: it is drawn along the reference run, which did not reach its " \
            "end; the case page says why.)" in student_page.step_lines(1, step, case, ran_away, tmp_path)
-    # with the reference run whole, a figure not drawn is one the case never draws: the course names it wrongly
+    # a figure a --set left undrawn otherwise (no oscillating mode to draw the shapes of, ...)
     whole = SimpleNamespace(runs={"reference": SimpleNamespace(ok=True)}, rows=())
+    assert "(The figure 'scene' is not in this report: the case page could not draw it at these parameters; the case " \
+           "page says why.)" in student_page.step_lines(1, step, case, whole, tmp_path)
+    # at the book's numbers every figure a course names is drawn: one that is not, the case never draws
     with pytest.raises(ValueError, match="figure 'scene': the case page drew no"):
-        student_page.step_lines(1, step, case, whole, tmp_path)
+        student_page.step_lines(1, step, dyncheck.load_case("spring_pendulum"), whole, tmp_path)

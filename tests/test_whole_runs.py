@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, Phase, assume, given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck import schema
+from dyncheck import cli, schema
 from dyncheck.checks import run_case
 from dyncheck.simulate import fastest_frequency
 
@@ -117,3 +117,17 @@ def test_mujocos_step_stops_following_where_its_twin_would_outrun_a_run(name, ov
     from dyncheck.simulate import MAX_STEPS
     case = dyncheck.load_case(name, **override)
     assert MAX_STEPS / 2 < 2 * case.initial[2] / case.integration["mujoco_step"] <= MAX_STEPS
+
+
+@pytest.mark.full
+@pytest.mark.parametrize("name, sets", [
+    ("rotating_pendulum", ["l=0.5", "g=1", "beta_rate=10"]),  # no mode oscillates: the page drew the shapes of none
+    ("spring_pendulum", ["k=100"]),  # the run leaves its bound: the student page's figures along it
+    ("double_pendulum", ["g=0"]),  # at rest: omega = 0, nothing to converge (a failing row, now not applicable)
+])
+def test_a_report_off_the_book_is_written(tmp_path, name, sets):
+    # each raised a traceback (ZeroDivisionError, ValueError) or failed a check that cannot apply
+    args = ["report", name, "--no-studies", "--no-animations", "--out", str(tmp_path)]
+    assert cli.main(args + [part for s in sets for part in ("--set", s)]) == 0
+    assert (tmp_path / f"{name}.md").is_file() and (tmp_path / f"{name}_student.md").is_file()
+

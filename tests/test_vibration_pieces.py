@@ -1,10 +1,13 @@
-"""The amplitude of the vibration analysis's runs (dyncheck.vibration.settled_amplitude): halved while its nonlinear
-shift would take the rows' tolerance near their ceiling, and no further than HALVINGS."""
+"""Pieces of the vibration analysis that need no whole analysis (the default `pytest`; tests/test_vibration.py runs
+whole ones): the amplitude of its runs (settled_amplitude), halved while its nonlinear shift would take the rows'
+tolerance near their ceiling and no further than HALVINGS; the shooting's failure as NoOrbit."""
 
 import math
 
+import numpy as np
 import pytest
 
+import dyncheck
 from dyncheck import ceilings, vibration
 
 
@@ -35,3 +38,15 @@ def test_a_failed_or_hopeless_run_is_not_halved_forever():
     shift_of = lambda at, doubled: 1.0
     assert vibration.settled_amplitude(1e-3, 1.0, hopeless, shift_of)[0] == 1e-3 / 2**vibration.HALVINGS
     assert len(asked) == vibration.HALVINGS + 2
+
+
+def test_a_singular_shooting_jacobian_is_no_orbit_not_a_traceback(monkeypatch):
+    # Phi(T) - I singular (a multiplier at 1): rotating_pendulum --set l=0.05 --set alpha_rate=-5 raised LinAlgError
+    # out of `dyncheck run`; it is NoOrbit, which the Floquet analysis turns into its row
+    case = dyncheck.load_case("rotating_pendulum")
+    table = vibration.floquet_settings(case)
+    period = vibration.period_of(case, table)
+    monkeypatch.setattr(vibration, "transition", lambda samples, *args: (np.eye(2)[None], None))
+    guess = np.concatenate([table["q"], table["v"]]) + 0.1  # off the orbit: Newton must step
+    with pytest.raises(vibration.NoOrbit, match=r"Phi\(T\) - I is singular at psi = "):
+        vibration.periodic_orbit(case, "reference", guess, period)
