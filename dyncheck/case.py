@@ -327,7 +327,12 @@ class Case:
             layout.append(("euler", s["euler"]["joint"], [index[c] for c in s["euler"]["coords"]]))
         driven = {joint: tuple(self.value(m.get(key, 0.0)) for key in ("angle", "rate", "acc"))
                   for joint, m in s["driven"].items()}
-        applied = {joint: AppliedForce(force, self.coords, self.params) for joint, force in s.get("applied", {}).items()}
+        applied = {}
+        for joint, force in s.get("applied", {}).items():
+            try:
+                applied[joint] = AppliedForce(force, self.coords, self.params)
+            except ValueError as error:  # an expression that does not parse, or names what it may not
+                raise ValueError(f"{self.file}: scene.applied.{joint} = {force!r}: {error}") from None
         return {"coords": self.coords, "layout": layout, "driven": driven, "applied": applied,
                 "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", []),
                 "urdf_root_joint": s.get("urdf_root_joint"), "dependent": s.get("dependent", [])}

@@ -477,8 +477,23 @@ def analyse(case):
     table = settings(case)
     if table is None:
         return None
-    about_equilibrium = equilibrium_analysis(case, table)
-    periodic = floquet(case)
+    # At absurd parameters (a mass of 1e300) an engine's or the derivation's arithmetic can fail anywhere in the
+    # analysis (a singular mass matrix, an eigenvalue problem of infinities): a failing row that says where, no traceback.
+    failed = lambda error: (f"the analysis failed: {type(error).__name__}: {error}",)
+    try:
+        about_equilibrium = equilibrium_analysis(case, table)
+    except (ArithmeticError, ValueError) as error:  # LinAlgError is a ValueError
+        why, = failed(error)
+        about_equilibrium = Vibration(table["why"], table["overrides"], None, {}, {}, (), (),
+                                      (no_number("vibration", "equilibrium", ("reference", "mujoco", "pinocchio"), why,
+                                                 Status.FAIL),), why)
+    try:
+        periodic = floquet(case)
+    except (ArithmeticError, ValueError) as error:
+        why, = failed(error)
+        periodic = Floquet(case.spec["vibration"]["floquet"]["why"], math.nan, np.empty((0, 2 * len(case.coords))), 0,
+                           {}, (), math.nan, (no_number("vibration", "periodic orbit", ("reference",), why, Status.FAIL),),
+                           why)
     if periodic is None:
         return about_equilibrium
     return replace(about_equilibrium, floquet=periodic, rows=about_equilibrium.rows + periodic.rows)

@@ -72,6 +72,8 @@ BAD_CASE_FILES = [
      "params.a.value = 0.06 as the book's text shows it, every digit 0 lost ('.6')"),
     ("spring_pendulum", "rtol = 1e-10", "rtol = inf", "integration.rtol = inf is not finite"),
     ("spring_pendulum", "output_step = 1e-3", "output_step = 0.0", "integration.output_step = 0.0 must be > 0"),
+    ("spinning_top", 'applied = { tip = [0.0, 0.0, "Mz"] }', 'applied = { tip = [0.0, 0.0, ""] }',  # hypothesis found it
+     "scene.applied.tip = [0.0, 0.0, '']: invalid syntax"),
     ("piston", "output_step = 1e-3", "output_step = 1.5e-4",
      "integration.output_step = 0.00015 is not a multiple of integration.mujoco_step = 0.0001"),
     ("spring_pendulum", "output_step = 1e-3", "output_step = 1.5e-4",  # a step that follows omega: its value too
