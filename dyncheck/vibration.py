@@ -479,21 +479,19 @@ def analyse(case):
         return None
     # At absurd parameters (a mass of 1e300) an engine's or the derivation's arithmetic can fail anywhere in the
     # analysis (a singular mass matrix, an eigenvalue problem of infinities): a failing row that says where, no traceback.
-    failed = lambda error: (f"the analysis failed: {type(error).__name__}: {error}",)
+    failed = lambda error: f"the analysis failed: {type(error).__name__}: {error}"
     try:
         about_equilibrium = equilibrium_analysis(case, table)
     except (ArithmeticError, ValueError) as error:  # LinAlgError is a ValueError
-        why, = failed(error)
-        about_equilibrium = Vibration(table["why"], table["overrides"], None, {}, {}, (), (),
-                                      (no_number("vibration", "equilibrium", ("reference", "mujoco", "pinocchio"), why,
-                                                 Status.FAIL),), why)
+        why = failed(error)
+        failing = no_number("vibration", "equilibrium", ("reference",) + ENGINES, why, Status.FAIL)
+        about_equilibrium = no_equilibrium(table, [failing], why)
     try:
         periodic = floquet(case)
     except (ArithmeticError, ValueError) as error:
-        why, = failed(error)
-        periodic = Floquet(case.spec["vibration"]["floquet"]["why"], math.nan, np.empty((0, 2 * len(case.coords))), 0,
-                           {}, (), math.nan, (no_number("vibration", "periodic orbit", ("reference",), why, Status.FAIL),),
-                           why)
+        why = failed(error)
+        periodic = no_orbit(case, floquet_settings(case), math.nan,
+                            [no_number("vibration", "periodic orbit", ("reference",), why, Status.FAIL)], why)
     if periodic is None:
         return about_equilibrium
     return replace(about_equilibrium, floquet=periodic, rows=about_equilibrium.rows + periodic.rows)
@@ -553,7 +551,12 @@ def without_equilibrium(scene, table, why):
         row_ = no_number("vibration", "equilibrium", ("reference", "mujoco"),
                          f"MuJoCo has one at {state_words(state_names(scene.coords), found.state)}, the "
                          f"derivation none: {why}", Status.FAIL)
-    return Vibration(table["why"], table["overrides"], None, {}, {}, (), (), (row_,), why)
+    return no_equilibrium(table, [row_], why)
+
+
+def no_equilibrium(table, rows, why):
+    """The analysis of a case without an equilibrium to linearise about: its rows and why."""
+    return Vibration(table["why"], table["overrides"], None, {}, {}, (), (), tuple(rows), why)
 
 
 def comparison_rows(linear, modes, pointwise):
@@ -818,6 +821,12 @@ def period_of(case, table):
     return period
 
 
+def no_orbit(case, table, period, rows, why):
+    """The Floquet analysis of a case without a periodic motion to linearise about (no period, no orbit): its rows
+    and why."""
+    return Floquet(table["why"], period, np.empty((0, 2 * len(case.coords))), 0, {}, (), math.nan, tuple(rows), why)
+
+
 def floquet(case):
     """The periodic motion of `[vibration.floquet]` at the case's own numbers: the period checked, the orbit by
     shooting, each source's monodromy matrix and multipliers, their comparison, the stroboscopic runs; None for a
@@ -830,23 +839,21 @@ def floquet(case):
         period = table["period"] = period_of(case, table)
     except ValueError as error:
         why = f"no period at these parameters: {error}"
-        return Floquet(table["why"], math.nan, np.empty((0, 2 * len(case.coords))), 0, {}, (), math.nan,
-                       (no_number(check, "periodic motion", ("reference",), why, Status.NOT_APPLICABLE),), why)
+        return no_orbit(case, table, math.nan, [no_number(check, "periodic motion", ("reference",), why,
+                                                           Status.NOT_APPLICABLE)], why)
     drift = periodicity(case, case.model("reference"), period)
     rows = [row(check, f"period T = {period:.10g} s of the equations", ("reference",), drift, NEWTON_TOLERANCE,
                 "|q''(t + T, q, q') - q''(t, q, q')| at the case's random states, relative to the largest |q''|; "
                 "allowed: rounding", ceiling=ceilings.POINTWISE)]
     if drift > NEWTON_TOLERANCE:
         why = f"T = {period:.10g} s is not a period of the equations (they change by {drift:.2e} of their size)"
-        return Floquet(table["why"], period, np.empty((0, 2 * len(case.coords))), 0, {}, (), math.nan,
-                       tuple(rows), why)
+        return no_orbit(case, table, period, rows, why)
     guess = np.concatenate([table["q"], table["v"]])
     try:
         states, iterations, residual, error = periodic_orbit(case, "reference", guess, period)
     except (NoOrbit, Unstable) as failure:
         rows.append(without_orbit(case, guess, period, str(failure)))
-        return Floquet(table["why"], period, np.empty((0, 2 * len(case.coords))), 0, {}, (), math.nan,
-                       tuple(rows), str(failure))
+        return no_orbit(case, table, period, rows, str(failure))
     samples = {}
     for source in ("reference",) + ENGINES:
         try:
