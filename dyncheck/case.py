@@ -398,10 +398,16 @@ class Case:
         at most PLACEHOLDER_MASS, an inertia of at most PLACEHOLDER_INERTIA, where the scene means none: a
         URDF's zero; MuJoCo refuses a moving body without them) and the drift of its prescribed motions (their armature halved).  Both are small, so
         a run responds linearly to them: this scene's run minus MuJoCo's is their effect."""
-        scales = {body.name: (2.0 if body.mass <= PLACEHOLDER_MASS else 1.0,
-                              2.0 if np.max(np.abs(body.inertia)) <= PLACEHOLDER_INERTIA else 1.0)
-                  for body in self.model("pinocchio").tree()}
+        scales = {name: tuple(2.0 if held else 1.0 for held in pair) for name, pair in self.placeholders().items()}
         return self.model("mujoco").approximations_doubled(scales)
+
+    def placeholders(self):
+        """The bodies to which MuJoCo gives a placeholder where the scene means none (MuJoCo refuses a moving body
+        without mass and inertia): {body: (placeholder mass?, placeholder inertia?)}, a mass of at most
+        PLACEHOLDER_MASS, an inertia of at most PLACEHOLDER_INERTIA."""
+        held = {body.name: (body.mass <= PLACEHOLDER_MASS, np.max(np.abs(body.inertia)) <= PLACEHOLDER_INERTIA)
+                for body in self.model("pinocchio").tree()}
+        return {name: pair for name, pair in held.items() if any(pair)}
 
     def _build(self, source):
         if source == "program":

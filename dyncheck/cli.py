@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from dyncheck import cache, ci
 from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
-from dyncheck.checks import run_case
+from dyncheck.checks import run_case, validate_placeholders
 from dyncheck.simulate import fastest_frequency
 from dyncheck.messages import suggest
 from dyncheck.results import format_rows, heading, load_results, save_results, to_json
@@ -373,6 +373,7 @@ def select_cases(names, set_pairs, cases_dir=CASES_DIR):
             case.model(source)
         stability.validate(case)
         vibration.validate(case)
+        validate_placeholders(case)
         work_precision.settings(case)
     return cases
 
