@@ -1,6 +1,6 @@
 """Pieces of the vibration analysis that need no whole analysis (the default `pytest`; tests/test_vibration.py runs
 whole ones): the amplitude of its runs (settled_amplitude), halved while its nonlinear shift would take the rows'
-tolerance near their ceiling and no further than HALVINGS; the shooting's failure as NoOrbit."""
+tolerance near their ceiling and no further than HALVINGS; the shooting's failure as NoOrbit (a singular Jacobian, a stall)."""
 
 import math
 
@@ -50,3 +50,19 @@ def test_a_singular_shooting_jacobian_is_no_orbit_not_a_traceback(monkeypatch):
     guess = np.concatenate([table["q"], table["v"]]) + 0.1  # off the orbit: Newton must step
     with pytest.raises(vibration.NoOrbit, match=r"Phi\(T\) - I is singular at psi = "):
         vibration.periodic_orbit(case, "reference", guess, period)
+
+
+def test_a_shooting_whose_steps_do_nothing_stops_after_stall_iterations(monkeypatch):
+    # A monodromy matrix the samples do not resolve gave the spring pendulum at m = 1e-4 kg steps of nothing: its
+    # |x(T) - x(0)| stayed at 31 for all 50 iterations (137 s).  Here Phi(T) is huge, so each step is ~1e-12
+    case = dyncheck.load_case("rotating_pendulum")
+    table = vibration.floquet_settings(case)
+    period = vibration.period_of(case, table)
+    monkeypatch.setattr(vibration, "transition", lambda samples, *args: (1e12 * np.eye(2)[None], None))
+    runs = []
+    orbit_run = vibration.orbit_run
+    monkeypatch.setattr(vibration, "orbit_run", lambda *args: runs.append(args[-1]) or orbit_run(*args))
+    guess = np.concatenate([table["q"], table["v"]]) + 0.1
+    with pytest.raises(vibration.NoOrbit, match=r"stalled: \|x\(T\) - x\(0\)\| stayed at .* for 5 iterations"):
+        vibration.periodic_orbit(case, "reference", guess, period)
+    assert runs.count(case.integration["tight_rtol"]) == vibration.STALL + 1
