@@ -270,7 +270,8 @@ def random_parameters(case):
             errors = {(a, b): compare(other, values[a], values[b]) for a, b in itertools.combinations(ENGINES, 2)}
             # MuJoCo's placeholders, measured only where a comparison with it fails: allowed, they pass nothing
             # that passes without them
-            failing = any(error > tolerance for (a, b), by in errors.items() if "mujoco" in (a, b) for error in by.values())
+            failing = any(error > tolerance for (a, b), by in errors.items() if "mujoco" in (a, b)
+                          for error in by.values())
             effect = placeholders_effect(other, states, values["mujoco"]) if failing else {}
         except ArithmeticError as failure:
             rows.append(no_number("random parameters", "every quantity", ("every source",),
@@ -279,8 +280,9 @@ def random_parameters(case):
         for (a, b), by in errors.items():
             for quantity, error in by.items():
                 allowed = effect.get(quantity, 0.0) if "mujoco" in (a, b) else 0.0
-                if error - (tolerance + allowed) >= worst.get((a, b), (-np.inf,))[0]:
-                    worst[(a, b)] = (error - (tolerance + allowed), error, tolerance + allowed, quantity, params, allowed)
+                judged = tolerance + allowed
+                if error - judged >= worst.get((a, b), (-np.inf,))[0]:
+                    worst[(a, b)] = (error - judged, error, judged, quantity, params, allowed)
     return rows + [row("random parameters", quantity, (a, b), error, judged,
                        f"{len(sets)} parameter sets (seed {seed}) x {count} states; worst at {named(params)}"
                        + (f", MuJoCo's placeholders' effect there {allowed:.2g} allowed" if allowed else "")

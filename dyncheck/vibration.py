@@ -545,8 +545,8 @@ def without_equilibrium(scene, table, why):
     try:
         found = equilibrium(scene.model("mujoco"), 0.0, table["q"], table["v"], table["solve"], scene.coords)
     except NoEquilibrium:
-        row_ = no_number("vibration", "equilibrium", ("reference", "mujoco"), f"neither has one near the guess: {why}",
-                         Status.NOT_APPLICABLE)
+        row_ = no_number("vibration", "equilibrium", ("reference", "mujoco"),
+                         f"Newton-Raphson finds none from the guess in either: {why}", Status.NOT_APPLICABLE)
     else:
         row_ = no_number("vibration", "equilibrium", ("reference", "mujoco"),
                          f"MuJoCo has one at {state_words(state_names(scene.coords), found.state)}, the "
@@ -734,9 +734,9 @@ def motion_rows(case, modes, motions, shift):
 # less tightly, measures the interpolation's error with the integrator's.
 SAMPLES = 32
 # Shooting stops when |x(T) - x(0)| stays within 10 % over STALL iterations: Newton's steps then do nothing, from a
-# monodromy matrix the samples do not resolve (the spring pendulum at m = 1e-4 kg, omega = 4,472 rad/s, kept it at
+# monodromy matrix the samples do not resolve (a spring-mass pendulum at m = 1e-4 kg, omega = 4,472 rad/s, kept it at
 # 31 for all 50 iterations: 137 s of the reference's and MuJoCo's runs).  A step that shrinks it slowly, or only now
-# and then, goes on (at beta' = -40 rad/s the rotating pendulum's falls 0.6-fold per iteration from the 15th, after
+# and then, goes on (a pendulum on a disk turning at beta' = -40 rad/s: 0.6-fold per iteration from the 15th, after
 # a dip at the 10th, and converges at the 27th); at the book's numbers it falls at least 300-fold at every one.
 STALL = 5
 
@@ -806,6 +806,7 @@ class Floquet:
     failure: str = ""  # why there is no analysis (T not a period of the equations, no orbit)
     residual: float = math.nan  # |x(T) - x(0)| left by shooting (its stopping rule: within the run's own error estimate)
     residual_error: float = math.nan  # that estimate
+    continued: int = 0  # steps of the continuation from the book's orbit that found it (continued_orbit), 0: none
 
 
 def floquet_settings(case):
@@ -856,7 +857,7 @@ def floquet(case):
         return no_orbit(case, table, period, rows, why)
     guess = np.concatenate([table["q"], table["v"]])
     try:
-        states, iterations, residual, error = periodic_orbit(case, "reference", guess, period)
+        (states, iterations, residual, error), continued = continued_orbit(case, table, guess, period)
     except (NoOrbit, Unstable) as failure:
         rows.append(without_orbit(case, guess, period, str(failure)))
         return no_orbit(case, table, period, rows, str(failure))
@@ -871,7 +872,7 @@ def floquet(case):
     motions, shift = stroboscopic_checks(case, states[0], monodromy, table)
     rows += stroboscopic_rows(case, monodromy, motions, shift, period)
     return Floquet(table["why"], period, states, iterations, monodromy, tuple(motions), shift, tuple(rows),
-                   residual=residual, residual_error=error)
+                   residual=residual, residual_error=error, continued=continued)
 
 
 def periodicity(case, model, period):
@@ -893,7 +894,7 @@ def orbit_run(case, model, x, period, rtol):
     return run[state_names(case.coords)].to_numpy()
 
 
-def periodic_orbit(case, source, guess, period):
+def periodic_orbit(case, source, guess, period, iterations=NEWTON_ITERATIONS):
     """Shooting Newton-Raphson for x0 with phi_T(x0) = x0, phi_T the run over one period at the case's tight rtol,
     the Jacobian Phi(T) - I (the derivation's monodromy matrix along the run).  Converged
     when |phi_T(x0) - x0| is within the run's own error estimate, its difference from the same run at the case's
@@ -905,7 +906,7 @@ def periodic_orbit(case, source, guess, period):
     integration = case.integration
     residual, error, residuals = math.inf, None, []
     names = state_names(case.coords)
-    for iteration in range(NEWTON_ITERATIONS):
+    for iteration in range(iterations):
         states = orbit_run(case, model, x, period, integration["tight_rtol"])
         scale = scales_of(x)
         residual = float(np.max(np.abs(states[-1] - x) / scale))
@@ -929,8 +930,50 @@ def periodic_orbit(case, source, guess, period):
                           f"singular at {state_words(names, x)} (a multiplier at 1: no isolated periodic "
                           f"motion there); |x(T) - x(0)| left {residual:.3g} (relative)") from None
     raise NoOrbit(f"shooting Newton-Raphson on the {source} from {state_words(names, guess)} did not converge in "
-                  f"{NEWTON_ITERATIONS} iterations: |x(T) - x(0)| left {residual:.3g} (relative) at "
+                  f"{iterations} iterations: |x(T) - x(0)| left {residual:.3g} (relative) at "
                   f"{state_words(names, x)}")
+
+
+CONTINUATION = 64  # the continuation's shortest step: 1/64 of the way from the book's parameters to the case's
+# Newton-Raphson's iterations at a step of the continuation: from the orbit before, a step short enough converges in
+# a few (2 to 5 measured), and a longer one is halved rather than iterated on (near a fold it went on for 50)
+CONTINUATION_ITERATIONS = 10
+
+
+def continued_orbit(case, table, guess, period):
+    """The derivation's periodic orbit by shooting from the table's guess (periodic_orbit's answer), and how many
+    steps of continuation it took.  The guess is made for the book's numbers: where shooting from it fails under
+    overrides (Newton-Raphson finds the orbit only from near it, and an orbit moves with the parameters), the
+    orbit is continued from the book's, the overridden parameters moved from the book's values to the case's in
+    steps of a quarter of the way, each shot from the orbit before, a step halved where it fails (down to
+    1/CONTINUATION of the way) and doubled after it succeeds.  NoOrbit says how far it got.  (A pendulum whose arm
+    turns at 4 times the book's rate: shot from the guess, Newton stalled at |x(T) - x(0)| = 1.7; continued, it
+    converges.)"""
+    try:
+        return periodic_orbit(case, "reference", guess, period), 0
+    except (NoOrbit, Unstable) as failure:
+        if not case.overrides:
+            raise
+        direct = failure
+    book = {name: case.defaults[name] for name in case.overrides}
+    along = lambda s: case.with_params(**{name: book[name] + s * (value - book[name])
+                                          for name, value in case.overrides.items()})
+    done, step, steps, x = 0.0, 0.25, 0, guess
+    while True:
+        target = min(1.0, done + step)
+        try:
+            at = case if target == 1.0 else along(target)
+            found = periodic_orbit(at, "reference", x, period_of(at, table), CONTINUATION_ITERATIONS)
+        except (NoOrbit, Unstable, ValueError) as failure:  # ValueError: a step's parameters break a constraint
+            step /= 2
+            if step < 1 / CONTINUATION:
+                raise NoOrbit(f"{direct}; continued from the book's orbit, shooting stopped {done:.3g} of the way to "
+                              f"{case.overrides_text()}: {failure}") from None
+            continue
+        steps += 1
+        if target == 1.0:
+            return found, steps
+        done, step, x = target, 2 * step, found[0][0]
 
 
 def without_orbit(case, guess, period, why):
@@ -940,7 +983,7 @@ def without_orbit(case, guess, period, why):
         found = periodic_orbit(case, "mujoco", guess, period)[0][0]
     except (ValueError, Unstable):  # NoOrbit, a blow-up, a scene MuJoCo cannot linearise
         return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
-                         f"neither has one near the guess: {why}", Status.NOT_APPLICABLE)
+                         f"shooting finds none from the guess in either: {why}", Status.NOT_APPLICABLE)
     return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
                      f"MuJoCo has one from {state_words(state_names(case.coords), found)}, the derivation "
                      f"none: {why}", Status.FAIL)

@@ -277,7 +277,10 @@ def floquet_lines(vib, case):
     amplitude = np.max(np.abs(coordinates - coordinates.mean(axis=0)), axis=0)
     lines += [f"**Period** T = {floquet.period:.10g} s: the equations repeat after it (the row `period T`).  **The "
               f"periodic orbit**, by shooting Newton-Raphson on the {source_name('reference', case)} "
-              f"({floquet.iterations} iterations, |x(T) - x(0)| left {floquet.residual:.1e} of the state's scale, "
+              f"({floquet.iterations} iterations"
+              + (f", continued from the book's orbit in {floquet.continued} steps of the overridden parameters"
+                 if floquet.continued else "")
+              + f", |x(T) - x(0)| left {floquet.residual:.1e} of the state's scale, "
               f"within the run's own error estimate {floquet.residual_error:.1e}), starts at "
               + ", ".join(f"{c} = {equilibrium_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, :n])) + "; "
               + ", ".join(f"{c}' = {equilibrium_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, n:]))

@@ -1,6 +1,7 @@
 """Pieces of the vibration analysis that need no whole analysis (the default `pytest`; tests/test_vibration.py runs
 whole ones): the amplitude of its runs (settled_amplitude), halved while its nonlinear shift would take the rows'
-tolerance near their ceiling and no further than HALVINGS; the shooting's failure as NoOrbit (a singular Jacobian, a stall)."""
+tolerance near their ceiling and no further than HALVINGS; the shooting's failure as NoOrbit (a singular Jacobian, a
+stall), and its continuation from the book's orbit."""
 
 import math
 
@@ -66,3 +67,15 @@ def test_a_shooting_whose_steps_do_nothing_stops_after_stall_iterations(monkeypa
     with pytest.raises(vibration.NoOrbit, match=r"stalled: \|x\(T\) - x\(0\)\| stayed at .* for 5 iterations"):
         vibration.periodic_orbit(case, "reference", guess, period)
     assert runs.count(case.integration["tight_rtol"]) == vibration.STALL + 1
+
+
+def test_an_orbit_that_shooting_misses_from_the_guess_is_continued_from_the_book_s():
+    # At 4 times the book's arm rate Newton-Raphson from the case file's guess stalls at |x(T) - x(0)| = 1.7 (and
+    # the row said no orbit existed); continued from the book's orbit it converges, to the orbit that
+    # scipy.optimize.root finds on phi_T(x) - x from the same continuation (psi = 0.648, psi' = 0)
+    case = dyncheck.load_case("rotating_pendulum", alpha_rate=3.14)
+    table = vibration.floquet_settings(case)
+    (states, _, residual, error), continued = vibration.continued_orbit(
+        case, table, np.concatenate([table["q"], table["v"]]), vibration.period_of(case, table))
+    assert continued > 0 and residual <= error
+    assert states[0] == pytest.approx([0.648064, 0.0], abs=1e-6)
