@@ -383,7 +383,8 @@ class Program:
                 out_psi.append(psi), out_l.append(l), out_psid.append(psid), out_ld.append(ld)
                 out_x.append(x), out_y.append(y), out_z.append(z)
         except (OverflowError, ValueError) as error:  # x**2 or cos of a huge or infinite state
-            raise FloatingPointError(f"the 1.8.3 listing's explicit Euler is unstable: {error} at "
+            raise FloatingPointError(f"the 1.8.3 listing's explicit Euler is unstable: its state grew beyond "
+                                     f"floats ({error.args[-1] if error.args else type(error).__name__}) at "
                                      f"t = {(i - 2) * deltat:.6g} s (step {i - 1})") from None
         rows = len(t_int)  # n_int - 1, as plotted (1:nplot)
         frame = pd.DataFrame({"psi": out_psi[:rows], "l": out_l[:rows], "psi_rate": out_psid[:rows],

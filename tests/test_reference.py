@@ -131,3 +131,13 @@ def test_the_double_pendulum_book_s_tensions_are_the_listing_s():
     book, program = case.model("book"), case.model("program")
     for t, q, v in case.sample_states(10):
         assert book.reactions(t, q, v) == program.reactions(t, q, v)
+
+
+def test_a_listing_that_overflows_says_so_in_words():
+    # at 10 times the book's stiffness the 1.8.3 listing's explicit Euler squares a huge rate: Python's OverflowError
+    # reached the row as "(34, 'Numerical result out of range')"
+    case = dyncheck.load_case("spring_pendulum", k=20000.0)
+    q0, v0, _ = case.initial
+    with pytest.raises(FloatingPointError, match=r"unstable: its state grew beyond floats \(Numerical result out of "
+                                                 r"range\) at t = 2\.0773 s \(step 41547\)$"):
+        case.model("program").run(q0, v0)
