@@ -173,13 +173,14 @@ def validate_placeholders(case):
     if quantity is not None and effect[quantity] > PLACEHOLDER_SHARE * tolerance:
         held = [f"{name} ({' and '.join(what for what, flag in zip(('mass', 'inertia'), pair) if flag)})"
                 for name, pair in case.placeholders().items()]
+        # the field: the overrides that made the bodies so light or small, or else the tolerance they are held to
+        field = f"override {case.overrides_text()}" if case.overrides else f"tolerance.pointwise.value = {tolerance:g}"
         raise ValueError(
-            f"{case.file}: {'with ' + case.overrides_text() if case.overrides else 'at its parameters'}, MuJoCo's "
-            f"placeholders ({PLACEHOLDER_MASS:g} kg, {PLACEHOLDER_INERTIA:g} kg m^2, where the scene means none: "
-            f"{', '.join(held)}) change its {quantity} by {effect[quantity]:.2g} of its size at the random states, "
-            f"above {PLACEHOLDER_SHARE:g} of the pointwise tolerance {tolerance:g}: every comparison with MuJoCo "
-            f"would blame them on a derivation. Heavier or larger bodies, or a [tolerance.pointwise] value of at "
-            f"least {effect[quantity] / PLACEHOLDER_SHARE:.2g}, would do")
+            f"{case.file}: {field}: MuJoCo's placeholders ({PLACEHOLDER_MASS:g} kg, {PLACEHOLDER_INERTIA:g} kg m^2, "
+            f"where the scene means none: {', '.join(held)}) change its {quantity} by {effect[quantity]:.2g} of its "
+            f"size at the random states, above {PLACEHOLDER_SHARE:g} of the pointwise tolerance {tolerance:g}: every "
+            f"comparison with MuJoCo would blame them on a derivation. Heavier or larger bodies, or a "
+            f"[tolerance.pointwise] value of at least {effect[quantity] / PLACEHOLDER_SHARE:.2g}, would do")
 
 
 def pointwise(case):
