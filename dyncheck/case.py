@@ -39,6 +39,14 @@ PLACEHOLDER_INERTIA = 1e-14
 
 
 @dataclass(frozen=True)
+class Runaway:
+    """A physical limit of the case that its parameters are past (a [[runaway]] whose `when` holds): the
+    runs stop where they leave `bound` = (coordinate, its index, escape); `why` says why, with its numbers."""
+    bound: tuple
+    why: str
+
+
+@dataclass(frozen=True)
 class Parameter:
     """A parameter of a case as this run uses it."""
     name: str
@@ -225,6 +233,15 @@ class Case:
     def with_params(self, **params):
         """This case with further parameters overridden (on top of its own overrides)."""
         return Case(self.folder, {**self.overrides, **params}, self.spec, self.derivation)
+
+    def runaway(self):
+        """The first [[runaway]] of the case whose `when` holds at its parameters (a Runaway), or None."""
+        for i, entry in enumerate(self.spec.get("runaway", [])):
+            if self.value(entry["when"], f"runaway[{i}].when"):
+                coordinate = entry["coordinate"]
+                return Runaway((coordinate, self.coords.index(coordinate), self.value(entry["escape"])),
+                               " ".join(self.prose(entry["why"], f"runaway[{i}].why").split()))
+        return None
 
     def with_horizon(self, t_end):
         """This case with its runs ending at `t_end` (s) instead of [initial] t_end: every source's run

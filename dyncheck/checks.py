@@ -4,7 +4,7 @@ import itertools
 import math
 import re
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
@@ -467,24 +467,6 @@ def energy(case, runs):
 
 # -- physical runaway -------------------------------------------------------------
 
-@dataclass(frozen=True)
-class Runaway:
-    """A physical limit of the case that its parameters are past (a [[runaway]] whose `when` holds): the
-    runs stop where they leave `bound` = (coordinate, its index, escape); `why` says why, with its numbers."""
-    bound: tuple
-    why: str
-
-
-def runaway(case):
-    """The first [[runaway]] of the case whose `when` holds at its parameters, or None."""
-    for i, entry in enumerate(case.spec.get("runaway", [])):
-        if case.value(entry["when"], f"runaway[{i}].when"):
-            coordinate = entry["coordinate"]
-            return Runaway((coordinate, case.coords.index(coordinate), case.value(entry["escape"])),
-                           " ".join(case.prose(entry["why"], f"runaway[{i}].why").split()))
-    return None
-
-
 RUN_CHECKS = ("trajectory", "energy")  # the checks of run_sources' runs: a row's first source is its run's
 
 
@@ -588,7 +570,7 @@ def run_case(case, localise=True):
     rows, sample = pointwise(case)
     equations, residuals_found = residuals.equation_rows(case, sample)
     rows += equations + residuals.printed_rows(case, sample) + random_parameters(case)
-    limit = runaway(case)
+    limit = case.runaway()
     runs = run_sources(case, None if limit is None else limit.bound)
     rows += trajectory(case, runs) + energy(case, runs)
     try:

@@ -965,13 +965,19 @@ def continued_orbit(case, table, guess, period):
     try:
         return periodic_orbit(case, "reference", guess, period), 0
     except (NoOrbit, Unstable) as failure:
-        if not case.overrides:
+        # Past a [[runaway]] nothing bounded is left to continue to: there, a spring-mass pendulum's orbit continued
+        # below k_crit put the mass through the pivot, at a negative spring length
+        if not case.overrides or case.runaway():
             raise
         direct = failure
     book = {name: case.defaults[name] for name in case.overrides}
     along = lambda s: case.with_params(**{name: book[name] + s * (value - book[name])
                                           for name, value in case.overrides.items()})
-    done, step, steps, x = 0.0, 0.25, 0, guess
+    try:
+        x = periodic_orbit(along(0.0), "reference", guess, period_of(along(0.0), table))[0][0]
+    except (NoOrbit, Unstable) as failure:
+        raise NoOrbit(f"{direct}; nor at the book's numbers, to continue from: {failure}") from None
+    done, step, steps = 0.0, 0.25, 0
     while True:
         target = min(1.0, done + step)
         try:

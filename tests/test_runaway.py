@@ -9,7 +9,8 @@ import pytest
 import dyncheck
 from dyncheck import cli
 from dyncheck.case import Case
-from dyncheck.checks import Runaway, run_sources, runaway, runaway_rows
+from dyncheck.case import Runaway
+from dyncheck.checks import run_sources, runaway_rows
 from dyncheck.results import Failure, Outcome, Row, Status
 from dyncheck.simulate import Escape, Escaped, simulate
 
@@ -32,10 +33,10 @@ def test_below_k_crit_every_source_runs_away_and_the_run_passes(tmp_path, capsys
 
 
 def test_above_k_crit_nothing_is_bounded_and_nothing_runs_away():
-    assert runaway(dyncheck.load_case("spring_pendulum")) is None  # k = 2000 N/m
+    assert dyncheck.load_case("spring_pendulum").runaway() is None  # k = 2000 N/m
     # just above k_crit the equilibrium lies at l* ~ 285 m, beyond the escape bound: bounding it would be wrong
-    assert runaway(dyncheck.load_case("spring_pendulum", k=160.0)) is None
-    assert runaway(dyncheck.load_case("spring_pendulum", k=159.8)) is not None
+    assert dyncheck.load_case("spring_pendulum", k=160.0).runaway() is None
+    assert dyncheck.load_case("spring_pendulum", k=159.8).runaway() is not None
 
 
 def test_at_the_book_stiffness_the_runs_end_and_no_row_is_runaway(results):
@@ -46,7 +47,7 @@ def test_at_the_book_stiffness_the_runs_end_and_no_row_is_runaway(results):
 
 def test_each_source_escapes_at_the_same_time():
     case = dyncheck.load_case("spring_pendulum", k=100.0)
-    limit = runaway(case)
+    limit = case.runaway()
     assert limit.bound == ("l", 1, 100.0)
     runs = run_sources(case, limit.bound)
     times = {source: outcome.failure.t for source, outcome in runs.items()}
@@ -142,7 +143,7 @@ def test_a_bad_runaway_is_refused_on_load_naming_file_field_and_value(spec, key,
 
 
 def test_the_reason_carries_its_numbers_at_the_run_parameters():
-    why = runaway(dyncheck.load_case("spring_pendulum", k=150.0)).why
+    why = dyncheck.load_case("spring_pendulum", k=150.0).runaway().why
     assert why == ("the spin's centrifugal pull m Omega^2 = 159.9 N/m beats the spring k = 150 N/m "
                    "(Omega = alpha' + beta' = 28.27 rad/s): l grows without bound")
     assert f"{K_CRIT:.4g}" in why
