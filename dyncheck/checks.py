@@ -175,12 +175,14 @@ def validate_placeholders(case):
                 for name, pair in case.placeholders().items()]
         # the field: the overrides that made the bodies so light or small, or else the tolerance they are held to
         field = f"override {case.overrides_text()}" if case.overrides else f"tolerance.pointwise.value = {tolerance:g}"
+        needed = effect[quantity] / PLACEHOLDER_SHARE  # a tolerance above its ceiling is refused as well
         raise ValueError(
             f"{case.file}: {field}: MuJoCo's placeholders ({PLACEHOLDER_MASS:g} kg, {PLACEHOLDER_INERTIA:g} kg m^2, "
             f"where the scene means none: {', '.join(held)}) change its {quantity} by {effect[quantity]:.2g} of its "
             f"size at the random states, above {PLACEHOLDER_SHARE:g} of the pointwise tolerance {tolerance:g}: every "
-            f"comparison with MuJoCo would blame them on a derivation. Heavier or larger bodies, or a "
-            f"[tolerance.pointwise] value of at least {effect[quantity] / PLACEHOLDER_SHARE:.2g}, would do")
+            f"comparison with MuJoCo would blame them on a derivation. Heavier or larger bodies"
+            + (f", or a [tolerance.pointwise] value of at least {needed:.2g}," if needed <= ceilings.POINTWISE else "")
+            + " would do")
 
 
 def pointwise(case):

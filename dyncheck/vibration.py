@@ -870,7 +870,7 @@ def floquet(case):
         return no_orbit(case, table, period, rows, why)
     guess = np.concatenate([table["q"], table["v"]])
     try:
-        (states, iterations, residual, error), continued = continued_orbit(case, table, guess, period)
+        (states, iterations, residual, error), continued = continued_orbit(case, guess, period)
     except (NoOrbit, Unstable) as failure:
         rows.append(without_orbit(case, guess, period, str(failure)))
         return no_orbit(case, table, period, rows, str(failure))
@@ -923,16 +923,16 @@ def periodic_orbit(case, source, guess, period, iterations=NEWTON_ITERATIONS):
         states = orbit_run(case, model, x, period, integration["tight_rtol"])
         scale = scales_of(x)
         residual = float(np.max(np.abs(states[-1] - x) / scale))
-        residuals = residuals[-STALL:] + [residual]
-        if len(residuals) > STALL and max(residuals) <= 1.1 * min(residuals):
-            raise NoOrbit(f"shooting Newton-Raphson on the {source} from {state_words(names, guess)} stalled: "
-                          f"|x(T) - x(0)| stayed at {min(residuals):.3g} to {max(residuals):.3g} (relative) for "
-                          f"{STALL} iterations, at {state_words(names, x)}")
         if error is None or residual <= error:  # the twin where it may decide: first, and where the last one says so
             loose = orbit_run(case, model, x, period, integration["rtol"])
             error = float(np.max(np.abs(loose[-1] - states[-1]) / scale))
             if residual <= error:
                 return states, iteration, residual, error
+        residuals = residuals[-STALL:] + [residual]
+        if len(residuals) > STALL and max(residuals) <= 1.1 * min(residuals):
+            raise NoOrbit(f"shooting Newton-Raphson on the {source} from {state_words(names, guess)} stalled: "
+                          f"|x(T) - x(0)| stayed at {min(residuals):.3g} to {max(residuals):.3g} (relative) for "
+                          f"{STALL} iterations, at {state_words(names, x)}")
         # from a quarter of the samples: the Jacobian's error (1e-10) is far below what slows Newton's convergence
         samples, _ = state_matrices(case, source, states[:-1:4], period)
         jacobian_, _ = transition(samples[:, None], period, integration["rtol"], fastest_frequency(case))
@@ -947,52 +947,65 @@ def periodic_orbit(case, source, guess, period, iterations=NEWTON_ITERATIONS):
                   f"{state_words(names, x)}")
 
 
-CONTINUATION = 64  # the continuation's shortest step: 1/64 of the way from the book's parameters to the case's
+SHORTEST_STEP = 1 / 64  # of the continuation, of the way from the book's parameters to the case's
 # Newton-Raphson's iterations at a step of the continuation: from the orbit before, a step short enough converges in
 # a few (2 to 5 measured), and a longer one is halved rather than iterated on (near a fold it went on for 50)
 CONTINUATION_ITERATIONS = 10
+# The continuation's shots, the failed ones included: its cost is bounded (at most 10 iterations each, as many as
+# two shots from the guess take at most), where steps of 1/64 failing and succeeding in turn would take 131
+CONTINUATION_SHOTS = 10
 
 
-def continued_orbit(case, table, guess, period):
-    """The derivation's periodic orbit by shooting from the table's guess (periodic_orbit's answer), and how many
-    steps of continuation it took.  The guess is made for the book's numbers: where shooting from it fails under
+def continued_orbit(case, guess, period):
+    """The derivation's periodic orbit by shooting from the case file's guess (periodic_orbit's answer), and how
+    many steps of continuation it took.  The guess is made for the book's numbers: where shooting from it fails under
     overrides (Newton-Raphson finds the orbit only from near it, and an orbit moves with the parameters), the
     orbit is continued from the book's, the overridden parameters moved from the book's values to the case's in
-    steps of a quarter of the way, each shot from the orbit before, a step halved where it fails (down to
-    1/CONTINUATION of the way) and doubled after it succeeds.  NoOrbit says how far it got.  (A pendulum whose arm
-    turns at 4 times the book's rate: shot from the guess, Newton stalled at |x(T) - x(0)| = 1.7; continued, it
-    converges.)"""
+    steps of a quarter of the way, each shot from the orbit before at its own parameters' period, a step halved
+    where it fails (down to SHORTEST_STEP) and doubled after it succeeds, in at most CONTINUATION_SHOTS shots; a
+    step past a [[runaway]] fails (nothing bounded is left there to continue to: a spring-mass pendulum's orbit
+    continued below k_crit put the mass through the pivot, at a negative spring length).  NoOrbit says how far it
+    got.  (A pendulum whose arm turns at 4 times the book's rate: shot from the guess, Newton stalled at
+    |x(T) - x(0)| = 1.7; continued, it converges.)"""
     try:
         return periodic_orbit(case, "reference", guess, period), 0
     except (NoOrbit, Unstable) as failure:
-        # Past a [[runaway]] nothing bounded is left to continue to: there, a spring-mass pendulum's orbit continued
-        # below k_crit put the mass through the pivot, at a negative spring length
         if not case.overrides or case.runaway():
             raise
         direct = failure
     book = {name: case.defaults[name] for name in case.overrides}
     along = lambda s: case.with_params(**{name: book[name] + s * (value - book[name])
                                           for name, value in case.overrides.items()})
+
+    def shot(at, start, iterations):
+        """periodic_orbit at `at`'s parameters and period (the table's period and guess are expressions of them)."""
+        table = floquet_settings(at)
+        start = np.concatenate([table["q"], table["v"]]) if start is None else start
+        return periodic_orbit(at, "reference", start, period_of(at, table), iterations)
+
     try:
-        x = periodic_orbit(along(0.0), "reference", guess, period_of(along(0.0), table))[0][0]
-    except (NoOrbit, Unstable) as failure:
+        x = shot(along(0.0), None, NEWTON_ITERATIONS)[0][0]
+    except (NoOrbit, Unstable, ValueError) as failure:
         raise NoOrbit(f"{direct}; nor at the book's numbers, to continue from: {failure}") from None
-    done, step, steps = 0.0, 0.25, 0
-    while True:
+    done, step, steps, failure = 0.0, 0.25, 0, None
+    for _ in range(CONTINUATION_SHOTS):
         target = min(1.0, done + step)
         try:
             at = case if target == 1.0 else along(target)
-            found = periodic_orbit(at, "reference", x, period_of(at, table), CONTINUATION_ITERATIONS)
-        except (NoOrbit, Unstable, ValueError) as failure:  # ValueError: a step's parameters break a constraint
-            step /= 2
-            if step < 1 / CONTINUATION:
-                raise NoOrbit(f"{direct}; continued from the book's orbit, shooting stopped {done:.3g} of the way to "
-                              f"{case.overrides_text()}: {failure}") from None
+            if at.runaway():
+                raise NoOrbit(f"the parameters {target:.3g} of the way are past the case's [[runaway]]")
+            found = shot(at, x, CONTINUATION_ITERATIONS)
+        except (NoOrbit, Unstable, ValueError) as error:  # ValueError: a step's parameters break a constraint
+            failure, step = error, step / 2
+            if step < SHORTEST_STEP:
+                break
             continue
         steps += 1
         if target == 1.0:
             return found, steps
         done, step, x = target, 2 * step, found[0][0]
+    raise NoOrbit(f"{direct}; continued from the book's orbit in {CONTINUATION_SHOTS} shots at most, shooting stopped "
+                  f"{done:.3g} of the way to {case.overrides_text()}" + (f": {failure}" if failure else ""))
 
 
 def without_orbit(case, guess, period, why):
@@ -1002,7 +1015,7 @@ def without_orbit(case, guess, period, why):
         found = periodic_orbit(case, "mujoco", guess, period)[0][0]
     except (ValueError, Unstable):  # NoOrbit, a blow-up, a scene MuJoCo cannot linearise
         return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
-                         f"shooting finds none from the guess in either: {why}", Status.NOT_APPLICABLE)
+                         f"shooting finds none in either: {why}", Status.NOT_APPLICABLE)
     return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
                      f"MuJoCo has one from {state_words(state_names(case.coords), found)}, the derivation "
                      f"none: {why}", Status.FAIL)

@@ -1,5 +1,5 @@
-"""Pieces of the vibration analysis that need no whole analysis (the default `pytest`; tests/test_vibration.py runs
-whole ones): the amplitude of its runs (settled_amplitude), halved while its nonlinear shift would take the rows'
+"""Pieces of the vibration analysis, each in seconds (the default `pytest`; tests/test_vibration.py runs the whole
+analysis of every case): the amplitude of its runs (settled_amplitude), halved while its nonlinear shift would take the rows'
 tolerance near their ceiling and no further than HALVINGS; the shooting's failure as NoOrbit (a singular Jacobian, a
 stall), and its continuation from the book's orbit."""
 
@@ -77,9 +77,25 @@ def test_an_orbit_that_shooting_misses_from_the_guess_is_continued_from_the_book
     case = dyncheck.load_case("rotating_pendulum", alpha_rate=3.14)
     table = vibration.floquet_settings(case)
     (states, _, residual, error), continued = vibration.continued_orbit(
-        case, table, np.concatenate([table["q"], table["v"]]), vibration.period_of(case, table))
+        case, np.concatenate([table["q"], table["v"]]), vibration.period_of(case, table))
     assert continued > 0 and residual <= error
     assert states[0] == pytest.approx([0.648064, 0.0], abs=1e-6)
+
+
+def test_each_step_of_the_continuation_shoots_at_its_own_period(monkeypatch):
+    # The disk's rate sets the period (2 pi / |beta'|): shot at the case's period, the book's orbit "converged" at
+    # T = 10.47 s on the book's 8 s system, and the continuation then failed (found in review)
+    case = dyncheck.load_case("rotating_pendulum", alpha_rate=3.14, beta_rate=0.6)
+    periods = []
+    periodic_orbit = vibration.periodic_orbit
+    monkeypatch.setattr(vibration, "periodic_orbit",
+                        lambda at, source, start, period, *rest: periods.append((dict(at.overrides), period))
+                        or periodic_orbit(at, source, start, period, *rest))
+    floquet = vibration.floquet(case)
+    assert floquet.continued > 0 and floquet.monodromy
+    assert periods[1] == ({"alpha_rate": pytest.approx(math.pi / 4), "beta_rate": pytest.approx(math.pi / 4)},
+                          pytest.approx(8.0))
+    assert all(period == pytest.approx(2 * math.pi / at["beta_rate"]) for at, period in periods[1:])
 
 
 def test_the_eigensolver_s_rounding_is_measured_not_bounded_by_the_matrix_s_norm():
