@@ -148,12 +148,14 @@ and 5.8e-10: docs/own-case.md).  At the random parameter sets, where nothing is 
 MuJoCo row is judged again with its set's effect allowed (random_parameters)."""
 
 
-def placeholders_effect(case, states, values):
-    """How much MuJoCo's placeholders change its `values` at `states`: {quantity: relative change}, as doubling them
-    changes them (Case.approximations_doubled: they are small, so MuJoCo's values respond linearly); {} for a scene
-    without any.  Raises ArithmeticError where the doubled scene's arithmetic fails (evaluate)."""
+def placeholders_effect(case, states, values=None):
+    """How much MuJoCo's placeholders change its `values` at `states` (evaluated here where not given):
+    {quantity: relative change}, as doubling them changes them (Case.approximations_doubled: they are small, so
+    MuJoCo's values respond linearly); {} for a scene without any, which evaluates nothing.  Raises ArithmeticError
+    where MuJoCo's arithmetic fails (evaluate)."""
     if not case.placeholders():
         return {}
+    values = evaluate(case, "mujoco", states) if values is None else values
     return compare(case, values, evaluate(case, "mujoco", states, case.approximations_doubled()))
 
 
@@ -165,7 +167,7 @@ def validate_placeholders(case):
     # singular mass matrix it is 50 times its size at the first five), and they cost 15 ms
     states = case.sample_states()
     try:
-        effect = placeholders_effect(case, states, evaluate(case, "mujoco", states))
+        effect = placeholders_effect(case, states)
     except ArithmeticError:
         return
     tolerance = case.tolerance["pointwise"]["value"]

@@ -856,7 +856,7 @@ def floquet(case):
         return None
     check = "vibration"
     try:
-        period = table["period"] = period_of(case, table)
+        period = period_of(case, table)
     except ValueError as error:
         why = f"no period at these parameters: {error}"
         return no_orbit(case, table, math.nan, [no_number(check, "periodic motion", ("reference",), why,
@@ -882,7 +882,7 @@ def floquet(case):
             rows.append(no_number(check, "monodromy matrix", (source,), str(failure), Status.FAIL))
     monodromy = monodromies(case, samples, period)
     rows += floquet_rows(monodromy, case.tolerance["pointwise"]["value"])
-    motions, shift = stroboscopic_checks(case, states[0], monodromy, table)
+    motions, shift = stroboscopic_checks(case, states[0], monodromy, table, period)
     rows += stroboscopic_rows(case, monodromy, motions, shift, period)
     return Floquet(table["why"], period, states, iterations, monodromy, tuple(motions), shift, tuple(rows),
                    residual=residual, residual_error=error, continued=continued)
@@ -1128,15 +1128,14 @@ def multiplier_text(mu):
     return f"|mu| {abs(mu):.10g} at {math.degrees(np.angle(mu)):.6g} deg"
 
 
-def stroboscopic_checks(case, start, monodromy, table):
-    """The largest multiplier of the derivation measured in runs from the orbit's x0 displaced by the amplitude
-    (settled_amplitude) along
-    each source's own eigenvector: the derivation and Pinocchio by DOP853 at the case's tight rtol, MuJoCo by its RK4
-    at the longest step no longer than the case's whose double divides T (its states, and its twin's, at the
-    multiples of T: a `--set` of the disk's rate moves T off the case's steps), and the twins: the derivation at twice
-    the amplitude, MuJoCo at twice the step (MUJOCO_TWIN).  Returns (motions, the nonlinear shift of mu at the amplitude, from the
-    derivation's twin: as `motion_checks`'s)."""
-    periods, period = table["periods"], table["period"]
+def stroboscopic_checks(case, start, monodromy, table, period):
+    """The largest multiplier of the derivation measured in runs of `period`s (T) from the orbit's x0 displaced by
+    the amplitude (settled_amplitude) along each source's own eigenvector: the derivation and Pinocchio by DOP853 at
+    the case's tight rtol, MuJoCo by its RK4 at the longest step no longer than the case's whose double divides T (its
+    states, and its twin's, at the multiples of T: a `--set` of the disk's rate moves T off the case's steps), and the
+    twins: the derivation at twice the amplitude, MuJoCo at twice the step (MUJOCO_TWIN).  Returns (motions, the
+    nonlinear shift of mu at the amplitude, from the derivation's twin: as `motion_checks`'s)."""
+    periods = table["periods"]
     twins = math.ceil(period / (MUJOCO_TWIN * case.integration["mujoco_step"]) * (1 - 1e-9))  # twin steps in T
     dt = period / (MUJOCO_TWIN * twins)
     reference = monodromy["reference"]
