@@ -810,7 +810,7 @@ class Floquet:
     check by stroboscopic runs: what the page's subsection shows."""
     why: str
     period: float  # T, s
-    orbit: np.ndarray  # the derivation's states over one period from t = 0, at 2 SAMPLES + 1 equal steps
+    orbit: np.ndarray  # the derivation's states over one period from t = 0, at 2 SAMPLES + 1 equal steps or more
     iterations: int  # of shooting Newton-Raphson
     monodromy: dict  # {source: Monodromy}
     motions: tuple  # of Motion: (reference, pinocchio, mujoco, reference at twice the amplitude, mujoco at twice the step)
@@ -820,6 +820,7 @@ class Floquet:
     residual: float = math.nan  # |x(T) - x(0)| left by shooting (its stopping rule: within the run's own error estimate)
     residual_error: float = math.nan  # that estimate
     continued: int = 0  # steps of the continuation from the book's orbit that found it (continued_orbit), 0: none
+    seeded: bool = False  # shot from MuJoCo's orbit, where neither the guess nor the continuation found it
 
 
 def floquet_settings(case):
@@ -869,23 +870,21 @@ def floquet(case):
         why = f"T = {period:.10g} s is not a period of the equations (they change by {drift:.2e} of their size)"
         return no_orbit(case, table, period, rows, why)
     guess = np.concatenate([table["q"], table["v"]])
+    seeded = False
     try:
         (states, iterations, residual, error), continued = continued_orbit(case, guess, period)
     except (NoOrbit, Unstable) as failure:
-        rows.append(without_orbit(case, guess, period, str(failure)))
-        return no_orbit(case, table, period, rows, str(failure))
-    samples = {}
-    for source in ("reference",) + ENGINES:
-        try:
-            samples[source] = state_matrices(case, source, states[:-1], period)
-        except ValueError as failure:  # a scene the engine cannot linearise (closed loops)
-            rows.append(no_number(check, "monodromy matrix", (source,), str(failure), Status.FAIL))
-    monodromy = monodromies(case, samples, period)
+        shot, missing = shot_from_mujocos_orbit(case, guess, period, str(failure))
+        if shot is None:
+            rows.append(missing)
+            return no_orbit(case, table, period, rows, missing.detail)
+        (states, iterations, residual, error), continued, seeded = shot, 0, True
+    states, monodromy = resolved_monodromy(case, states, period, rows)
     rows += floquet_rows(monodromy, case.tolerance["pointwise"]["value"])
     motions, shift = stroboscopic_checks(case, states[0], monodromy, table, period)
     rows += stroboscopic_rows(case, monodromy, motions, shift, period)
     return Floquet(table["why"], period, states, iterations, monodromy, tuple(motions), shift, tuple(rows),
-                   residual=residual, residual_error=error, continued=continued)
+                   residual=residual, residual_error=error, continued=continued, seeded=seeded)
 
 
 def periodicity(case, model, period):
@@ -898,11 +897,11 @@ def periodicity(case, model, period):
     return change / max(size, EPS)
 
 
-def orbit_run(case, model, x, period, rtol):
-    """The states of `model`'s run from x at t = 0 over one period by DOP853 at `rtol`, at 2 SAMPLES + 1 times."""
+def orbit_run(case, model, x, period, rtol, steps=2 * SAMPLES):
+    """The states of `model`'s run from x at t = 0 over one period by DOP853 at `rtol`, at `steps` + 1 equal times."""
     n = len(case.coords)
     with np.errstate(all="ignore"):
-        run = simulate(model, (x[:n], x[n:]), period, "DOP853", rtol=rtol, output_step=period / (2 * SAMPLES),
+        run = simulate(model, (x[:n], x[n:]), period, "DOP853", rtol=rtol, output_step=period / steps,
                        work=False, omega=fastest_frequency(case), quantities=())
     return run[state_names(case.coords)].to_numpy()
 
@@ -1008,17 +1007,26 @@ def continued_orbit(case, guess, period):
                   f"{done:.3g} of the way to {case.overrides_text()}" + (f": {failure}" if failure else ""))
 
 
-def without_orbit(case, guess, period, why):
-    """The row of a case whose derivation has no periodic motion near the guess: not applicable if MuJoCo has none
-    there either (the parameters leave none: a spring too soft for the spin), a failure if it has."""
+def shot_from_mujocos_orbit(case, guess, period, why):
+    """Where the derivation's shooting from the guess (and the continuation) found no orbit: MuJoCo's shooting from the
+    guess, then the derivation's from MuJoCo's orbit.  Returns (periodic_orbit's answer, None) where the derivation
+    converges there, or (None, the row): `not applicable` where MuJoCo finds none either (the parameters leave none: a
+    spring too soft for the spin), a failure where the derivation has none even from MuJoCo's.  (A pendulum whose arm
+    and disk turn at -3.77 and 3.55 rad/s: the derivation's Newton-Raphson from the guess ran off to |psi'| = 282 and
+    failed, MuJoCo's converged at psi = -146.04; the derivation converges from there.)"""
+    sources = ("reference", "mujoco")
     try:
         found = periodic_orbit(case, "mujoco", guess, period)[0][0]
     except (ValueError, Unstable):  # NoOrbit, a blow-up, a scene MuJoCo cannot linearise
-        return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
-                         f"shooting finds none in either: {why}", Status.NOT_APPLICABLE)
-    return no_number("vibration", "periodic orbit", ("reference", "mujoco"),
-                     f"MuJoCo has one from {state_words(state_names(case.coords), found)}, the derivation "
-                     f"none: {why}", Status.FAIL)
+        return None, no_number("vibration", "periodic orbit", sources,
+                               f"shooting (Newton-Raphson) finds none from the guess in either: {why}",
+                               Status.NOT_APPLICABLE)
+    try:
+        return periodic_orbit(case, "reference", found, period), None
+    except (NoOrbit, Unstable) as failure:
+        return None, no_number("vibration", "periodic orbit", sources,
+                               f"MuJoCo has one from {state_words(state_names(case.coords), found)}, the derivation "
+                               f"none from the guess ({why}) nor from MuJoCo's ({failure})", Status.FAIL)
 
 
 def state_matrices(case, source, states, period):
@@ -1069,8 +1077,42 @@ def dop853(rhs, start, t_end, rtol, omega):
     return solver.y
 
 
+# The samples of A along the orbit are doubled (the orbit's run again with twice the outputs) while the monodromy
+# matrix's error estimate would put its rows' tolerance above a tenth of their ceiling, at most REFINEMENTS times.  The
+# estimate is the twin's, from every other sample: where A's harmonics reach past the twin's Nyquist frequency (the
+# 16th multiple of 2 pi / T), it measures the twin's interpolation, not the samples'.  A pendulum whose arm and disk
+# turn at -5 and -2.8 rad/s (T = 2.24 s): 1.5e-6 of Phi's largest entry from 64 samples (every row inconclusive), 8e-10
+# from 128 (the twin's looser integration, now), and Phi from 64 and from 128 samples 6e-12 apart.  At the book's
+# numbers the estimate keeps within its share: its 4.0e-9 and 1.7e-10 are the twin's integration, which more samples
+# would not lower.
+REFINEMENTS = 2
+
+
+def resolved_monodromy(case, states, period, rows):
+    """(the orbit's states, {source: Monodromy}) from A sampled at the orbit's `states` (2 SAMPLES + 1 over the
+    period), the samples doubled while the error estimate is above its share (REFINEMENTS); a source that cannot be
+    linearised (a scene with closed loops) is a row appended to `rows`."""
+    sources, share = ("reference",) + ENGINES, math.inf
+    for refinement in range(REFINEMENTS + 1):
+        samples = {}
+        for source in sources:
+            try:
+                samples[source] = state_matrices(case, source, states[:-1], period)
+            except ValueError as failure:  # a scene the engine cannot linearise (closed loops)
+                rows.append(no_number("vibration", "monodromy matrix", (source,), str(failure), Status.FAIL))
+        sources = tuple(samples)  # a source that fails is a row once
+        monodromy = monodromies(case, samples, period)
+        # a tenth of the rows' ceiling for the estimate, SAFETY times for each of a row's two sources; more samples
+        # go on only while they halve it (they do not lower the twin's integration error)
+        last, share = share, max(2 * SAFETY * np.max(m.errors) / np.max(np.abs(m.matrix)) for m in monodromy.values())
+        if refinement == REFINEMENTS or share <= ceilings.POINTWISE / 10 or share > last / 2:
+            return states, monodromy
+        states = orbit_run(case, case.model("reference"), states[0], period, case.integration["tight_rtol"],
+                           2 * (len(states) - 1))
+
+
 def monodromies(case, samples, period):
-    """{source: Monodromy} from `samples`, {source: (A at 2 SAMPLES equal steps over the period, method)}: Phi(T)
+    """{source: Monodromy} from `samples`, {source: (A at equal steps over the period, method)}: Phi(T)
     by DOP853 at the case's tight rtol; its error estimate, the difference from the same from every other sample at
     the case's rtol (the twin's interpolation and integration errors both larger, so it bounds them)."""
     integration, omega = case.integration, fastest_frequency(case)
@@ -1116,9 +1158,15 @@ def floquet_rows(monodromy, pointwise):
             for label, r in enumerate(reference.distinct(), start=1):
                 i, j = match(reference, mo_a)[r], match(reference, mo_b)[r]
                 mu, other = mo_a.multipliers[i], mo_b.multipliers[j]
+                # as an eigenvalue's of A: a small multiplier beside a large one (mu = 0.017 beside 59) moves under
+                # Phi's errors by far more than 1e-6 of itself
+                moved = first_order_change(mo_a.left[:, [i]], mo_a.right[:, [i]],
+                                           ceilings.POINTWISE * np.abs(mo_a.matrix))[0] / abs(mu)
                 rows.append(row("vibration", f"Floquet multiplier {label}", (a, b), abs(other - mu) / abs(mu),
                                 SAFETY * (mo_a.bounds[i] + mo_b.bounds[j]) / abs(mu) + pointwise,
-                                f"{multiplier_text(mu)} vs {multiplier_text(other)}", ceiling=ceilings.POINTWISE))
+                                f"{multiplier_text(mu)} vs {multiplier_text(other)}; ceiling: the multiplier's change "
+                                f"under a term of {ceilings.POINTWISE:g} of every entry of Phi(T)",
+                                ceiling=max(ceilings.POINTWISE, moved)))
             rows.append(verdict_row("stability (Floquet)", (a, b), mo_a.verdict, mo_b.verdict))
     return rows
 

@@ -280,6 +280,8 @@ def floquet_lines(vib, case):
               f"({floquet.iterations} iterations"
               + (f", continued from the book's orbit in {floquet.continued} steps of the overridden parameters"
                  if floquet.continued else "")
+              + (", from MuJoCo's orbit: from the guess, and continued from the book's orbit, it found none"
+                 if floquet.seeded else "")
               + f", |x(T) - x(0)| left {floquet.residual:.1e} of the state's scale, "
               f"within the run's own error estimate {floquet.residual_error:.1e}), starts at "
               + ", ".join(f"{c} = {equilibrium_value(x)}" for c, x in zip(case.coords, floquet.orbit[0, :n])) + "; "

@@ -494,20 +494,26 @@ class PinocchioModel:
         """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): Pinocchio's analytic
         derivatives of RNEA (computeRNEADerivatives) at the state's accelerations, the prescribed joints' imposed,
         with the springs' -k and the dampers' -d on their dofs, in the case's coordinates
-        (engines.scene.case_linearisation, which differences applied laws of the state).  Its error: rounding
-        (ROUNDING).  ValueError for a scene with loops."""
+        (engines.scene.case_linearisation, which differences applied laws of the state).  Its error: RNEA's
+        rounding (ROUNDING of its largest entry), and the rounding of the springs' and dampers' sums with it.
+        ValueError for a scene with loops."""
         if self.loops.loops:
             raise ValueError(f"{self.path}: linearisation of a scene with closed loops "
                              f"({', '.join(loop.name for loop in self.loops.loops)}) is not supported: its "
                              "coordinates' equations hold the loops' constraint forces, which RNEA does not give")
         config, velocity, acc, _ = self._dynamics(t, q, v)
         dtau_dq, dtau_dv, _ = pin.computeRNEADerivatives(self.m, self.d, config, velocity, acc)
+        # RNEA's rounding is of RNEA's own entries: a stiff spring's -k, added here in one rounding, would make it
+        # 1e3 eps of k on every entry (k = 4929 N/m on a spring pendulum's length row put 2e-6 on its angle's row,
+        # whose entries are about 10, and its mode rows were inconclusive)
+        error = ROUNDING * max(np.max(np.abs(dtau_dq)), np.max(np.abs(dtau_dv)))
         force_q, force_v = -dtau_dq, -dtau_dv
         mass = pin.crba(self.m, self.d, config)[self._whole]  # `mass_matrix`'s to the bit (RNEA's rounds otherwise)
         for _, iv, k, _, damping in self.passive:
             force_q[iv, iv] -= k
             force_v[iv, iv] -= damping
-        error = ROUNDING * max(np.max(np.abs(force_q)), np.max(np.abs(force_v)))
+        # the sums' rounding: half an ulp of each, within eps of the term added (RNEA's share is in its own)
+        error += EPS * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive), default=0.0)
         layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
         return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
                                               mass, force_q, force_v, error,
@@ -610,6 +616,7 @@ def _equalities(path):
 # agrees with MuJoCo's to 1e-14 to 1e-12 of the largest entry (the top, the cart-pendulum: no placeholders),
 # MuJoCo's own rounding (tests/test_engine_linearisation.py).
 ROUNDING = 1e3 * np.finfo(float).eps
+EPS = np.finfo(float).eps
 
 DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>
 

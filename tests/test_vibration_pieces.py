@@ -4,12 +4,13 @@ tolerance near their ceiling and no further than HALVINGS; the shooting's failur
 stall), and its continuation from the book's orbit."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck import ceilings, vibration
+from dyncheck import ceilings, vibration, vibration_page
 from dyncheck.results import Status
 
 
@@ -107,3 +108,47 @@ def test_the_eigensolver_s_rounding_is_measured_not_bounded_by_the_matrix_s_norm
     shapes = [r for r in vibration.analyse(case).rows if r.quantity.startswith("mode shape")]
     assert len(shapes) == 6 and all(r.status == Status.PASS for r in shapes)
     assert all(1e3 * r.error < r.tolerance < r.ceiling for r in shapes)
+
+
+def test_the_samples_of_a_are_doubled_while_the_monodromy_s_estimate_is_the_interpolation_s(monkeypatch):
+    # The estimate is the twin's, from every other sample: off the book's numbers (arm and disk at -5 and -2.8 rad/s)
+    # A's harmonics reached past the twin's resolution, and every Floquet row was inconclusive from 64 samples whose
+    # Phi(T) agreed with 128's to 6e-12.  Here the book's orbit sampled 4 times: the estimate's share of the rows'
+    # ceiling is 0.76 (the Floquet rows inconclusive); from 8, 6e-5; from 16, 8e-8, the twin's integration error,
+    # which more samples do not lower
+    case = dyncheck.load_case("rotating_pendulum")
+    table = vibration.floquet_settings(case)
+    period = vibration.period_of(case, table)
+    states = vibration.periodic_orbit(case, "reference", np.concatenate([table["q"], table["v"]]), period)[0]
+    share = lambda monodromy: max(2 * vibration.SAFETY * np.max(m.errors) / np.max(np.abs(m.matrix))
+                                  for m in monodromy.values())
+    rows = []
+    resolved, monodromy = vibration.resolved_monodromy(case, states[::16], period, rows)
+    assert len(resolved) == 17 and not rows
+    assert resolved == pytest.approx(states[::4], rel=0, abs=1e-15)  # the orbit's run again, with more outputs
+    assert share(monodromy) <= ceilings.POINTWISE / 10
+    # at the case's 64 samples nothing is doubled; with a 100 times lower ceiling the estimate stays above its share,
+    # and the samples are doubled once: 128 do not halve it, and the doubling stops
+    assert len(vibration.resolved_monodromy(case, states, period, rows)[0]) == len(states)
+    monkeypatch.setattr(ceilings, "POINTWISE", ceilings.POINTWISE / 100)
+    assert len(vibration.resolved_monodromy(case, states, period, rows)[0]) == 2 * len(states) - 1
+
+
+def test_an_orbit_shooting_misses_but_mujoco_finds_is_shot_from_mujoco_s(monkeypatch):
+    # The arm and disk at -3.77 and 3.55 rad/s (tests/test_vibration.py runs it): the derivation's Newton-Raphson from
+    # the guess ran off, and so did the continuation; MuJoCo's converged, and the row failed the derivation for
+    # lacking an orbit it has.  Here the derivation's own shooting from the guess is made to fail at the book's numbers
+    case = dyncheck.load_case("rotating_pendulum")
+    periodic_orbit = vibration.periodic_orbit
+    table = vibration.floquet_settings(case)
+    guess = np.concatenate([table["q"], table["v"]])
+
+    def missing_from_the_guess(at, source, start, *rest):
+        if source == "reference" and np.array_equal(start, guess):
+            raise vibration.NoOrbit("planted")
+        return periodic_orbit(at, source, start, *rest)
+
+    monkeypatch.setattr(vibration, "periodic_orbit", missing_from_the_guess)
+    floquet = vibration.floquet(case)
+    assert floquet.seeded and floquet.monodromy and all(r.status == Status.PASS for r in floquet.rows)
+    assert "from MuJoCo's orbit" in "\n".join(vibration_page.floquet_lines(SimpleNamespace(floquet=floquet), case))
