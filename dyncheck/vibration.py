@@ -435,6 +435,22 @@ def along(vector, n):
     return (vector / vector[:n][np.argmax(np.abs(vector[:n]))]).real
 
 
+STEPS_PER_PERIOD = 20  # a mode's DOP853 run steps at most a twentieth of its period (mode_run)
+
+
+def dop853_exponent_error(lam, step):
+    """How far DOP853 at steps of `step` moves the exponent lambda of a linear motion exp(lambda t): per step its
+    stability function R(z) = 1 + z b^T (I - z A)^-1 1 multiplies the state by R(lambda h) where the motion is
+    multiplied by exp(lambda h), so |log R(lambda h) / h - lambda|.  Exact for the linear motion at that step, an
+    upper bound where the tolerance takes shorter ones (the error falls as h^8).  At a mode's cap (|lambda| h =
+    2 pi / 20) it is 6.1e-12 of |lambda|, which a mode's rows allowed nothing for: a spring-mass pendulum's 5.37 rad/s
+    mode measured 6.3e-12 off in its run and failed at a tolerance of 5.0e-12 (pytest -m slow)."""
+    z = lam * step
+    stages = DOP853.n_stages
+    growth = 1 + z * DOP853.B @ np.linalg.solve(np.eye(stages) - z * DOP853.A[:stages, :stages], np.ones(stages))
+    return float(abs(np.log(growth) / step - lam))
+
+
 def mode_run(case, model, source, eq, modes, i, amplitude, periods, method, dt=None):
     """The run of `model` from the equilibrium displaced by `amplitude` along mode i of `modes`, measured."""
     n = len(eq.q)
@@ -444,7 +460,7 @@ def mode_run(case, model, source, eq, modes, i, amplitude, periods, method, dt=N
     coarsest = MUJOCO_TWIN * case.integration["mujoco_step"]  # MuJoCo's twin's step: the outputs fall on both runs' steps
     output_step = coarsest * max(1, round(period / RUNS_PER_PERIOD / coarsest))
     t_end = output_step * round(periods * period / output_step)
-    options = {"dt": dt} if dt else {"rtol": case.integration["tight_rtol"], "max_step": period / 20,
+    options = {"dt": dt} if dt else {"rtol": case.integration["tight_rtol"], "max_step": period / STEPS_PER_PERIOD,
                                      "omega": abs(lam)}
     try:
         with np.errstate(all="ignore"):
@@ -704,8 +720,9 @@ def unmeasured(motion, mujoco_twin):
 
 def motion_rows(case, modes, motions, shift):
     """Each source's lambda = growth + i frequency in its run against its own linearisation's eigenvalue,
-    relative to |lambda|: allowed SAFETY times the nonlinear shift at the amplitude, plus MuJoCo's step error
-    (RK4 at dt and at twice it: their difference is 15 times the error at dt), plus the eigenvalue's own bound; the
+    relative to |lambda|: allowed SAFETY times the nonlinear shift at the amplitude, plus the step error (MuJoCo's RK4
+    at dt and at twice it: their difference is 15 times the error at dt; DOP853's at its cap, dop853_exponent_error),
+    plus the eigenvalue's own bound; the
     ceiling: a shift above ceilings.MOTION of |lambda| hides a term of that size."""
     rows = []
     reference = modes["reference"]
@@ -722,7 +739,8 @@ def motion_rows(case, modes, motions, shift):
                 continue
             j = match(reference, modes[source])[i]
             lam = modes[source].eigenvalues[j]
-            step_error = abs(motion.exponent - mujoco_twin.exponent) * MUJOCO_TWIN_FACTOR if source == "mujoco" else 0.0
+            step_error = (abs(motion.exponent - mujoco_twin.exponent) * MUJOCO_TWIN_FACTOR if source == "mujoco"
+                          else dop853_exponent_error(lam, 2 * math.pi / lam.imag / STEPS_PER_PERIOD))
             allowed = SAFETY * (shift[k] + step_error + modes[source].bounds[j]) / abs(lam) + ceilings.ROUNDING_FLOOR
             rows.append(row("vibration", label, (source,), abs(motion.exponent - lam) / abs(lam), allowed,
                             f"run {motion.growth:.3g} + {motion.frequency:.10g} i, linear {lam.real:.3g} + "

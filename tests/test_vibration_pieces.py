@@ -152,3 +152,20 @@ def test_an_orbit_shooting_misses_but_mujoco_finds_is_shot_from_mujoco_s(monkeyp
     floquet = vibration.floquet(case)
     assert floquet.seeded and floquet.monodromy and all(r.status == Status.PASS for r in floquet.rows)
     assert "from MuJoCo's orbit" in "\n".join(vibration_page.floquet_lines(SimpleNamespace(floquet=floquet), case))
+
+
+@pytest.mark.parametrize("lam", [1j, -0.3 + 2j, 5.366j])
+def test_dop853_s_error_on_a_linear_motion_is_its_stability_function_s(lam):
+    # A mode's DOP853 run at its step cap (a twentieth of the period) moves lambda by 6.1e-12 of |lambda|; the
+    # rows allowed nothing for it, and a spring pendulum's mode off by 6.3e-12 failed at 5.0e-12 (pytest -m slow)
+    step, steps = 2 * math.pi / lam.imag / vibration.STEPS_PER_PERIOD, 200
+    rates = lambda t, y: [lam.real * y[0] - lam.imag * y[1], lam.imag * y[0] + lam.real * y[1]]  # z' = lambda z
+    solver = vibration.DOP853(rates, 0.0, [1.0, 0.0], steps * step, first_step=step, max_step=step, rtol=1e-3, atol=1e-3)
+    while solver.status == "running":
+        solver.step()
+    assert solver.t == pytest.approx(steps * step, rel=1e-12)
+    z = complex(*solver.y)
+    turns = round((lam.imag * solver.t - np.angle(z)) / (2 * math.pi))  # the phase's whole turns, which log drops
+    measured = abs(complex(np.log(abs(z)), np.angle(z) + 2 * math.pi * turns) / solver.t - lam)
+    assert measured == pytest.approx(vibration.dop853_exponent_error(lam, step), rel=1e-3)
+    assert 5e-12 < measured / abs(lam) < 8e-12
