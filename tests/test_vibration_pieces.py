@@ -135,9 +135,10 @@ def test_the_samples_of_a_are_doubled_while_the_monodromy_s_estimate_is_the_inte
 
 
 def test_an_orbit_shooting_misses_but_mujoco_finds_is_shot_from_mujoco_s(monkeypatch):
-    # The arm and disk at -3.77 and 3.55 rad/s (tests/test_vibration.py runs it): the derivation's Newton-Raphson from
-    # the guess ran off, and so did the continuation; MuJoCo's converged, and the row failed the derivation for
-    # lacking an orbit it has.  Here the derivation's own shooting from the guess is made to fail at the book's numbers
+    # The arm and disk at -3.77 and 3.55 rad/s (tests/test_vibration.py analyses its orbit): the derivation's
+    # Newton-Raphson from the guess ran off, and so did the continuation; MuJoCo's converged (on AVX-512 kernels), and
+    # the row failed the derivation for lacking an orbit it has.  Here the derivation's own shooting from the guess is
+    # made to fail at the book's numbers
     case = dyncheck.load_case("rotating_pendulum")
     periodic_orbit = vibration.periodic_orbit
     table = vibration.floquet_settings(case)
@@ -169,3 +170,15 @@ def test_dop853_s_error_on_a_linear_motion_is_its_stability_function_s(lam):
     measured = abs(complex(np.log(abs(z)), np.angle(z) + 2 * math.pi * turns) / solver.t - lam)
     assert measured == pytest.approx(vibration.dop853_exponent_error(lam, step), rel=1e-3)
     assert 5e-12 < measured / abs(lam) < 8e-12
+
+
+@pytest.mark.parametrize("overrides", [{"m1": 0.05, "m2": 2.0}, {"m1": 0.0533416, "l1": 0.0789191, "m2": 0.713027}])
+def test_newton_finds_the_hanging_state_where_the_mass_matrix_is_nearly_singular(overrides):
+    # A light inner mass makes M's condition 1,000: q'' = M^-1 f is far from linear near the hanging state, and
+    # Newton-Raphson on it did not converge (the first) or went to theta2 = 5 pi (the second, where every source
+    # agreed that the pendulum was unstable, exit 0).  On the forces M q'' (over M's diagonal) it converges from the
+    # guess in 3 iterations
+    vib = vibration.analyse(dyncheck.load_case("double_pendulum", **overrides))
+    assert vib.equilibrium.q == pytest.approx([0.0, 0.0], abs=1e-12) and vib.equilibrium.iterations <= 4
+    assert vib.modes["reference"].verdict == "marginally stable"
+    assert all(r.status == Status.PASS for r in vib.rows)
