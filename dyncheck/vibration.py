@@ -185,79 +185,44 @@ def state_words(names, x):
     return ", ".join(f"{name} = {round(float(value), 6)}" for name, value in zip(names, x))
 
 
-def equilibrium(model, t, q, v, solve, coords, mass_matrix=None):
-    """Newton-Raphson (`newton`) for the state variables `solve` (names of coordinates and rates), the others held,
-    on the generalized forces M q'' over M's diagonal with `mass_matrix(t, q, v)` (any source's: M is not singular,
-    so they vanish where q'' does), else on the accelerations.  Where M is nearly singular (two pendulums with a
-    light inner mass, m1 = 0.05 kg beside m2 = 2 kg: M's condition 1,000), q'' = M^-1 f is far from linear even
-    0.01 rad from the hanging state: Newton on it went to theta2 = 5 pi (m1 = 0.053 kg, l1 = 0.079 m, m2 = 0.71 kg,
-    where every source agreed and the page called a hanging pendulum unstable) or did not converge, where on f,
-    linear there, it converges in 3 iterations.  Over M's diagonal, the equations are q'' itself where M is
-    diagonal: f alone weighs each equation by its inertia (a spring's angle row by m l^2, l = 20 m near its
-    runaway), and Newton then found another equilibrium.  NoEquilibrium if it does not converge."""
+def equilibrium(model, t, q, v, solve, coords):
+    """Newton-Raphson on the accelerations for the state variables `solve` (names of coordinates and rates),
+    the others held; least-squares steps (a cyclic coordinate's equation is identically zero), halved while
+    they do not reduce the residual.  NoEquilibrium if it does not converge."""
     n = len(coords)
     names = state_names(coords)
     unknown = [names.index(name) for name in solve]
-    start = np.concatenate([q, v]).astype(float)
+    x = np.concatenate([q, v]).astype(float)
 
-    def state(u):
-        y = start.copy()
+    def accelerations(u):
+        y = x.copy()
         y[unknown] = u
-        return y
+        return np.asarray(model.accelerations(t, y[:n], y[n:]), dtype=float)
 
-    accelerations = lambda u: np.asarray(model.accelerations(t, *np.split(state(u), [n])), dtype=float)
-
-    def forces(u):  # M q'' over M's diagonal: q'' itself where M is diagonal
-        mass = np.asarray(mass_matrix(t, *np.split(state(u), [n])), dtype=float)
-        return mass @ accelerations(u) / np.diag(mass)
-
-    found = newton(accelerations if mass_matrix is None else forces, accelerations, start[unknown])
-    x = state(found.u)
-    if not found.converged:
-        raise NoEquilibrium(f"Newton-Raphson for {', '.join(solve)} from {state_words(names, start)} did not converge "
-                            f"in {NEWTON_ITERATIONS} iterations: the largest |q''| left is "
-                            f"{np.max(np.abs(accelerations(found.u))):.3g} at {state_words(names, x)}")
-    return Equilibrium(t, x[:n], x[n:], found.residual, found.scale, found.iterations)
-
-
-@dataclass(frozen=True)
-class Newton:
-    """Where Newton-Raphson stopped: the unknowns, and whether they converged (after how many iterations, with
-    the largest |q''| left relative to `scale`, the balancing terms' size)."""
-    u: np.ndarray
-    converged: bool
-    iterations: int = 0
-    residual: float = math.nan
-    scale: float = math.nan
-
-
-def newton(equations, accelerations, u):
-    """Newton-Raphson on `equations` (of the unknowns u) from u; least-squares steps (a cyclic coordinate's equation
-    is identically zero), halved while they do not reduce the residual; converged when the accelerations are within
-    NEWTON_TOLERANCE of the balancing terms (their Jacobian times the unknowns' scale), whatever the equations."""
-    residual = equations(u)
+    residual = accelerations(x[unknown])
     for iteration in range(NEWTON_ITERATIONS):
-        scales = scales_of(u)
-        acc = residual if equations is accelerations else accelerations(u)
-        acc_jac, _ = jacobian(accelerations, u, scales)
-        scale = max(np.max(np.abs(acc_jac)) * np.max(scales), EPS)
-        jac = acc_jac if equations is accelerations else jacobian(equations, u, scales)[0]
-        if not all(np.all(np.isfinite(a)) for a in (acc, acc_jac, residual, jac)):
+        jac, _ = jacobian(accelerations, x[unknown], scales_of(x[unknown]))
+        scale = max(np.max(np.abs(jac)) * np.max(scales_of(x[unknown])), EPS)
+        if not np.all(np.isfinite(residual)) or not np.all(np.isfinite(jac)):
             break
-        if np.max(np.abs(acc)) <= NEWTON_TOLERANCE * scale:
-            return Newton(u, True, iteration, float(np.max(np.abs(acc)) / scale), float(scale))
+        if np.max(np.abs(residual)) <= NEWTON_TOLERANCE * scale:
+            return Equilibrium(t, x[:n].copy(), x[n:].copy(), float(np.max(np.abs(residual)) / scale), float(scale),
+                               iteration)
         step = np.linalg.lstsq(jac, -residual, rcond=None)[0]
         # at most a scale a step (a radian, a metre, a radian per second): far from the equilibrium the linear model
         # can send a step many turns away, to another equilibrium or a local minimum of |q''| (two pendulums with
         # m2 = 80 m1 stalled at theta1 = -187 rad from the guess 0.1 rad)
-        step = step / max(1.0, float(np.max(np.abs(step) / scales)))
+        step = step / max(1.0, float(np.max(np.abs(step) / scales_of(x[unknown]))))
         for _ in range(30):
-            trial = equations(u + step)
+            trial = accelerations(x[unknown] + step)
             if np.all(np.isfinite(trial)) and np.max(np.abs(trial)) < np.max(np.abs(residual)):
                 break
             step = step / 2
-        u, residual = u + step, trial
-    return Newton(u, False)
+        x[unknown] += step
+        residual = trial
+    raise NoEquilibrium(f"Newton-Raphson for {', '.join(solve)} from {state_words(names, np.concatenate([q, v]))} "
+                        f"did not converge in {NEWTON_ITERATIONS} iterations: the largest |q''| left is "
+                        f"{np.max(np.abs(residual)):.3g} at {state_words(names, x)}")
 
 
 def steady(model, eq, times):
@@ -567,8 +532,7 @@ def equilibrium_analysis(case, table):
     check = "vibration"
     reference = scene.model("reference")
     try:
-        eq = equilibrium(reference, 0.0, table["q"], table["v"], table["solve"], case.coords,
-                         scene.model("mujoco").mass_matrix)
+        eq = equilibrium(reference, 0.0, table["q"], table["v"], table["solve"], case.coords)
     except NoEquilibrium as error:
         return without_equilibrium(scene, table, str(error))
     rows = []  # Newton-Raphson's residual is its own stopping rule, no check: the page states it
@@ -608,8 +572,7 @@ def without_equilibrium(scene, table, why):
     """The analysis of a scene whose derivation has no equilibrium near the guess: not applicable if MuJoCo
     has none there either (the parameters leave none: a spring too soft for the spin), a failure if it has."""
     try:
-        mujoco = scene.model("mujoco")
-        found = equilibrium(mujoco, 0.0, table["q"], table["v"], table["solve"], scene.coords, mujoco.mass_matrix)
+        found = equilibrium(scene.model("mujoco"), 0.0, table["q"], table["v"], table["solve"], scene.coords)
     except NoEquilibrium:
         row_ = no_number("vibration", "equilibrium", ("reference", "mujoco"),
                          f"Newton-Raphson finds none from the guess in either: {why}", Status.NOT_APPLICABLE)
@@ -868,7 +831,8 @@ class Floquet:
     orbit: np.ndarray  # the derivation's states over one period from t = 0, at 2 SAMPLES + 1 equal steps or more
     iterations: int  # of shooting Newton-Raphson
     monodromy: dict  # {source: Monodromy}
-    motions: tuple  # of Motion: (reference, pinocchio, mujoco, reference at twice the amplitude, mujoco at twice the step)
+    motions: tuple  # of Motion: (reference, pinocchio, mujoco, reference at twice the amplitude, mujoco at twice the
+    # step, and mujoco with its approximations doubled where its scene has any)
     shift: float  # the nonlinear shift of the largest multiplier at the amplitude
     rows: tuple
     failure: str = ""  # why there is no analysis (T not a period of the equations, no orbit)
@@ -1245,28 +1209,34 @@ def stroboscopic_checks(case, start, monodromy, table, period):
     reference = monodromy["reference"]
     i = reference.largest()
 
-    def run(source, method, amplitude, step=None):
+    def run(source, method, amplitude, step=None, model=None):
         own = monodromy[source]
         return stroboscopic_run(case, source, start, own, match(reference, own)[i], amplitude, periods,
-                                period, method, step)
+                                period, method, step, model)
 
     amplitude, (run_at, twin), shift = settled_amplitude(
         table["amplitude"], abs(reference.multipliers[i]), lambda a: run("reference", "DOP853", a),
         lambda at, doubled: abs(multiplier(doubled, period) - multiplier(at, period)))
+    # MuJoCo's scene with its approximations doubled (the drift of the disk's prescribed rate through its armature):
+    # a spring held just above its runaway (k = 165 N/m, k_crit = 160) moved MuJoCo's |mu| by 2.7e-7, 50 times the
+    # rest of its allowance; a scene without approximations is its own doubled scene, and has no such run
+    doubled = case.approximations_doubled()
+    approximations = [] if doubled is case.model("mujoco") else [run("mujoco", "mujoco:RK4", amplitude, dt, doubled)]
     return [run_at, run("pinocchio", "DOP853", amplitude), run("mujoco", "mujoco:RK4", amplitude, dt), twin,
-            run("mujoco", "mujoco:RK4", amplitude, MUJOCO_TWIN * dt)], shift
+            run("mujoco", "mujoco:RK4", amplitude, MUJOCO_TWIN * dt)] + approximations, shift
 
 
-def stroboscopic_run(case, source, start, monodromy, j, amplitude, periods, period, method, dt=None):
-    """The run of `source` over `periods` periods from `start` displaced by `amplitude` along multiplier j's
-    eigenvector, sampled once per period: its modal coordinate z_k (the left eigenvector's projection of
-    x(kT) - x0) goes as mu^k; mu measured by least squares, z_{k+1} = mu z_k, as the exponent log(mu) / T."""
+def stroboscopic_run(case, source, start, monodromy, j, amplitude, periods, period, method, dt=None, model=None):
+    """The run of `source` (its `model`, else the case's) over `periods` periods from `start` displaced by
+    `amplitude` along multiplier j's eigenvector, sampled once per period: its modal coordinate z_k (the left
+    eigenvector's projection of x(kT) - x0) goes as mu^k; mu measured by least squares, z_{k+1} = mu z_k, as the
+    exponent log(mu) / T."""
     n = len(start) // 2
     displaced = start + amplitude * along(monodromy.right[:, j], n)
     options = {"dt": dt} if dt else {"rtol": case.integration["tight_rtol"], "omega": fastest_frequency(case)}
     try:
         with np.errstate(all="ignore"):
-            run = simulate(case.model(source), (displaced[:n], displaced[n:]), periods * period, method,
+            run = simulate(model or case.model(source), (displaced[:n], displaced[n:]), periods * period, method,
                            output_step=period, work=False, quantities=(), **options)
     except (Unstable, ArithmeticError, np.linalg.LinAlgError) as error:
         return Motion(source, j, amplitude, None, None, f"{method}: {error}")
@@ -1284,13 +1254,17 @@ def multiplier(motion, period):
 def stroboscopic_rows(case, monodromy, motions, shift, period):
     """Each source's measured multiplier against its own largest one, relative to |mu|: allowed SAFETY times the
     nonlinear shift, MuJoCo's step error (RK4 at dt and at twice it: their difference is 15 times the error at dt) and the
-    multiplier's bound; the ceiling that of a mode's run (ceilings.MOTION)."""
+    multiplier's bound and MuJoCo's approximations' effect (its run with them doubled minus its run, which their
+    response, linear to first order, makes the effect: at k = 165 N/m 2.58e-7 of an error of 2.70e-7); the ceiling
+    that of a mode's run (ceilings.MOTION)."""
     rows = []
-    mujoco_twin = motions[4]
+    mujoco_twin, doubled = motions[4], (motions[5] if len(motions) > 5 else None)
     for motion in motions[:3]:
         source = motion.source
         label = "largest Floquet multiplier, stroboscopic run"
-        why = unmeasured(motion, mujoco_twin)
+        why = unmeasured(motion, mujoco_twin) or (doubled and source == "mujoco" and not doubled.ok and
+                                                  f"its approximations' effect is unknown: its run with them doubled "
+                                                  f"failed ({doubled.why})")
         if why:
             rows.append(no_number("vibration", label, (source,), why))
             continue
@@ -1298,8 +1272,9 @@ def stroboscopic_rows(case, monodromy, motions, shift, period):
         mu, bound = own.multipliers[motion.mode], own.bounds[motion.mode]
         measured = multiplier(motion, period)
         step_error = abs(measured - multiplier(mujoco_twin, period)) * MUJOCO_TWIN_FACTOR if source == "mujoco" else 0.0
+        approximations = abs(multiplier(doubled, period) - measured) if doubled and source == "mujoco" else 0.0
         rows.append(row("vibration", label, (source,), abs(measured - mu) / abs(mu),
-                        SAFETY * (shift + step_error + bound) / abs(mu) + ceilings.ROUNDING_FLOOR,
+                        SAFETY * (shift + step_error + bound + approximations) / abs(mu) + ceilings.ROUNDING_FLOOR,
                         f"run {multiplier_text(measured)}, linear {multiplier_text(mu)}; amplitude {motion.amplitude:g}, "
                         f"its nonlinear shift {shift / abs(mu):.1e}", ceiling=ceilings.MOTION))
     return rows
@@ -1382,8 +1357,7 @@ def equilibrium_at(scene, table, name, value, guess):
     `guess` (q, v); (scene, None, None) where there is no equilibrium."""
     scene, q, v = vary(scene, name, value, *guess)
     try:
-        eq = equilibrium(scene.model("reference"), 0.0, q, v, table["solve"], scene.coords,
-                         scene.model("mujoco").mass_matrix)
+        eq = equilibrium(scene.model("reference"), 0.0, q, v, table["solve"], scene.coords)
     except NoEquilibrium:
         return scene, None, None
     return scene, eq, modal(derivation_linear(scene.model("reference"), "reference", eq))
