@@ -185,44 +185,79 @@ def state_words(names, x):
     return ", ".join(f"{name} = {round(float(value), 6)}" for name, value in zip(names, x))
 
 
-def equilibrium(model, t, q, v, solve, coords):
-    """Newton-Raphson on the accelerations for the state variables `solve` (names of coordinates and rates),
-    the others held; least-squares steps (a cyclic coordinate's equation is identically zero), halved while
-    they do not reduce the residual.  NoEquilibrium if it does not converge."""
+def equilibrium(model, t, q, v, solve, coords, mass_matrix=None):
+    """Newton-Raphson (`newton`) for the state variables `solve` (names of coordinates and rates), the others held,
+    on the generalized forces M q'' over M's diagonal with `mass_matrix(t, q, v)` (Pinocchio's CRBA, for every
+    source: M is not singular, so they vanish where q'' does), else on the accelerations.  Where M is nearly singular (two pendulums with a
+    light inner mass, m1 = 0.05 kg beside m2 = 2 kg: M's condition 1,000), q'' = M^-1 f is far from linear even
+    0.01 rad from the hanging state: Newton on it went to theta2 = 5 pi (m1 = 0.053 kg, l1 = 0.079 m, m2 = 0.71 kg,
+    where every source agreed and the page called a hanging pendulum unstable) or did not converge, where on f,
+    linear there, it converges in 3 iterations.  Over M's diagonal, the equations are q'' itself where M is
+    diagonal: f alone weighs each equation by its inertia (a spring's angle row by m l^2, l = 20 m near its
+    runaway), and Newton then found another equilibrium.  NoEquilibrium if it does not converge."""
     n = len(coords)
     names = state_names(coords)
     unknown = [names.index(name) for name in solve]
-    x = np.concatenate([q, v]).astype(float)
+    start = np.concatenate([q, v]).astype(float)
 
-    def accelerations(u):
-        y = x.copy()
+    def state(u):
+        y = start.copy()
         y[unknown] = u
-        return np.asarray(model.accelerations(t, y[:n], y[n:]), dtype=float)
+        return y
 
-    residual = accelerations(x[unknown])
+    accelerations = lambda u: np.asarray(model.accelerations(t, *np.split(state(u), [n])), dtype=float)
+
+    def forces(u):  # M q'' over M's diagonal: q'' itself where M is diagonal
+        mass = np.asarray(mass_matrix(t, *np.split(state(u), [n])), dtype=float)
+        return mass @ accelerations(u) / np.diag(mass)
+
+    found = newton(accelerations if mass_matrix is None else forces, accelerations, start[unknown])
+    x = state(found.u)
+    if not found.converged:
+        raise NoEquilibrium(f"Newton-Raphson for {', '.join(solve)} from {state_words(names, start)} did not converge "
+                            f"in {NEWTON_ITERATIONS} iterations: the largest |q''| left is "
+                            f"{np.max(np.abs(accelerations(found.u))):.3g} at {state_words(names, x)}")
+    return Equilibrium(t, x[:n], x[n:], found.residual, found.scale, found.iterations)
+
+
+@dataclass(frozen=True)
+class Newton:
+    """Where Newton-Raphson stopped: the unknowns, and whether they converged (after how many iterations, with
+    the largest |q''| left relative to `scale`, the balancing terms' size)."""
+    u: np.ndarray
+    converged: bool
+    iterations: int = 0
+    residual: float = math.nan
+    scale: float = math.nan
+
+
+def newton(equations, accelerations, u):
+    """Newton-Raphson on `equations` (of the unknowns u) from u; least-squares steps (a cyclic coordinate's equation
+    is identically zero), halved while they do not reduce the residual; converged when the accelerations are within
+    NEWTON_TOLERANCE of the balancing terms (their Jacobian times the unknowns' scale), whatever the equations."""
+    residual = equations(u)
     for iteration in range(NEWTON_ITERATIONS):
-        jac, _ = jacobian(accelerations, x[unknown], scales_of(x[unknown]))
-        scale = max(np.max(np.abs(jac)) * np.max(scales_of(x[unknown])), EPS)
-        if not np.all(np.isfinite(residual)) or not np.all(np.isfinite(jac)):
+        scales = scales_of(u)
+        acc = residual if equations is accelerations else accelerations(u)
+        acc_jac, _ = jacobian(accelerations, u, scales)
+        scale = max(np.max(np.abs(acc_jac)) * np.max(scales), EPS)
+        jac = acc_jac if equations is accelerations else jacobian(equations, u, scales)[0]
+        if not all(np.all(np.isfinite(a)) for a in (acc, acc_jac, residual, jac)):
             break
-        if np.max(np.abs(residual)) <= NEWTON_TOLERANCE * scale:
-            return Equilibrium(t, x[:n].copy(), x[n:].copy(), float(np.max(np.abs(residual)) / scale), float(scale),
-                               iteration)
+        if np.max(np.abs(acc)) <= NEWTON_TOLERANCE * scale:
+            return Newton(u, True, iteration, float(np.max(np.abs(acc)) / scale), float(scale))
         step = np.linalg.lstsq(jac, -residual, rcond=None)[0]
         # at most a scale a step (a radian, a metre, a radian per second): far from the equilibrium the linear model
         # can send a step many turns away, to another equilibrium or a local minimum of |q''| (two pendulums with
         # m2 = 80 m1 stalled at theta1 = -187 rad from the guess 0.1 rad)
-        step = step / max(1.0, float(np.max(np.abs(step) / scales_of(x[unknown]))))
+        step = step / max(1.0, float(np.max(np.abs(step) / scales)))
         for _ in range(30):
-            trial = accelerations(x[unknown] + step)
+            trial = equations(u + step)
             if np.all(np.isfinite(trial)) and np.max(np.abs(trial)) < np.max(np.abs(residual)):
                 break
             step = step / 2
-        x[unknown] += step
-        residual = trial
-    raise NoEquilibrium(f"Newton-Raphson for {', '.join(solve)} from {state_words(names, np.concatenate([q, v]))} "
-                        f"did not converge in {NEWTON_ITERATIONS} iterations: the largest |q''| left is "
-                        f"{np.max(np.abs(residual)):.3g} at {state_words(names, x)}")
+        u, residual = u + step, trial
+    return Newton(u, False)
 
 
 def steady(model, eq, times):
@@ -532,7 +567,8 @@ def equilibrium_analysis(case, table):
     check = "vibration"
     reference = scene.model("reference")
     try:
-        eq = equilibrium(reference, 0.0, table["q"], table["v"], table["solve"], case.coords)
+        eq = equilibrium(reference, 0.0, table["q"], table["v"], table["solve"], case.coords,
+                         scene.model("pinocchio").mass_matrix)
     except NoEquilibrium as error:
         return without_equilibrium(scene, table, str(error))
     rows = []  # Newton-Raphson's residual is its own stopping rule, no check: the page states it
@@ -572,7 +608,8 @@ def without_equilibrium(scene, table, why):
     """The analysis of a scene whose derivation has no equilibrium near the guess: not applicable if MuJoCo
     has none there either (the parameters leave none: a spring too soft for the spin), a failure if it has."""
     try:
-        found = equilibrium(scene.model("mujoco"), 0.0, table["q"], table["v"], table["solve"], scene.coords)
+        found = equilibrium(scene.model("mujoco"), 0.0, table["q"], table["v"], table["solve"], scene.coords,
+                            scene.model("pinocchio").mass_matrix)
     except NoEquilibrium:
         row_ = no_number("vibration", "equilibrium", ("reference", "mujoco"),
                          f"Newton-Raphson finds none from the guess in either: {why}", Status.NOT_APPLICABLE)
@@ -1357,7 +1394,8 @@ def equilibrium_at(scene, table, name, value, guess):
     `guess` (q, v); (scene, None, None) where there is no equilibrium."""
     scene, q, v = vary(scene, name, value, *guess)
     try:
-        eq = equilibrium(scene.model("reference"), 0.0, q, v, table["solve"], scene.coords)
+        eq = equilibrium(scene.model("reference"), 0.0, q, v, table["solve"], scene.coords,
+                         scene.model("pinocchio").mass_matrix)
     except NoEquilibrium:
         return scene, None, None
     return scene, eq, modal(derivation_linear(scene.model("reference"), "reference", eq))

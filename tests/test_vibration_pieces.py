@@ -171,3 +171,15 @@ def test_dop853_s_error_on_a_linear_motion_is_its_stability_function_s(lam):
     assert measured == pytest.approx(vibration.dop853_exponent_error(lam, step), rel=1e-3)
     assert 5e-12 < measured / abs(lam) < 8e-12
 
+
+
+@pytest.mark.parametrize("overrides", [{"m1": 0.05, "m2": 2.0}, {"m1": 0.0533416, "l1": 0.0789191, "m2": 0.713027}])
+def test_newton_finds_the_hanging_state_where_the_mass_matrix_is_nearly_singular(overrides):
+    # A light inner mass makes M's condition 1,000: q'' = M^-1 f is far from linear near the hanging state, and
+    # Newton-Raphson on it did not converge (the first) or went to theta2 = 5 pi (the second, where every source
+    # agreed that the pendulum was unstable, exit 0).  On the forces M q'' (over M's diagonal) it converges from the
+    # guess in 3 iterations
+    vib = vibration.analyse(dyncheck.load_case("double_pendulum", **overrides))
+    assert vib.equilibrium.q == pytest.approx([0.0, 0.0], abs=1e-12) and vib.equilibrium.iterations <= 4
+    assert vib.modes["reference"].verdict == "marginally stable"
+    assert all(r.status == Status.PASS for r in vib.rows)
