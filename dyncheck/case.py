@@ -422,7 +422,8 @@ class Case:
         """The bodies to which MuJoCo gives a placeholder where the scene means none (MuJoCo refuses a moving body
         without mass and inertia): {body: (placeholder mass?, placeholder inertia?)}, a mass of at most
         PLACEHOLDER_MASS, an inertia of at most PLACEHOLDER_INERTIA."""
-        held = {body.name: (bool(body.mass <= PLACEHOLDER_MASS), bool(np.max(np.abs(body.inertia)) <= PLACEHOLDER_INERTIA))
+        held = {body.name: (bool(body.mass <= PLACEHOLDER_MASS),
+                            bool(np.max(np.abs(body.inertia)) <= PLACEHOLDER_INERTIA))
                 for body in self.model("pinocchio").tree()}
         return {name: pair for name, pair in held.items() if any(pair)}
 

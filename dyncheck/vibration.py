@@ -188,11 +188,11 @@ def state_words(names, x):
 def equilibrium(model, t, q, v, solve, coords, mass_matrix=None):
     """Newton-Raphson (`newton`) for the state variables `solve` (names of coordinates and rates), the others held,
     on the generalized forces M q'' over M's diagonal with `mass_matrix(t, q, v)` (Pinocchio's CRBA, for every
-    source: M is not singular, so they vanish where q'' does), else on the accelerations.  Where M is nearly singular (two pendulums with a
-    light inner mass, m1 = 0.05 kg beside m2 = 2 kg: M's condition 1,000), q'' = M^-1 f is far from linear even
-    0.01 rad from the hanging state: Newton on it went to theta2 = 5 pi (m1 = 0.053 kg, l1 = 0.079 m, m2 = 0.71 kg,
-    where every source agreed and the page called a hanging pendulum unstable) or did not converge, where on f,
-    linear there, it converges in 3 iterations.  Over M's diagonal, the equations are q'' itself where M is
+    source: M is not singular, so they vanish where q'' does), else on the accelerations.  Where M is nearly
+    singular (two pendulums with a light inner mass, m1 = 0.05 kg beside m2 = 2 kg: M's condition 1,000),
+    q'' = M^-1 f is far from linear even 0.01 rad from the hanging state: Newton on it went to theta2 = 5 pi
+    (m1 = 0.053 kg, l1 = 0.079 m, m2 = 0.71 kg, where every source agreed and the page called a hanging pendulum
+    unstable) or did not converge, where on f, linear there, it converges in 3 iterations.  Over M's diagonal, the equations are q'' itself where M is
     diagonal: f alone weighs each equation by its inertia (a spring's angle row by m l^2, l = 20 m near its
     runaway), and Newton then found another equilibrium.  NoEquilibrium if it does not converge."""
     n = len(coords)
@@ -473,6 +473,11 @@ def along(vector, n):
 STEPS_PER_PERIOD = 20  # a mode's DOP853 run steps at most a twentieth of its period (mode_run)
 
 
+def step_cap(lam):
+    """The longest step of a DOP853 run of the mode of eigenvalue lam: a STEPS_PER_PERIOD-th of its period."""
+    return 2 * math.pi / lam.imag / STEPS_PER_PERIOD
+
+
 def dop853_exponent_error(lam, step):
     """How far DOP853 at steps of `step` moves the exponent lambda of a linear motion exp(lambda t): per step its
     stability function R(z) = 1 + z b^T (I - z A)^-1 1 multiplies the state by R(lambda h) where the motion is
@@ -495,7 +500,7 @@ def mode_run(case, model, source, eq, modes, i, amplitude, periods, method, dt=N
     coarsest = MUJOCO_TWIN * case.integration["mujoco_step"]  # MuJoCo's twin's step: the outputs fall on both runs' steps
     output_step = coarsest * max(1, round(period / RUNS_PER_PERIOD / coarsest))
     t_end = output_step * round(periods * period / output_step)
-    options = {"dt": dt} if dt else {"rtol": case.integration["tight_rtol"], "max_step": period / STEPS_PER_PERIOD,
+    options = {"dt": dt} if dt else {"rtol": case.integration["tight_rtol"], "max_step": step_cap(lam),
                                      "omega": abs(lam)}
     try:
         with np.errstate(all="ignore"):
@@ -745,13 +750,15 @@ def motion_checks(case, scene, eq, modes, table):
     return motions, shift
 
 
-def unmeasured(motion, mujoco_twin):
-    """Why a source's run measures nothing (it failed; MuJoCo's twin failed, so that its step error is unknown),
-    or None."""
+def unmeasured(motion, mujoco_twin, mujoco_doubled=None):
+    """Why a source's run measures nothing (it failed; MuJoCo's twin failed, so that its step error is unknown, or
+    its run with its approximations doubled, where there is one, so that their effect is unknown), or None."""
     if not motion.ok:
         return motion.why
     if motion.source == "mujoco" and not mujoco_twin.ok:
         return f"its step error is unknown: its twin at twice the step failed ({mujoco_twin.why})"
+    if motion.source == "mujoco" and mujoco_doubled is not None and not mujoco_doubled.ok:
+        return f"its approximations' effect is unknown: its run with them doubled failed ({mujoco_doubled.why})"
     return None
 
 
@@ -777,7 +784,7 @@ def motion_rows(case, modes, motions, shift):
             j = match(reference, modes[source])[i]
             lam = modes[source].eigenvalues[j]
             step_error = (abs(motion.exponent - mujoco_twin.exponent) * MUJOCO_TWIN_FACTOR if source == "mujoco"
-                          else dop853_exponent_error(lam, 2 * math.pi / lam.imag / STEPS_PER_PERIOD))
+                          else dop853_exponent_error(lam, step_cap(lam)))
             allowed = SAFETY * (shift[k] + step_error + modes[source].bounds[j]) / abs(lam) + ceilings.ROUNDING_FLOOR
             rows.append(row("vibration", label, (source,), abs(motion.exponent - lam) / abs(lam), allowed,
                             f"run {motion.growth:.3g} + {motion.frequency:.10g} i, linear {lam.real:.3g} + "
@@ -1299,9 +1306,7 @@ def stroboscopic_rows(case, monodromy, motions, shift, period):
     for motion in motions[:3]:
         source = motion.source
         label = "largest Floquet multiplier, stroboscopic run"
-        why = unmeasured(motion, mujoco_twin) or (doubled and source == "mujoco" and not doubled.ok and
-                                                  f"its approximations' effect is unknown: its run with them doubled "
-                                                  f"failed ({doubled.why})")
+        why = unmeasured(motion, mujoco_twin, doubled)
         if why:
             rows.append(no_number("vibration", label, (source,), why))
             continue
@@ -1309,7 +1314,7 @@ def stroboscopic_rows(case, monodromy, motions, shift, period):
         mu, bound = own.multipliers[motion.mode], own.bounds[motion.mode]
         measured = multiplier(motion, period)
         step_error = abs(measured - multiplier(mujoco_twin, period)) * MUJOCO_TWIN_FACTOR if source == "mujoco" else 0.0
-        approximations = abs(multiplier(doubled, period) - measured) if doubled and source == "mujoco" else 0.0
+        approximations = 0.0 if doubled is None or source != "mujoco" else abs(multiplier(doubled, period) - measured)
         rows.append(row("vibration", label, (source,), abs(measured - mu) / abs(mu),
                         SAFETY * (shift + step_error + bound + approximations) / abs(mu) + ceilings.ROUNDING_FLOOR,
                         f"run {multiplier_text(measured)}, linear {multiplier_text(mu)}; amplitude {motion.amplitude:g}, "

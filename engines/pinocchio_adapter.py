@@ -615,8 +615,8 @@ def _equalities(path):
 # largest entry; 1e3 eps allows some ten times that.  Nothing measured contradicts it: Pinocchio's linearisation
 # agrees with MuJoCo's to 1e-14 to 1e-12 of the largest entry (the top, the cart-pendulum: no placeholders),
 # MuJoCo's own rounding (tests/test_engine_linearisation.py).
-ROUNDING = 1e3 * np.finfo(float).eps
 EPS = np.finfo(float).eps
+ROUNDING = 1e3 * EPS
 
 DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>
 
