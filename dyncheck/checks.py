@@ -19,7 +19,7 @@ from dyncheck.results import OWN_WORDS, CaseResult, Finding, Outcome, Pair, Stat
 from dyncheck.simulate import (ERROR_EXPONENT, Escape, Unstable, at_many_states, energy_residual, fastest_frequency,
                                richardson_factor, simulate, state_columns)
 from dyncheck.stability.long_runs import agreement_horizon
-from dyncheck.work_precision import convergence
+from dyncheck.work_precision import NoFrequency, convergence
 
 EPS = np.finfo(float).eps
 INTEGRATED = ("reference", "book", "pinocchio")  # sources driven by scipy's DOP853
@@ -579,7 +579,13 @@ def run_case(case, localise=True):
     rows += trajectory(case, runs) + energy(case, runs)
     try:
         rows += convergence(case)
-    except ValueError as error:  # e.g. overrides that leave nothing to converge (no motion, omega = 0)
+    except NoFrequency as error:  # nothing to converge on where nothing moves; a motion without omega is the case's fault
+        reference = runs["reference"]
+        at_rest = reference.ok and bool((reference.twin[state_columns(case)].nunique() == 1).all())
+        rows.append(no_number("convergence", "every method", ("reference",),
+                              f"not measured: {error}" + ("; nothing moves" if at_rest else ", yet the scene moves"),
+                              Status.NOT_APPLICABLE if at_rest else Status.FAIL))
+    except ValueError as error:  # a step within rounding
         rows.append(no_number("convergence", "every method", ("reference",), f"not measured: {error}", Status.FAIL))
     program_rows, program = program_checks(case, sample)
     vibrations = vibration.analyse(case)

@@ -880,13 +880,16 @@ def study_sections(result, case, tmp):
     if studies and studies["stability"]:
         lines += ["## Stability: where methods fail", ""]
         for study in studies["stability"]:
+            lines += [f"### {study.title}", "", *[f"- {sentence}" for sentence in study.findings], ""]
             chart = f"figures/{case.name}_{study.study}.png"
             caption = stability.figure(case, study, tmp / chart)
+            if caption is None:  # not applicable at these parameters: nothing measured, nothing drawn
+                lines += [f"*How, where it applies:* {study.why}", ""]
+                continue
             if not (tmp / chart).is_file():  # a case's own figure function that drew nothing
                 raise ValueError(f"{case.file}: stability study {study.study}: its figure function wrote no {chart}")
             files.append(chart)
-            lines += [f"### {study.title}", "", *[f"- {sentence}" for sentence in study.findings], "",
-                      *embed(chart, study.study, caption),
+            lines += [*embed(chart, study.study, caption),
                       f"*How:* {study.why}", "",
                       f"<details><summary>The numbers ({plural(len(study.table), 'row')})</summary>", "",
                       markdown_table(study.table), "", "</details>", ""]

@@ -648,7 +648,8 @@ MEANINGS = {
                       "they are measured against) and the convergence checks (`convergence.omega`, the scene's "
                       "fastest frequency as an expression of the parameters, sets each method's step and horizon; "
                       "an optional `convergence.method_omega` table gives a method that integrates other "
-                      "coordinates its own); validated by dyncheck/work_precision.py.",
+                      "coordinates its own; where the motion outruns it, four times over, the horizon ends "
+                      "before, and the row says where); validated by dyncheck/work_precision.py.",
     "integration": "How the checks integrate the equations.",
     "integration.output_step": "The interval between a run's output rows; a multiple of mujoco_step.",
     "integration.rtol": "The relative and absolute tolerance of scipy's DOP853 for the runs of reference, book and "

@@ -14,9 +14,9 @@ import numpy as np
 import pandas as pd
 
 from dyncheck import cache, ceilings
-from dyncheck.ceilings import ROUNDING_FLOOR
+from dyncheck.ceilings import EPS, ROUNDING_FLOOR
 from dyncheck.messages import plural
-from dyncheck.results import heading, no_number, row
+from dyncheck.results import Status, heading, no_number, row
 from dyncheck.schema import MAX_OUTPUTS
 from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
                                energy_residual, fastest_frequency, simulate, state_columns)
@@ -460,6 +460,11 @@ def figure(frame, case, path, cost="evaluations"):
 
 # -- convergence ----------------------------------------------------------------------------------
 
+class NoFrequency(ValueError):
+    """The parameters give the scene no frequency (omega = 0: two pendulums without gravity), so the convergence
+    study has no steps: not applicable where nothing moves (released from rest), a failure where something does."""
+
+
 def convergence(case):
     """The observed order of every fixed-step method of the case file's [work_precision.convergence]:
     check rows (check "convergence", quantity the method, error |observed - expected order|).
@@ -480,19 +485,42 @@ def convergence(case):
     omega h (1 + omega T), omega from the case file (measured over the four cases: 0.02 to 0.45 of
     it, halving with h as the expansion says).  Steps are chosen to keep it at most 0.25: an order
     off by one fails fourfold.  Differences at rounding level would make p meaningless, so a setup
-    whose D2 is under ROUNDING_FLOOR raises instead of reporting."""
+    whose D2 is under ROUNDING_FLOOR raises instead of reporting.
+
+    The argument needs omega to bound the motion's frequency.  Where the reference's motion outruns it
+    (`motion_frequency`: more than OUTRUN omega), the horizon ends before, and the row says where: a top with
+    Izz = Ixx / 4 under g = 1 m/s^2 passes 0.003 rad from its Euler angles' singularity 0.24 s in, where the
+    frequency of its Euler-angle equations reaches 2,000 rad/s against the case's 11.5, and RK4 at the
+    case's step blew up; before 0.196 s it shows order 3.92."""
     wp = settings(case)
     if wp is None:
         return []
     q0, v0, _ = case.initial
     columns = state_columns(case)
     units = dict(zip(case.coords, case.spec["coord_units"]))
-    rows = []
-    for method, (h, t_end, omega) in wp["convergence"]["steps"].items():
+    steps = wp["convergence"]["steps"]
+    if any(omega == 0 for _, _, omega in steps.values()):
+        raise NoFrequency("the case's fastest frequency omega (work_precision.convergence.omega) is 0 at these "
+                          "parameters, and the study's steps h = omega_h / omega follow from it")
+    for method, (_, _, omega) in steps.items():
         if not omega > 0:
             raise ValueError(f"{case.file}: work_precision.convergence: omega = {omega!r} for {method} must be a "
                              "positive number (the fastest frequency it integrates, with these parameters)")
+    times, frequency = motion_frequency(case, max(t_end for _, t_end, _ in steps.values()))
+    rows = []
+    for method, (h, t_end, omega) in steps.items():
         source = "mujoco" if method in MUJOCO_METHODS else "reference"
+        outrun = (times <= t_end) & (frequency > OUTRUN * omega)
+        cut = ""
+        if outrun.any():
+            first = times[np.argmax(outrun)]
+            cut = (f"; the horizon ends before {first:.3g} s, where the motion's frequency passes {OUTRUN:g} omega "
+                   f"(to {frequency[times <= t_end].max():.3g} rad/s within {t_end:.3g} s)")
+            t_end = math.floor(first / h) * h
+            if t_end < MIN_STEPS * h:
+                rows.append(no_number("convergence", method, (source,), f"not measured: within {MIN_STEPS} steps of "
+                                      f"h = {h:.3g} s{cut}", Status.INCONCLUSIVE))
+                continue
         model = case.model(source)
         # Compare at least 50 instants on the coarsest run's steps, not every one of them: each output costs
         # a frame row; the states are all these runs give (no reactions, no energy).
@@ -520,5 +548,45 @@ def convergence(case):
         rows.append(row("convergence", method, (source,), abs(observed - expected), omega * h * (1 + omega * t_end),
                         f"observed order {observed:.3f} (expected {expected}) from dt = {h:g}, {h / 2:g}, "
                         f"{h / 4:g} s over {t_end:g} s; differences {d1:.2e}, {d2:.2e}; allowed "
-                        f"omega h (1 + omega T) with omega = {omega:g} rad/s", ceiling=ceilings.CONVERGENCE))
+                        f"omega h (1 + omega T) with omega = {omega:g} rad/s{cut}", ceiling=ceilings.CONVERGENCE))
     return rows
+
+
+# The argument above needs omega to bound the motion's frequency.  Measured as the spectral radius of the
+# state Jacobian along the reference's motion, the book's cases reach 0.98 to 1.15 of the case's omega, and the
+# two pendulums' chaotic swings 2.7 of it for instants, where the orders are observed as the argument says.  A top
+# passing 0.003 rad from its Euler angles' singularity (Izz = Ixx / 4, g = 1 m/s^2) reaches 177 times its
+# omega there, and RK4 at the case's step blew up: the horizon ends where the motion passes OUTRUN omega.
+OUTRUN = 4.0
+MIN_STEPS = 20  # the fewest steps of h a convergence run's horizon may hold
+MOTION_POINTS = 400  # the instants of the reference's motion whose frequency is measured
+DIFFERENCE_STEP = EPS ** (1 / 3)  # central differences: truncation ~h^2 and rounding ~eps / h balance
+
+
+def motion_frequency(case, t_end):
+    """The reference's motion from the book's start over [0, t_end] (DOP853 at the case's rtol): MOTION_POINTS + 1
+    times, and at each the spectral radius of the state Jacobian [[0, I], [dq''/dq, dq''/dq']] (central differences):
+    the local frequency, from rest or not, which a coordinate singularity makes large.  Zero where the run fails (the
+    convergence runs then say how)."""
+    q0, v0, _ = case.initial
+    model = case.model("reference")
+    n = len(q0)
+    try:
+        run = simulate(model, (q0, v0), t_end, "DOP853", rtol=case.integration["rtol"],
+                       output_step=t_end / MOTION_POINTS, work=False, omega=fastest_frequency(case), quantities=())
+    except Unstable:
+        return np.array([0.0]), np.array([0.0])
+    states = run[state_columns(case)].to_numpy()[:, np.r_[0:2 * n:2, 1:2 * n:2]]  # (q, q') per instant
+    radius = []
+    with np.errstate(all="ignore"):
+        for t, x in zip(run.index, states):
+            jacobian = np.zeros((2 * n, 2 * n))
+            jacobian[:n, n:] = np.eye(n)
+            for j in range(2 * n):
+                step = np.zeros(2 * n)
+                step[j] = DIFFERENCE_STEP * max(abs(x[j]), 1.0)
+                plus, minus = (np.asarray(model.accelerations(t, *np.split(x + d, [n])), dtype=float)
+                               for d in (step, -step))
+                jacobian[n:, j] = (plus - minus) / (2 * step[j])
+            radius.append(np.max(np.abs(np.linalg.eigvals(jacobian))) if np.all(np.isfinite(jacobian)) else np.inf)
+    return run.index.to_numpy(), np.array(radius)

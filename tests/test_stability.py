@@ -218,3 +218,18 @@ def test_every_study_runs_in_budget_and_draws(name, tmp_path):
         path = tmp_path / f"{name}_{result.study}.png"
         stability.figure(case, result, path)
         assert path.stat().st_size > 10_000
+
+
+def test_a_study_with_nothing_to_measure_says_why_and_draws_nothing(tmp_path):
+    """A top whose centre of mass is below its tip (--set h=-0.03) needs no spin to stand upright: its
+    least-spin study raised a math domain error out of `report`; it is now not applicable, says why on the
+    page, and draws no figure.  Its passages through the upright need the upright spin-stabilised."""
+    case = dyncheck.load_case("spinning_top", h=-0.03)
+    top = stability.case_module(case)
+    with pytest.raises(common.NotApplicable, match="no least spin to find"):
+        top.sleeping_top(case, settings(case, "sleeping_top"))
+    with pytest.raises(common.NotApplicable, match="the top falls rather than swing through the vertical"):
+        top._passages(dyncheck.load_case("spinning_top", g=100.0), settings(case, "euler_singularity"), None)
+    result = common.not_applicable(case, "sleeping_top", settings(case, "sleeping_top"), "because")
+    assert result.findings == ("Not applicable at these parameters: because",) and result.table.empty
+    assert stability.figure(case, result, tmp_path / "top.png") is None and not any(tmp_path.iterdir())

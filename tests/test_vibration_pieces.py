@@ -183,3 +183,27 @@ def test_newton_finds_the_hanging_state_where_the_mass_matrix_is_nearly_singular
     assert vib.equilibrium.q == pytest.approx([0.0, 0.0], abs=1e-12) and vib.equilibrium.iterations <= 4
     assert vib.modes["reference"].verdict == "marginally stable"
     assert all(r.status == Status.PASS for r in vib.rows)
+
+
+def test_a_boundary_formula_that_is_no_number_at_the_parameters_is_no_bad_input():
+    """The top's existence boundary takes the square root of (Ixx - Izz) m g h: with its centre of mass below the
+    tip (h < 0) it is no number, which says there is no boundary, not that the case file is bad (`--set h=-0.03`
+    exited 2 blaming the file); a formula naming something that is not a parameter still is bad input."""
+    case = dyncheck.load_case("spinning_top", h=-0.03)  # loading validates
+    case.spec["vibration"]["boundary"][0]["expected"] = "2*sqrt(m*g*hh)"
+    with pytest.raises(ValueError, match=r"vibration\.boundary\[0\]\.expected = '2\*sqrt\(m\*g\*hh\)' names hh, "
+                                         "not a parameter"):
+        vibration.validate(case)
+
+
+
+def test_a_degenerate_equilibrium_is_found():
+    """The rotating pendulum under g = 0 balances at psi = -pi/2, where psi'' and its slope both vanish while the
+    centrifugal terms that cancel there do not.  Newton stopped there with |psi''| 8e-24 but did not call it
+    converged (a tolerance relative to the zero Jacobian there), and the row failed the derivation for lacking the
+    equilibrium MuJoCo has: its tolerance is relative to the largest Jacobian met on the way now."""
+    case = dyncheck.load_case("rotating_pendulum", g=0.0)
+    table, scene = vibration.settings(case), vibration.linearised(case)
+    eq = vibration.equilibrium(scene.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords,
+                               scene.model("pinocchio").mass_matrix)
+    assert abs(eq.q[0] + math.pi / 2) < 1e-4  # psi'' ~ d^3 there: within rounding of the terms at d = 6e-5 rad

@@ -43,6 +43,30 @@ def test_convergence_refuses_differences_at_rounding_level():
         work_precision.convergence(case)
 
 
+# A top with Izz = Ixx / 4 under g = 1 m/s^2 (drawn by `pytest -m slow`): 0.24 s in, its axis passes 0.003 rad from
+# the Euler angles' singularity, where its precession rate turns at 1,170 rad/s against the case's omega of 11.5.
+NEAR_SINGULAR = {"Izz": 0.002166779934105066, "m": 0.9837987364501684, "Mz": 3.8110158311579513e-299,
+                 "Ixx": 0.00827376186236723, "g": 1.0, "h": 0.02}
+
+
+def test_convergence_stops_its_horizon_where_the_motion_outruns_omega():
+    """RK4 at the case's step blew up near the singularity (an `unstable` row for a motion every source runs
+    through): the horizon now ends before the motion outruns omega, and the row says so.  Where the motion never
+    does (the book's top), the horizon is the case's."""
+    near = {r.quantity: r for r in work_precision.convergence(dyncheck.load_case("spinning_top", **NEAR_SINGULAR))}
+    assert all(r.status == "pass" for r in near.values()), near
+    assert "the horizon ends before" in near["RK4"].detail and "omega = 11.5" in near["RK4"].detail
+    book = {r.quantity: r for r in work_precision.convergence(dyncheck.load_case("spinning_top"))}
+    assert not any("the horizon ends" in r.detail for r in book.values())
+
+
+def test_a_motion_outrunning_omega_at_once_leaves_the_order_unmeasured():
+    case = dyncheck.load_case("spinning_top", **NEAR_SINGULAR)
+    case.spec["work_precision"]["convergence"]["method_omega"]["RK4"] = "1.0"  # the motion: 7 rad/s from the start
+    rows = {r.quantity: r for r in work_precision.convergence(case)}
+    assert rows["RK4"].status == "inconclusive" and "not measured: within 20 steps" in rows["RK4"].detail
+
+
 def tiny(case, sweep):
     case.spec["work_precision"].update(t_end=1.0, output_step=0.01, repeat=2, sweep=sweep,
                                        solution={"rtol": 1e-9, "max_step": 0.01})

@@ -9,7 +9,8 @@ import pandas as pd
 from scipy.optimize import brentq
 
 from dyncheck.simulate import Unstable, fastest_frequency, simulate
-from dyncheck.stability.common import EPS, Map, Study, attempt, describe, fmt, settings_of, study_result
+from dyncheck.stability.common import (EPS, Map, NotApplicable, Study, attempt, describe, fmt, settings_of,
+                                       study_result)
 from dyncheck.vibration import SAFETY
 from dyncheck.style import legend_below, panels, save, title
 
@@ -102,7 +103,10 @@ def euler_singularity(case, settings, progress=None):
     data = pd.DataFrame(rows)
 
     # A motion through the near-upright: the axis swings through the vertical, missing it by `miss`.
-    passes = _passages(variant, settings, progress)
+    try:
+        passes, no_passage = _passages(variant, settings, progress), []
+    except NotApplicable as why:  # the rest of the study holds at any parameters
+        passes, no_passage = [], [f"No passage through the upright: {why}."]
 
     ref = data[data["source"] == "reference (Euler angles)"]
     table = pd.DataFrame([{
@@ -137,6 +141,7 @@ def euler_singularity(case, settings, progress=None):
             ("the digits are lost in evaluating the equations, whose terms of size ~1/n^2 cancel, not in "
              "representing the state." if part < 0.1 * total else
              "the coordinates themselves, not only the equations, lose the digits."))
+    findings += no_passage
     for r in passes:
         if r["status"] != "ok":
             findings.append(f"Passage with miss {r['miss']:.0e} rad: MuJoCo {describe(r['fail'])}.")
@@ -205,9 +210,12 @@ def _passages(case, settings, progress):
 
     p = case.params
     spin, n0, T = settings["passage_spin"], settings["start_nutation"], settings["passage_horizon"]
-    s_c = 2 * math.sqrt(p["Ixx"] * p["m"] * p["g"] * p["h"]) / p["Izz"]
+    s_c2 = 4 * p["Ixx"] * p["m"] * p["g"] * p["h"] / p["Izz"] ** 2  # s_c^2, negative for a top hanging from its tip
+    if spin**2 <= s_c2:
+        raise NotApplicable(f"at the passages' spin {spin:.4g} rad/s the upright is unstable (below s_c = "
+                            f"{math.sqrt(s_c2):.4g} rad/s): the top falls rather than swing through the vertical")
     omega0 = p["Izz"] * spin / (2 * p["Ixx"])
-    mu = p["Izz"] * math.sqrt(spin**2 - s_c**2) / (2 * p["Ixx"])
+    mu = p["Izz"] * math.sqrt(spin**2 - s_c2) / (2 * p["Ixx"])
     dt = settings["mujoco_step"]
     every = max(1, int(round(settings["passage_output"] / dt)))
     model = case.model("mujoco")
@@ -304,6 +312,9 @@ def sleeping_top(case, settings, progress=None):
     start = time.perf_counter()
     variant = case.with_params(**settings.get("overrides", {}))
     p = variant.params
+    if not p["m"] * p["g"] * p["h"] > 0:
+        raise NotApplicable(f"m g h = {p['m'] * p['g'] * p['h']:.3g} N m: with its centre of mass at or below the tip "
+                            "the top needs no spin to stay upright, so there is no least spin to find")
     criterion = maxwell_klein(p)
     n0, bound, T = settings["start_nutation"], settings["bound"], settings["horizon"]
     dt, method = settings["mujoco_step"], settings.get("method", "mujoco:RK4")

@@ -22,7 +22,7 @@ from dyncheck import ceilings
 from dyncheck.results import heading
 
 from dyncheck.case import load_file
-from dyncheck.stability.common import Study, settings_of
+from dyncheck.stability.common import NotApplicable, Study, not_applicable, settings_of
 from dyncheck.stability.long_runs import energy_drift, figure_energy_drift, figure_lyapunov, lyapunov
 
 # The studies any case may name.
@@ -123,7 +123,11 @@ def studies(case, progress=None):
             continue
         if progress:
             progress(f"{case.name}: stability study {name}")
-        out.append(studies[name].run(case, settings_of(case, name), progress))
+        settings = settings_of(case, name)
+        try:
+            out.append(studies[name].run(case, settings, progress))
+        except NotApplicable as why:
+            out.append(not_applicable(case, name, settings, why))
     return out
 
 
@@ -131,5 +135,8 @@ def studies(case, progress=None):
 
 def figure(case, result, path):
     """Draw a study's result to the PNG `path` (and its PDF twin), titled with the case's heading; returns
-    the figure's caption, from the study: what it shows and what to see in it."""
+    the figure's caption, from the study: what it shows and what to see in it.  None, drawing nothing, for a
+    study that was not applicable (it has nothing to draw)."""
+    if not result.series:
+        return None
     return available(case)[result.study].figure(result, path, heading(case.spec))

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+import pandas as pd
 from scipy.optimize import brentq
 
 from dyncheck.results import StudyResult
@@ -163,6 +164,18 @@ def fmt(x, spec=".3g", none="-"):
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return none
     return format(x, spec)
+
+
+class NotApplicable(ValueError):
+    """Raised by a study that has nothing to measure at the case's parameters (a top whose centre of mass is below
+    its tip has no least spin to stand upright); the message says why, and the page says so in the study's place."""
+
+
+def not_applicable(case, study, settings, why):
+    """The result of a study that raised NotApplicable: no numbers, no figure, the reason as its one finding."""
+    return study_result(case, study, f"{study.replace('_', ' ').capitalize()}: not applicable", settings,
+                        pd.DataFrame(), pd.DataFrame(), [f"Not applicable at these parameters: {why}"], {},
+                        time.perf_counter())
 
 
 def study_result(case, study, title, settings, data, table, findings, series, start):
