@@ -299,9 +299,16 @@ def list_cases(names, cases_dir):
                  " to ".join(f"{case.value(end):g}" for end in ranges[p.name]), "about": p.about}
                 for p in case.parameters]
         print(text_table(rows) if rows else "no parameters")
+        constraints = case.spec.get("constraints", [])
+        if constraints:
+            print("constraints, which every set of values (the case file's and --set's together) must keep:")
+            print(text_table([{"constraint": f"{c['expression']} {'>' if c.get('strict') else '>='} 0",
+                               "here": f"{case.value(c['expression']):.3g}", "why": " ".join(c["why"].split())}
+                              for c in constraints]))
     print("\n" + textwrap.fill("allowed: what a value (the case file's or --set's) must satisfy; sampled: the "
                                "interval that the random parameter sets are drawn from (the 'random parameters' "
-                               "check), - if the parameter is not drawn", 100))
+                               "check), - if the parameter is not drawn; here: a constraint's value at the "
+                               "case's numbers, how far they are from breaking it", 100))
     return 0
 
 

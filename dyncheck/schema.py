@@ -227,7 +227,9 @@ def _check_constraints(constraints, params, overrides, file):
             involved = [p for p in dict.fromkeys(re.findall(r"[A-Za-z_]\w*", expression)) if p in params]
             values = ", ".join(f"{p} = {params[p]!r}" + (" (override)" if p in overrides else "") for p in involved)
             raise _error(file, field, expression, f"is {x:.4g} at {values or 'any parameters'}, not "
-                         f"{'>' if strict else '>='} 0: {' '.join(constraint['why'].split())}")
+                         f"{'>' if strict else '>='} 0: {' '.join(constraint['why'].split())}"
+                         + ("; set the others with the overrides (`dyncheck list` shows each case's constraints)"
+                            if any(p in overrides for p in involved) else ""))
 
 
 def check_values(spec, file, value):
@@ -611,7 +613,7 @@ MEANINGS = {
     "params.<name>.exclusive_minimum": "Its value (default, override, random range) must be > this.",
     "params.<name>.maximum": "Its value (default, override, random range) must be <= this.",
     "params.<name>.exclusive_maximum": "Its value (default, override, random range) must be < this.",
-    "constraints": "What the parameters must satisfy together, beyond each one's bounds (see Constraints).",
+    "constraints": "What the parameters must satisfy together, beyond each one's bounds (see Constraints); `dyncheck list` shows each with its margin at the case's numbers.",
     "constraints[i].expression": "An expression of the parameters and pi that must be >= 0 (> 0 if strict).",
     "constraints[i].strict": "true: the expression must be > 0, not only >= 0.  Absent: false.",
     "constraints[i].why": "What the constraint means and why it holds; the error shows it.",

@@ -14,13 +14,14 @@ import numpy as np
 import pandas as pd
 
 from dyncheck import cache, ceilings
-from dyncheck.ceilings import EPS, ROUNDING_FLOOR
+from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.messages import plural
 from dyncheck.results import Status, heading, no_number, row
 from dyncheck.schema import MAX_OUTPUTS
 from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
                                energy_residual, fastest_frequency, simulate, state_columns)
 from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
+from dyncheck.vibration import jacobian, scales_of
 
 COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "cpu", "cpu_min", "cpu_max",
            "repeats", "evaluations", "steps", "status", "resolved", "detail"]
@@ -490,8 +491,8 @@ def convergence(case):
     The argument needs omega to bound the motion's frequency.  Where the reference's motion outruns it
     (`motion_frequency`: more than OUTRUN omega), the horizon ends before, and the row says where: a top with
     Izz = Ixx / 4 under g = 1 m/s^2 passes 0.003 rad from its Euler angles' singularity 0.24 s in, where the
-    frequency of its Euler-angle equations reaches 2,000 rad/s against the case's 11.5, and RK4 at the
-    case's step blew up; before 0.196 s it shows order 3.92."""
+    frequency of its Euler-angle equations passes 600 rad/s against the case's 11.5, and RK4 at the
+    case's step blew up; before 0.198 s it shows order 3.92."""
     wp = settings(case)
     if wp is None:
         return []
@@ -553,21 +554,20 @@ def convergence(case):
 
 
 # The argument above needs omega to bound the motion's frequency.  Measured as the spectral radius of the
-# state Jacobian along the reference's motion, the book's cases reach 0.98 to 1.15 of the case's omega, and the
-# two pendulums' chaotic swings 2.7 of it for instants, where the orders are observed as the argument says.  A top
-# passing 0.003 rad from its Euler angles' singularity (Izz = Ixx / 4, g = 1 m/s^2) reaches 177 times its
+# state Jacobian along the reference's motion, the book's cases reach 0.68 to 1.15 of the case's omega, and the
+# two pendulums' chaotic swings 2.6 of it for instants, where the orders are observed as the argument says.  A top
+# passing 0.003 rad from its Euler angles' singularity (Izz = Ixx / 4, g = 1 m/s^2) passes 50 times its
 # omega there, and RK4 at the case's step blew up: the horizon ends where the motion passes OUTRUN omega.
 OUTRUN = 4.0
 MIN_STEPS = 20  # the fewest steps of h a convergence run's horizon may hold
-MOTION_POINTS = 400  # the instants of the reference's motion whose frequency is measured
-DIFFERENCE_STEP = EPS ** (1 / 3)  # central differences: truncation ~h^2 and rounding ~eps / h balance
+MOTION_POINTS = 50  # the instants of the reference's motion whose frequency is measured
 
 
 def motion_frequency(case, t_end):
     """The reference's motion from the book's start over [0, t_end] (DOP853 at the case's rtol): MOTION_POINTS + 1
-    times, and at each the spectral radius of the state Jacobian [[0, I], [dq''/dq, dq''/dq']] (central differences):
-    the local frequency, from rest or not, which a coordinate singularity makes large.  Zero where the run fails (the
-    convergence runs then say how)."""
+    times, and at each the spectral radius of the state Jacobian [[0, I], [dq''/dq, dq''/dq']] (the vibration
+    analysis's differences): the local frequency, from rest or not, which a coordinate singularity makes large.
+    Zero where the run fails (the convergence runs then say how)."""
     q0, v0, _ = case.initial
     model = case.model("reference")
     n = len(q0)
@@ -580,13 +580,8 @@ def motion_frequency(case, t_end):
     radius = []
     with np.errstate(all="ignore"):
         for t, x in zip(run.index, states):
-            jacobian = np.zeros((2 * n, 2 * n))
-            jacobian[:n, n:] = np.eye(n)
-            for j in range(2 * n):
-                step = np.zeros(2 * n)
-                step[j] = DIFFERENCE_STEP * max(abs(x[j]), 1.0)
-                plus, minus = (np.asarray(model.accelerations(t, *np.split(x + d, [n])), dtype=float)
-                               for d in (step, -step))
-                jacobian[n:, j] = (plus - minus) / (2 * step[j])
-            radius.append(np.max(np.abs(np.linalg.eigvals(jacobian))) if np.all(np.isfinite(jacobian)) else np.inf)
+            acc = lambda y: np.asarray(model.accelerations(t, y[:n], y[n:]), dtype=float)
+            state_matrix = np.block([[np.zeros((n, n)), np.eye(n)], [jacobian(acc, x, scales_of(x))[0]]])
+            radius.append(np.max(np.abs(np.linalg.eigvals(state_matrix))) if np.all(np.isfinite(state_matrix))
+                          else np.inf)
     return run.index.to_numpy(), np.array(radius)

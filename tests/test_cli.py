@@ -38,6 +38,14 @@ def test_list_shows_each_parameter_with_its_unit_bounds_and_sampled_range(capsys
     assert all(len(line) <= 100 for line in lines)
 
 
+def test_list_shows_the_constraints_that_couple_the_parameters(capsys):
+    """`--set m=0.73` alone, within m's sampled range, breaks the top's triangle inequality: list says so ahead."""
+    assert cli.main(["list", "spinning_top"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    constraint = next(line for line in lines if line.startswith("2*(Ixx - m*h**2) - Izz + 1e-5 >= 0"))
+    assert constraint.split(">= 0")[1].split()[0] == "6.32e-06" and all(len(line) <= 100 for line in lines)
+
+
 def test_list_shows_the_sampled_interval_apart_from_the_allowed_one(capsys):
     assert cli.main(["list", "piston"]) == 0
     m = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("m "))
