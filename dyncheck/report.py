@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from dyncheck import animation, expressions, stability, student_page, typeset, vibration_page, work_precision
-from dyncheck.case import Case
+from dyncheck.case import CASES_DIR, Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.messages import ENGINE_NAMES, plural, statuses_in_words
 from dyncheck.results import (OWN_WORDS, RESULTS_VERSION, Status, case_json, consequences, format_rows, heading,
@@ -662,7 +662,7 @@ def write_case_page(result, case, tmp, animations=True):
         *(embed(figures["scene"], "scene", captions["scene"]) if "scene" in figures else ["", ""]),
         "## Parameters",
         "",
-        *parameters_table(case),
+        *parameters_table(case, tmp),
         initial_conditions(case),
         "",
         "## How each source models it",
@@ -896,19 +896,22 @@ def study_sections(result, case, tmp):
     return lines, files
 
 
-def parameters_table(case):
-    """The page's table of parameters, and where the book's program gives one, what the listing shows."""
+def parameters_table(case, tree):
+    """The page's table of parameters, and where the book's program gives one, what the listing shows; `tree`: the
+    folder the page is written in, from which the link to docs/book-numbers.md goes."""
     printed = any(p.printed for p in case.parameters)
     table = pd.DataFrame([{"parameter": p.name, "value": f"{p.value:.10g}", "unit": p.unit, "allowed": p.allowed,
                            **({"as printed": as_printed(p)} if printed else {}),
                            "meaning": p.about + (" (overridden)" if p.name in case.overrides else "")}
                           for p in case.parameters])
-    # ../docs: the book's report trees are top-level folders of the checkout (reports/, reports-NAME=VALUE/)
+    # ../docs from the book's report trees, top-level folders of the checkout (reports/, reports-NAME=VALUE/); from
+    # an --out elsewhere, the way to this checkout's docs
+    book_numbers = Path(os.path.relpath(CASES_DIR.parent / "docs" / "book-numbers.md", tree)).as_posix()
     return [markdown_table(table), "",
             *(["*As printed*: the value in the book's program listing as the book's text extraction shows it.  The"
                " extraction lost every digit 0; each value was read back by replaying the listing for every way of"
                " restoring the zeros and keeping the one that lands inside the book's figures ([the book's"
-               " numbers](../docs/book-numbers.md), example by example).", ""] if printed else [])]
+               f" numbers]({book_numbers}), example by example).", ""] if printed else [])]
 
 
 def as_printed(parameter):

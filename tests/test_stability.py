@@ -233,3 +233,14 @@ def test_a_study_with_nothing_to_measure_says_why_and_draws_nothing(tmp_path):
     result = common.not_applicable(case, "sleeping_top", settings(case, "sleeping_top"), "because")
     assert result.findings == ("Not applicable at these parameters: because",) and result.table.empty
     assert stability.figure(case, result, tmp_path / "top.png") is None and not any(tmp_path.iterdir())
+
+
+def test_the_euler_singularity_study_without_passages_draws_its_one_panel(tmp_path):
+    """--set Ixx=0.0105 (within its sampled range) lifts the upright top's least spin above the passages' spin:
+    they are not applicable, and the study's figure, drawn with its one other panel, had its title run off the
+    figure's edge, which took the whole report down (a helper's sweep of `report --set`)."""
+    case = dyncheck.load_case("spinning_top", Ixx=0.0105063)
+    result = stability.case_module(case).euler_singularity(case, settings(case, "euler_singularity"))
+    assert any(f.startswith("No passage through the upright: at the passages' spin 43.98 rad/s the upright is "
+                            "unstable") for f in result.findings)
+    assert stability.figure(case, result, tmp_path / "singularity.png") and (tmp_path / "singularity.png").is_file()

@@ -462,7 +462,7 @@ def figure_euler_singularity(result, path, name):
     ax.invert_xaxis()
     ax.set_xlabel("nutation [rad] (toward upright ->)")
     ax.set_ylabel("relative error of the\nangular acceleration [1]")
-    ax.set_title("the same physical state: body angular acceleration (errors below 1e-18 drawn at 1e-18)")
+    ax.set_title("the same physical state: body angular acceleration\n(errors below 1e-18 drawn at 1e-18)")
     ax.grid(True, which="both")
     if passes:
         ax = axes[1]
@@ -494,13 +494,15 @@ def figure_euler_singularity(result, path, name):
     legend_below(fig, ncol=1)
     save(fig, path)
     worst = rows[rows["source"] == rows["source"].iloc[0]].astype({"error": float}).sort_values("nutation")
-    return ("Top: the relative error of the body angular acceleration of one physical state, as the nutation goes to"
-            " zero (toward upright, to the right), from the book's Euler-angle equations and from the engines fed the"
-            f" same state as a quaternion: the Euler-angle error grows like 1/n^2, to {worst['error'].iloc[0]:.1g} at"
-            f" n = {worst['nutation'].iloc[0]:.0e} rad, the engines' stays at rounding."
-            + (" Bottom: runs through the near-upright, the axis direction against MuJoCo's: an adaptive integrator"
-               " follows the singularity by shrinking its steps, a fixed-step one blows up (X) when the axis"
-               " passes closest (grey: the nutation of the closest passage)." if passes else ""))
+    errors = ("the relative error of the body angular acceleration of one physical state, as the nutation goes to"
+              " zero (toward upright, to the right), from the book's Euler-angle equations and from the engines fed the"
+              f" same state as a quaternion: the Euler-angle error grows like 1/n^2, to {worst['error'].iloc[0]:.1g} at"
+              f" n = {worst['nutation'].iloc[0]:.0e} rad, the engines' stays at rounding.")
+    if not passes:  # not applicable at these parameters: the study's findings say why
+        return errors[0].upper() + errors[1:]
+    return (f"Top: {errors} Bottom: runs through the near-upright, the axis direction against MuJoCo's: an adaptive"
+            " integrator follows the singularity by shrinking its steps, a fixed-step one blows up (X) when the axis"
+            " passes closest (grey: the nutation of the closest passage).")
 
 
 def figure_sleeping_top(result, path, name):
