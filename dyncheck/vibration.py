@@ -1143,12 +1143,13 @@ def dop853(rhs, start, t_end, rtol, omega):
     budget = scipy_budget("DOP853", t_end, rtol, np.inf, omega)
     solver = DOP853(rhs, 0.0, start, t_end, rtol=rtol, atol=rtol)
     steps = 0
-    while solver.status == "running":
-        message = solver.step()
-        steps += 1
-        if solver.status == "failed" or not np.all(np.isfinite(solver.y)):
-            raise Unstable("DOP853", solver.t, steps, message or "state is not finite")
-        budget.check(solver.t, steps)
+    with np.errstate(all="ignore"):  # a blow-up is the Unstable below, not a warning on the way to it
+        while solver.status == "running":
+            message = solver.step()
+            steps += 1
+            if solver.status == "failed" or not np.all(np.isfinite(solver.y)):
+                raise Unstable("DOP853", solver.t, steps, message or "state is not finite")
+            budget.check(solver.t, steps)
     return solver.y
 
 
