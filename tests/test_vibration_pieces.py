@@ -197,7 +197,7 @@ def test_a_boundary_formula_that_is_no_number_at_the_parameters_is_no_bad_input(
 
 
 
-def test_a_degenerate_equilibrium_is_found():
+def test_a_degenerate_equilibrium_is_found_and_its_linearisations_compared_within_their_rounding():
     """The rotating pendulum under g = 0 balances at psi = -pi/2, where psi'' and its slope both vanish while the
     centrifugal terms that cancel there do not.  Newton stopped there with |psi''| 8e-24 but did not call it
     converged (a tolerance relative to the zero Jacobian there), and the row failed the derivation for lacking the
@@ -207,3 +207,10 @@ def test_a_degenerate_equilibrium_is_found():
     eq = vibration.equilibrium(scene.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords,
                                scene.model("pinocchio").mass_matrix)
     assert abs(eq.q[0] + math.pi / 2) < 1e-4  # psi'' ~ d^3 there: within rounding of the terms at d = 6e-5 rad
+    # A's entries there are 1e-8 of the terms they sum: Pinocchio's A, 2e-14 off the derivation's, once failed
+    # with an error estimate relative to its RNEA derivatives' own entries (1e-23); its measured noise allows it
+    ours = vibration.derivation_linear(scene.model("reference"), "reference", eq)
+    theirs = vibration.engine_linear(scene.model("pinocchio"), "pinocchio", eq)
+    n = ours.n
+    assert np.max(np.abs(ours.state_matrix[n:] - theirs.state_matrix[n:])) <= vibration.SAFETY * (ours.error
+                                                                                                  + theirs.error)
