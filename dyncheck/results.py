@@ -27,7 +27,8 @@ class Status(enum.StrEnum):
     FAIL = "fail"
     INCONCLUSIVE = "inconclusive"  # the tolerance is above the ceiling: the comparison proves nothing
     UNSTABLE = "unstable"  # an integration blew up: no number to compare
-    NOT_APPLICABLE = "not applicable"  # the book's printed run under other parameters; a derivation's missing energy; nothing to measure
+    # the book's printed run under other parameters; a derivation's missing energy; a study with nothing to measure
+    NOT_APPLICABLE = "not applicable"
     RUNAWAY = "runaway"  # every source's run left the case's physical limits, as the case says it must
 
     @property

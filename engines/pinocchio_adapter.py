@@ -507,7 +507,7 @@ class PinocchioModel:
         # RNEA's rounding is of RNEA's own entries: a stiff spring's -k, added here in one rounding, would make it
         # 1e3 eps of k on every entry (k = 4929 N/m on a spring pendulum's length row put 2e-6 on its angle's row,
         # whose entries are about 10, and its mode rows were inconclusive); or, where its entries are far below the
-        # terms they sum, its noise as measured (`rounding_noise`)
+        # terms they sum, its noise as measured (`_rounding_noise`)
         error = max(ROUNDING * max(np.max(np.abs(dtau_dq)), np.max(np.abs(dtau_dv))),
                     NOISE_MARGIN * self._rounding_noise(derivatives, config, velocity, (dtau_dq, dtau_dv)))
         force_q, force_v = -dtau_dq, -dtau_dv
