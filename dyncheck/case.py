@@ -7,6 +7,7 @@ import importlib.util
 import math
 import re
 import sys
+import time
 import tomllib
 from dataclasses import dataclass
 from functools import cached_property
@@ -14,8 +15,9 @@ from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
+from scipy.stats import qmc
 
-from dyncheck import derived, expressions, schema
+from dyncheck import derived, expressions, isolation, schema
 from dyncheck.messages import suggest
 from dyncheck.results import overrides_in_words
 
@@ -111,8 +113,9 @@ def load_file(path, what):
         spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
-        try:
-            guarded(what, lambda: spec.loader.exec_module(module))
+        try:  # foreign code: bounded in time, its exit an error (isolation)
+            guarded(what, lambda: isolation.guarded_call(str(path), "import", isolation.IMPORT_BUDGET,
+                                                         spec.loader.exec_module, module))
         except BaseException:
             del sys.modules[name]
             raise
@@ -124,7 +127,7 @@ def guarded(what, call):
     bad input, exit 2, never a traceback or a silent exit."""
     try:
         return call()
-    except ValueError as error:
+    except (ValueError, isolation.DerivationError) as error:
         raise ValueError(f"{what}: {error}") from None
     except (Exception, SystemExit) as error:
         raise ValueError(f"{what}: {type(error).__name__}: {error}") from None
@@ -258,8 +261,9 @@ class Case:
         where = given.get("derivation", derived.EQUATIONS)
         if isinstance(where, str) and where.endswith(".py") and (self.folder / where).is_file() \
                 and (self.folder / derived.SCENE).is_file():
-            module = load_file(self.folder / where, f"{self.file}: derivation = {where!r}" if "derivation" in given
-                               else str(self.folder / where))
+            module = isolation.Guarded(load_file(self.folder / where, f"{self.file}: derivation = {where!r}"
+                                                 if "derivation" in given else str(self.folder / where)),
+                                       f"{self.folder.name}/{where}", isolation.IMPORT_BUDGET)
             if derived.is_plain(module):
                 from engines.mjcf import describe  # the harness reads a scene only through engines/
                 return derived.case_file(self.folder, module, describe(self.folder / derived.SCENE), given)
@@ -313,17 +317,20 @@ class Case:
         return (np.array([self.value(x) for x in ic["q"]]), np.array([self.value(x) for x in ic["v"]]),
                 self.value(ic["t_end"]))
 
-    def sample_states(self, count=None):
-        """The pointwise check's seeded random states: a list of (t, q, v); with `count`, the first `count` of them
-        (each state is drawn after the one before, so the first ones do not depend on how many follow)."""
+    def sample_states(self, count=None, stream=0):
+        """The pointwise check's seeded states, a list of (t, q, v): a scrambled Halton sequence over the box of
+        [sample] t, q and v, which covers it evenly (a region of 5 % of the box holds about 5 % of the states, where
+        as many independent draws leave gaps and clusters).  With `count`, the first `count` of them (a point of the
+        sequence does not depend on how many follow); `stream` k > 0, the k-th other sequence of the same seed
+        (each random parameter set's own states)."""
         s = self.spec["sample"]
-        rng = np.random.default_rng(s["seed"])
         bounds = lambda ranges: np.array([[self.value(lo), self.value(hi)] for lo, hi in ranges]).reshape(-1, 2)
-        q_bounds, v_bounds = bounds(s["q"]), bounds(s["v"])
-        t_lo, t_hi = self.value(s["t"][0]), self.value(s["t"][1])
+        box = np.vstack([[[self.value(s["t"][0]), self.value(s["t"][1])]], bounds(s["q"]), bounds(s["v"])])
         count = s["count"] if count is None else min(count, s["count"])
-        return [(rng.uniform(t_lo, t_hi), rng.uniform(q_bounds[:, 0], q_bounds[:, 1]),
-                 rng.uniform(v_bounds[:, 0], v_bounds[:, 1])) for _ in range(count)]
+        halton = qmc.Halton(len(box), scramble=True, seed=np.random.default_rng([s["seed"], stream]))
+        points = box[:, 0] + halton.random(count) * (box[:, 1] - box[:, 0])
+        n = len(self.coords)
+        return [(float(x[0]), x[1:1 + n], x[1 + n:]) for x in points]
 
     @property
     def integration(self):
@@ -381,7 +388,28 @@ class Case:
         where = self.spec["derivation"]
         if not where.endswith(".py"):
             return guarded(self._where_derived, lambda: importlib.import_module(where))
-        return load_file(self.folder / where, self._where_derived)
+        # code of the case's own folder: its calls bounded and recorded (isolation), within IMPORT_BUDGET until
+        # _derived has measured what one costs
+        return isolation.Guarded(load_file(self.folder / where, self._where_derived), f"{self.folder.name}/{where}",
+                                 isolation.IMPORT_BUDGET)
+
+    @property
+    def foreign(self):
+        """Whether the case's derivation is code of its own folder, not the package's `reference`: code dyncheck
+        does not control, run under a budget (dyncheck.isolation)."""
+        return isinstance(self.derivation, isolation.Guarded)
+
+    @cached_property
+    def budget(self):
+        """How long the case's own code may run, a call and the whole case, and in how much memory
+        (isolation.Budget; case.toml [budget], docs/isolation.md).  Memory None: the machine's, shared by the cases
+        that run at once (dyncheck.cli)."""
+        given = self.spec.get("budget", {})
+        self.model("reference")  # measures the cost of a call of the case's own code, and sets its budget
+        cost, call = (self.derivation.cost, self.derivation.budget) if self.foreign else (0.0, math.inf)
+        case = given.get("case", max(isolation.CASE_FLOOR, isolation.CALLS_PER_CASE * cost))
+        memory = int(given["memory"] * 1e9) if "memory" in given else None
+        return isolation.Budget(float(call), float(case), memory)
 
     @property
     def _where_derived(self):
@@ -477,7 +505,11 @@ class Case:
             cls = lambda params: derived.Equations(self.derivation, params, self.reaction_names)
         if cls is None:
             raise ValueError(f"{what} defines no class {name} (docs/model-interface.md)")
-        model = guarded(f"{what}: {name}({{params}})", lambda: cls(self.params))
+        own = self.derivation if self.foreign else None  # the case's own code, bounded (isolation)
+        model = guarded(f"{what}: {name}({{params}})", lambda: cls(self.params) if own is None else
+                        isolation.guarded_call(own.label, name, own.budget, cls, self.params))
+        if own is not None and not isinstance(model, derived.Equations):  # a class of the case's own code
+            model = isolation.Guarded(model, own.label, own.budget)
         coords, reactions = getattr(model, "coords", None), getattr(model, "reaction_names", None)
         if coords is None or tuple(coords) != self.coords:
             raise ValueError(f"{what}: {name}.coords is {coords!r}, but case.toml's coords are {list(self.coords)}")
@@ -489,7 +521,12 @@ class Case:
         q0, v0, _ = self.initial
         try:
             with np.errstate(all="ignore"):
+                start = time.perf_counter()
                 acc = np.asarray(model.accelerations(0.0, q0, v0), dtype=float)
+                if own is not None and name == "Reference":  # its calls' budget follows from their cost
+                    own.cost = time.perf_counter() - start
+                    own.budget = self.spec.get("budget", {}).get(
+                        "call", max(isolation.CALL_FLOOR, isolation.CALLS_PER_BUDGET * own.cost))
         except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
             return model
         except Exception as error:

@@ -212,6 +212,40 @@ def pointwise(case):
     return rows, {"states": states, "values": values, "failures": failures}
 
 
+ALONG_RUN = 200  # states: every output row of the book's runs would cost a second of MuJoCo's reactions per case
+
+
+def along_run(case, runs):
+    """Reference and both engines at states the reference's tight run visits (ALONG_RUN output rows, evenly
+    spaced): the pointwise comparison where the motion goes, beside the random states that span the state space.
+    None where that run did not finish (its trajectory rows say why)."""
+    tight = runs["reference"]
+    if not tight.ok or not case.coords:  # a scene without free coordinates is a function of time alone
+        return []
+    n, frame = len(case.coords), tight.twin
+    frame = frame.iloc[np.unique(np.linspace(0, len(frame) - 1, ALONG_RUN).round().astype(int))]
+    columns = frame[state_columns(case)].to_numpy()
+    states = [(float(t), x[0::2][:n], x[1::2][:n]) for t, x in zip(frame.index, columns)]
+    values, rows = {}, []
+    for source in ENGINES:
+        try:
+            values[source] = evaluate(case, source, states)
+        except ArithmeticError as failure:
+            values[source] = str(failure)
+    tolerance = case.tolerance["pointwise"]["value"]
+    for a, b in itertools.combinations(ENGINES, 2):
+        failed = [values[s] for s in (a, b) if isinstance(values[s], str)]
+        if failed:
+            rows.append(no_number("along the run", "every quantity", (a, b), failed[0], Status.FAIL))
+            continue
+        errors = compare(case, values[a], values[b])
+        quantity = max(errors, key=errors.get)
+        rows.append(row("along the run", quantity, (a, b), errors[quantity], tolerance,
+                        f"the worst of {len(errors)} quantities at the {len(states)} states of the tight "
+                        "reference's run", ceiling=ceilings.POINTWISE))
+    return rows
+
+
 # -- random parameters ------------------------------------------------------------
 
 ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
@@ -267,9 +301,9 @@ def random_parameters(case):
                                  f"beside the overrides {named(case.overrides)}", Status.FAIL))
     tolerance = case.tolerance["pointwise"]["value"]
     worst = {}  # comparison -> (error beyond its tolerance, error, its tolerance, quantity, set, placeholders' effect)
-    for params in sets:
+    for i, params in enumerate(sets):
         other = case.with_params(**params)
-        states = other.sample_states(count)
+        states = other.sample_states(count, stream=i + 1)  # each set its own states: together they cover more
         try:
             values = {source: evaluate(other, source, states) for source in ENGINES}
             errors = {(a, b): compare(other, values[a], values[b]) for a, b in itertools.combinations(ENGINES, 2)}
@@ -576,7 +610,7 @@ def run_case(case, localise=True):
     rows += equations + residuals.printed_rows(case, sample) + random_parameters(case)
     limit = case.runaway()
     runs = run_sources(case, None if limit is None else limit.bound)
-    rows += trajectory(case, runs) + energy(case, runs)
+    rows += trajectory(case, runs) + energy(case, runs) + along_run(case, runs)
     try:
         rows += convergence(case)
     except NoFrequency as error:  # nothing to converge on where nothing moves; a motion without omega is the case's fault
@@ -610,6 +644,16 @@ def run_case(case, localise=True):
                       findings=findings, sample=sample, runs=runs, program=program,
                       drawings={**drawings(case, runs), "animation": animation.frames(case, runs, program)},
                       wall=time.perf_counter() - start, localisations=localisations, vibration=vibrations)
+
+
+def unfinished(case, why):
+    """The result of a case whose checks could not finish (its process died or overran its budget, or its checks
+    stopped on an error: dyncheck.isolation): one failing row that says why, and nothing else to show."""
+    source = "derivation" if case.one_derivation else "reference"
+    return CaseResult(folder=str(case.folder), spec=case.spec, overrides=dict(case.overrides),
+                      rows=(no_number("checks", "every check", (source,), f"the checks did not finish: {why}",
+                                      Status.FAIL),),
+                      findings=(), sample={}, runs={}, program={}, drawings={}, wall=0.0)
 
 
 def in_own_words(rows):

@@ -6,6 +6,7 @@ renders the pages from what it saved, so `report --from` renders the same pages 
 alone, without the engines."""
 
 import argparse
+import contextlib
 import json
 import multiprocessing
 import os
@@ -14,18 +15,25 @@ import sys
 import tempfile
 import textwrap
 import time
+from dataclasses import replace
 from importlib.metadata import version
 from pathlib import Path
 
 import pandas as pd
 from tqdm import tqdm
 
-from dyncheck import cache, ci
+from dyncheck import cache, ci, isolation
 from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
-from dyncheck.checks import run_case, validate_placeholders
+from dyncheck.checks import run_case, unfinished, validate_placeholders
 from dyncheck.simulate import fastest_frequency
 from dyncheck.messages import suggest
 from dyncheck.results import format_rows, heading, load_results, save_results, to_json
+
+
+def entry():
+    """The console command: main() in a process of its own, so that a case's own code cannot end dyncheck with an
+    exit code of its choosing (dyncheck.isolation.supervised)."""
+    sys.exit(isolation.supervised(main))
 
 
 def main(argv=None):
@@ -88,6 +96,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.command == "report" and args.out is None:
         args.out = Path("reports" + "".join(f"-{pair.strip().replace('/', '_')}" for pair in args.set))
+    isolation.RECORD.loading = True  # until the cases are loaded, a case's code that ends the process is bad input
     try:
         if args.command == "list":
             return list_cases(args.cases, args.cases_dir)
@@ -109,6 +118,7 @@ def main(argv=None):
             check_results_folder(args.results, [case.name for case in cases])
     except ValueError as error:
         return error_exit(error)
+    isolation.RECORD.loading = False
     if args.command == "bench":
         from dyncheck.bench import bench_case, bench_runs
         table = pd.concat([bench_case(case) for case in cases] + ([bench_runs(cases, run_cases)] if args.runs else []),
@@ -158,33 +168,34 @@ def error_exit(error):
 
 def run_cases(cases, localise=True, workers=None):
     """The results of the cases, in their order, and the name of the first case that did not finish because of
-    Ctrl-C (None if all did).  The cases run in parallel, one process per core (forked: each inherits its Case,
-    whose engine models cannot be pickled), the longest first (expected_cost) so that no long case starts last."""
-    global _INHERITED
+    Ctrl-C (None if all did).  Each case runs in a forked process of its own (it inherits its Case, whose engine
+    models cannot be pickled), one per core, the longest first (expected_cost) so that no long case starts last;
+    a process that dies or overruns its budget gives its case one failing row saying so (dyncheck.isolation)."""
     workers = min(len(cases), workers or os.cpu_count() or 1)
     finished = {}  # index -> result
     bar = tqdm(total=len(cases), desc="checks", unit="case", disable=None, leave=False)
     try:
-        if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        if "fork" not in multiprocessing.get_all_start_methods():  # no process to isolate a case in
             for index, case in enumerate(cases):
                 finished[index] = run_case(case, localise)
                 bar.update()
         else:
-            _INHERITED = (cases, localise)
             longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
-            # The workers ignore Ctrl-C: the terminal sends it to them too, and this process ends them.
-            with multiprocessing.get_context("fork").Pool(workers, signal.signal, (signal.SIGINT, signal.SIG_IGN)) as pool:
-                for index, result in pool.imap_unordered(_run_inherited, longest_first):
-                    if result is not None:  # None: the case's run_case was interrupted
-                        finished[index] = result
+            memory = isolation.machine_memory() // workers
+            budget = lambda case: replace(case.budget, memory=case.budget.memory or memory)
+            each = isolation.run_each([cases[i] for i in longest_first], lambda case: run_case(case, localise),
+                                      workers, budget)
+            with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
+                for position, (kind, value) in each:
+                    case = cases[longest_first[position]]
+                    finished[longest_first[position]] = value if kind == "result" else unfinished(case, value)
                     bar.update()
     except KeyboardInterrupt:
         pass
     finally:
         bar.close()
-        _INHERITED = None
-    unfinished = [case.name for index, case in enumerate(cases) if index not in finished]
-    return [finished[index] for index in sorted(finished)], (unfinished[0] if unfinished else None)
+    unfinished_names = [case.name for index, case in enumerate(cases) if index not in finished]
+    return [finished[index] for index in sorted(finished)], (unfinished_names[0] if unfinished_names else None)
 
 
 def expected_cost(case):
@@ -192,24 +203,14 @@ def expected_cost(case):
     return (fastest_frequency(case) or 0.0) * case.initial[2]
 
 
-_INHERITED = None  # (cases, localise) of run_cases, for its forked workers
-
-
-def _run_inherited(index):
-    """A worker's case: its index and result, or None if run_case was interrupted."""
-    cases, localise = _INHERITED
-    try:
-        return index, run_case(cases[index], localise)
-    except KeyboardInterrupt:
-        return index, None
-
-
 def make_report(results, cases, out, no_studies, animations=True):
     """The studies of each case added to its results, and the pages written (with `animations`, their GIFs);
     the results."""
     from dyncheck.report import write_reports
     start = time.perf_counter()
-    results = [result if no_studies else result.with_studies(study_case(case)) for result, case in zip(results, cases)]
+    # a case whose checks did not finish (no runs: dyncheck.checks.unfinished) has no studies either
+    results = [result if no_studies or not result.runs else result.with_studies(study_case(case))
+               for result, case in zip(results, cases)]
     written = write_reports(results, out, animations)
     print(f"studies and pages: wrote {len(written)} files to {out}/ in {time.perf_counter() - start:.1f} s")
     print_results(results, table=False)

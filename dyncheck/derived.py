@@ -28,7 +28,11 @@ ABOUT = {"mass": "mass of body '{name}'", "pos": "position of body '{name}' in i
          "stiffness": "stiffness of joint '{name}'", "damping": "viscous damping of joint '{name}'",
          "springref": "rest position of joint '{name}''s spring"}
 AXES = "xyz"
-DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)  # of an output step into MuJoCo's steps: 1-2-5 steps
+DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+# States of the pointwise check: a region of 5 % of the state space holds about 13 of 256 evenly spread states
+# (Case.sample_states), where a derivation wrong only there must fail; 256 evaluations of the slowest
+# derivations known (a generated 7-dof inverse dynamics, 2-6 ms each) take about a second.
+SAMPLE_COUNT = 256  # of an output step into MuJoCo's steps: 1-2-5 steps
 
 
 def is_plain(module):
@@ -244,11 +248,14 @@ def case_file(folder, module, scene, given):
     # MuJoCo's RK4 at omega dt <= 0.01: error ~(omega dt)^5 / 120 ~ 1e-12 per step
     substeps = next(d for d in DIVISORS if output_step / d * omega <= 0.01)
     ranges = {j.name: j.range for j in scene.joints}
-    # A slide without a range: half the scene's size either way, which keeps a slide along a rod of that
-    # length (a spring's extension) from passing through the hinge, where M(q) vanishes.
+    # The states span the state space a derivation must hold in (docs/own-case.md): an angle's whole turn (or its
+    # joint's range); a slide without a range three quarters of the scene's size either way, which keeps a
+    # slide along a rod of that length (a spring's extension) a quarter of it from the hinge, where M(q)
+    # vanishes; rates of four times the fastest frequency (a whole turn's rate, over the top, is about twice
+    # it); times over four horizons (a law of time beyond the runs' is checked too).
     span = lambda c, unit: list(ranges[joints[c]]) if ranges[joints[c]] else (
-        [-math.pi, math.pi] if unit == "rad" else [-length / 2, length / 2])
-    rate = lambda unit: 2 * omega * (1.0 if unit == "rad" else length)
+        [-math.pi, math.pi] if unit == "rad" else [-0.75 * length, 0.75 * length])
+    rate = lambda unit: 4 * omega * (1.0 if unit == "rad" else length)
     gravity = next((p for p, locs in bound.items() if locs[0]["element"] == "option"), None)
     masses = [p for p, locs in bound.items() if locs[0].get("attribute") == "mass"]
     weight = (f"({' + '.join(masses)})" if masses else f"{sum(scene.masses.values()):.6g}") + \
@@ -267,7 +274,7 @@ def case_file(folder, module, scene, given):
                            name=bound[p][0]["name"], index=AXES[bound[p][0].get("index", 0)])}
                    for p, value in params.items()},  # every other parameter is bound (bindings refuses the rest)
         "initial": {"q": q0.tolist(), "v": v0.tolist(), "t_end": t_end},
-        "sample": {"count": 50, "seed": 1, "t": [0.0, t_end],
+        "sample": {"count": SAMPLE_COUNT, "seed": 1, "t": [0.0, 4 * t_end],
                    "q": [span(c, u) for c, u in zip(coords, units)], "v": [[-rate(u), rate(u)] for u in units],
                    "params": {"sets": 8, "states": 20, "seed": 2,
                               "ranges": {p: sorted([0.5 * v, 2.0 * v]) for p, v in params.items()}}},

@@ -59,8 +59,11 @@ def write_reports(results, out, animations=True):
             # The pages from the results as saved: what `report --from` renders from them.
             for result in (load_result(tree / "results" / result.name) for result in results):
                 case = Case(result.folder, result.overrides, result.spec)
-                written += write_case_page(result, case, tree, animations)
-                written += student_page.write(result, case, tree)  # after the case page: it shows its figures
+                if result.runs:
+                    written += write_case_page(result, case, tree, animations)
+                    written += student_page.write(result, case, tree)  # after the case page: it shows its figures
+                else:  # its checks did not finish (dyncheck.checks.unfinished)
+                    written.append(write_unfinished_page(result, case, tree))
                 written.append(write_summary(result, case, tree))
             cases = summaries(tree, out)
             written.append(write_index(tree, cases))
@@ -487,7 +490,7 @@ def random_tried(result, case):
                    and set(r.sources) <= set(ENGINES)]
     return {"states": sample["count"], "seed": sample["seed"], "parameter_sets": params.get("sets", 0),
             "states_per_set": params.get("states", 0), "parameter_seed": params.get("seed"),
-            "agreed": all(r.status == Status.PASS for r in engine_rows)}
+            "agreed": bool(engine_rows) and all(r.status == Status.PASS for r in engine_rows)}
 
 
 def random_sentence(tried):
@@ -729,6 +732,18 @@ def write_case_page(result, case, tmp, animations=True):
     page = f"{name}.md"
     (tmp / page).write_text("\n".join(lines))
     return [page] + list(figures.values()) + study_files + write_timing_page(result, case, tmp)
+
+
+def write_unfinished_page(result, case, tmp):
+    """The page of a case whose checks did not finish (its process died or overran its budget): its one row says
+    why, and there is nothing else to show."""
+    (row,) = result.rows
+    page = f"{case.name}.md"
+    (tmp / page).write_text("\n".join([
+        f"# {heading(case.spec)}", "", f"**{result.status}**: {row.detail}. [All cases](index.md)", "",
+        "Nothing else was checked: the rows, runs and figures of this case are those of a run that finishes "
+        "(docs/isolation.md).", ""]))
+    return page
 
 
 def cost_table(runs, one_derivation):

@@ -64,6 +64,8 @@ SCHEMA = ("table", {
                               "ranges": ("map", ("pair", "expr"))}),
     }),
     "work_precision?": FREE,  # validated by dyncheck/work_precision.py
+    # how long the case's own code may run, and in how much memory (dyncheck/isolation.py)
+    "budget?": ("table", {"call?": "number > 0", "case?": "number > 0", "memory?": "number > 0"}),
     "integration": ("table", {"output_step": "expr > 0", "rtol": "expr > 0", "tight_rtol": "expr > 0",
                               "mujoco_step": "expr > 0"}),
     "tolerance": ("table", {"pointwise": ("table", {"value": "number > 0", "force_scale": "expr >= 0",
@@ -652,6 +654,16 @@ MEANINGS = {
                       "an optional `convergence.method_omega` table gives a method that integrates other "
                       "coordinates its own; where the motion outruns it, four times over, the horizon ends "
                       "before, and the row says where); validated by dyncheck/work_precision.py.",
+    "budget": "How long a derivation of the case folder (code dyncheck does not control) may run, and in how much "
+              "memory: a call, a run or a memory use past its budget is a failing row that says which function, at "
+              "which state, after how long (docs/isolation.md).  The book's derivations in the package's own "
+              "`reference` have none.",
+    "budget.call": "One call of the derivation (an accelerations, an energy, ...).  Absent: 1000 times the slowest of "
+                   "its calls at the initial state, at least 5 s; its import has 60 s.",
+    "budget.case": "All the checks of the case, in a process of its own.  Absent: a million times that call's cost "
+                   "(what the longest runs of a case take), at least 900 s.",
+    "budget.memory": "The memory the case's process may map.  Absent: the machine's memory shared by the cases that "
+                     "run at once.",
     "integration": "How the checks integrate the equations.",
     "integration.output_step": "The interval between a run's output rows; a multiple of mujoco_step.",
     "integration.rtol": "The relative and absolute tolerance of scipy's DOP853 for the runs of reference, book and "
@@ -876,6 +888,8 @@ KEY_UNITS = {
     "runaway[i].escape": "the coordinate's (coord_units)",
     **dict.fromkeys(["initial.v", "sample.v"], "coord_units per s"),
     **dict.fromkeys(["initial.t_end", "sample.t", "integration.output_step", "integration.mujoco_step"], "s"),
+    **dict.fromkeys(["budget.call", "budget.case"], "s"),
+    "budget.memory": "GB (10^9 bytes)",
     "tolerance.pointwise.force_scale": "N",
     "tolerance.pointwise.moment_scale": "N m",
     "scene.driven.<name>.angle": "rad or m (the joint's)",

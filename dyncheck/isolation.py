@@ -1,0 +1,338 @@
+"""Code dyncheck does not control, bounded: a researcher's derivation may exit, hang, allocate without bound or end
+its process.  Every call into it runs under `guarded_call`, which records what runs (the file, the function, the
+state, since when) and turns its exit (SystemExit), an overrun of its time budget or a MemoryError into a
+DerivationError naming all of that: the checks make of it a failing row, as of any error of a model.  What a
+process cannot survive (os._exit, a signal, a hang in compiled code) is seen from outside: each case runs in a
+forked process of its own (`run_each`), within a memory cap and a time budget, and the console command itself runs
+under `supervised`, so that foreign code can never end dyncheck with an exit code of its choosing.
+docs/isolation.md says what a user sees."""
+
+import faulthandler
+import mmap
+import os
+import pickle
+import resource
+import signal
+import struct
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from multiprocessing import connection, get_context
+
+import numpy as np
+
+MAX_SHOWN = 16  # coordinates a record keeps of a state (a message shows no more)
+LABEL_BYTES = 2048
+# The record's layout, in one page shared with the forked process that reads it: a header of doubles
+# (active, t, started, coordinates n, the state's q and v), the function's name and the label (what runs).
+HEADER = 4 + 2 * MAX_SHOWN
+NAME_AT, LABEL_AT, DONE_AT = 8 * HEADER, 8 * HEADER + 64, 8 * HEADER + 64 + LABEL_BYTES
+# The defaults of a case's budget (Case.budget).  A call of a derivation costs microseconds to milliseconds (a
+# generated 7-dof inverse dynamics: 2-6 ms); 1000 of them is no honest call's time, and 5 s is a floor that
+# no machine's load reaches.  The checks of a case make at most about a million evaluations of it (the double
+# pendulum's runs: 640,000 DOP853 evaluations), so a million calls' cost bounds a case, with 900 s as its floor
+# (the book's slowest case takes 7 s, a 7-dof arm 3 minutes).  An import may compile or lambdify for seconds.
+CALL_FLOOR, CALLS_PER_BUDGET = 5.0, 1000
+CASE_FLOOR, CALLS_PER_CASE = 900.0, 10**6
+IMPORT_BUDGET = 60.0
+TICK = 0.05  # s between two looks of the watchdog: a call is stopped within this of its budget
+OVERRUN_SIGNAL = signal.SIGUSR2  # the watchdog's to the main thread (SIGALRM is the user's, and pytest's)
+
+
+class DerivationError(Exception):
+    """Foreign code that exited, overran its time budget or ran out of memory, said with where and when."""
+
+
+class CallTimeout(BaseException):
+    """Raised into foreign code past its budget: a BaseException, so that its own `except Exception` lets it out."""
+
+
+@dataclass(frozen=True)
+class Budget:
+    """How long one call of a case's own code may run (s), how long its whole case (s, in its own process), and
+    how much memory that process may map (bytes); docs/isolation.md argues the defaults."""
+    call: float
+    case: float
+    memory: int
+
+
+class Record:
+    """What foreign code runs now, in memory that a forked process shares with the one that forked it: written at
+    every call (about 0.7 us), read by the parent when the child dies.  `done(code)` marks a normal end."""
+
+    def __init__(self):
+        self._memory = mmap.mmap(-1, DONE_AT + 16)  # anonymous and shared: a forked child writes, its parent reads
+        self._doubles = np.frombuffer(self._memory, dtype=float, count=HEADER)
+        self._name = self._label = None
+
+    def enter(self, label, name, args):
+        if label != self._label:
+            self._write(LABEL_AT, LABEL_BYTES, label)
+            self._label = label
+        if name != self._name:
+            self._write(NAME_AT, 64, name)
+            self._name = name
+        d = self._doubles
+        d[1], d[2], d[3] = np.nan, time.monotonic(), 0
+        if len(args) >= 3 and np.ndim(args[1]) == 1 and np.ndim(args[2]) == 1:  # (t, q, v, ...)
+            t, q, v = args[:3]
+            n = min(len(q), MAX_SHOWN)
+            d[1], d[3] = float(t), n
+            d[4:4 + n], d[4 + MAX_SHOWN:4 + MAX_SHOWN + n] = q[:n], v[:n]
+        d[0] = 1.0
+
+    def leave(self):
+        self._doubles[0] = 0.0
+
+    def _write(self, at, size, text):
+        data = text.encode()[:size - 2]
+        self._memory[at:at + 2 + len(data)] = struct.pack("<H", len(data)) + data
+
+    def _read(self, at):
+        (size,) = struct.unpack("<H", self._memory[at:at + 2])
+        return self._memory[at + 2:at + 2 + size].decode(errors="replace")
+
+    def done(self, code):
+        self._memory[DONE_AT:DONE_AT + 9] = struct.pack("<?q", True, code)
+
+    @property
+    def loading(self):
+        """Whether the process is loading cases (bad input ends it with exit 2), rather than running them."""
+        return self._memory[DONE_AT + 9] == 1
+
+    @loading.setter
+    def loading(self, value):
+        self._memory[DONE_AT + 9] = int(value)
+
+    @property
+    def code(self):
+        """The exit code that `done` recorded, or None where the process ended otherwise."""
+        finished, code = struct.unpack("<?q", self._memory[DONE_AT:DONE_AT + 9])
+        return code if finished else None
+
+    def describe(self):
+        """The call that was running, in words ("equations.py: accelerations at t = 0.1 s, q = [...], v = [...],
+        after 2.5 s"), or None where none was."""
+        d = self._doubles
+        if d[0] != 1.0:
+            return None
+        return in_words(self._read(LABEL_AT), self._read(NAME_AT), d[1], d[4:4 + int(d[3])],
+                        d[4 + MAX_SHOWN:4 + MAX_SHOWN + int(d[3])], time.monotonic() - d[2])
+
+
+def in_words(label, name, t, q, v, elapsed):
+    state = "" if np.isnan(t) else (f" at t = {t:.6g} s, q = [{', '.join(f'{x:.6g}' for x in q)}], "
+                                     f"v = [{', '.join(f'{x:.6g}' for x in v)}]")
+    return f"{label}: {name}{state}, after {elapsed:.3g} s"
+
+
+RECORD = Record()  # this process's; a forked child given its own (run_each) writes there
+
+
+class _Watchdog:
+    """A thread that sends OVERRUN_SIGNAL to the main thread when the call running there has outrun its deadline
+    (and every second after, should the call swallow the CallTimeout): the signal ends a sleep or a Python loop."""
+
+    def __init__(self):
+        self.deadline = None  # the running call's, time.monotonic(); None between calls
+        self.pid = os.getpid()
+        self.main = threading.main_thread().ident
+        signal.signal(OVERRUN_SIGNAL, _overrun)
+        threading.Thread(target=self._watch, daemon=True, name="dyncheck-watchdog").start()
+
+    def _watch(self):
+        last = 0.0
+        while True:
+            time.sleep(TICK)
+            deadline, now = self.deadline, time.monotonic()
+            if deadline is not None and now > deadline and now - last > 1.0:
+                last = now
+                signal.pthread_kill(self.main, OVERRUN_SIGNAL)
+
+
+_WATCHDOG = None
+
+
+def _overrun(signum, frame):
+    if _WATCHDOG is not None and _WATCHDOG.deadline is not None and time.monotonic() > _WATCHDOG.deadline:
+        raise CallTimeout
+
+
+def _watchdog():
+    """This process's watchdog (a forked child has none of its parent's threads: it starts its own), or None off
+    the main thread, where no signal handler can be set (a Dask worker's threads): their calls have no deadline."""
+    global _WATCHDOG
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    if _WATCHDOG is None or _WATCHDOG.pid != os.getpid():
+        _WATCHDOG = _Watchdog()
+    return _WATCHDOG
+
+
+def guarded_call(label, name, budget, function, *args):
+    """function(*args), foreign code: recorded, within `budget` s, its exit or overrun a DerivationError."""
+    watchdog = _watchdog()
+    RECORD.enter(label, name, args)
+    start = time.monotonic()
+    if watchdog is not None:
+        watchdog.deadline = start + budget
+    where = lambda: in_words(label, name, *(_state(args) + (time.monotonic() - start,)))
+    try:
+        try:
+            return function(*args)
+        finally:
+            if watchdog is not None:
+                watchdog.deadline = None
+            RECORD.leave()
+    except SystemExit as error:
+        raise DerivationError(f"{where()}: it ended the process (sys.exit({error.code!r}))") from None
+    except CallTimeout:
+        raise DerivationError(f"{where()}: stopped, past its budget of {budget:g} s for one call "
+                              "(case.toml [budget] call)") from None
+    except MemoryError:
+        raise DerivationError(f"{where()}: it ran out of memory (the case's cap: case.toml [budget] memory)") from None
+
+
+def _state(args):
+    if len(args) >= 3 and np.ndim(args[1]) == 1 and np.ndim(args[2]) == 1:
+        return float(args[0]), np.asarray(args[1], dtype=float), np.asarray(args[2], dtype=float)
+    return np.nan, (), ()
+
+
+class Guarded:
+    """A module or model of foreign code whose functions each run under guarded_call, within `budget` s a call
+    (which Case sets from their measured cost once it has one); its other attributes (classes among them) as
+    they are."""
+
+    def __init__(self, target, label, budget):
+        self._target, self.label, self.budget = target, label, budget
+        self.cost = 0.0  # s, of one call, once measured (Case._derived)
+        self.__doc__ = getattr(target, "__doc__", None)  # the module's, which a derived case's title is read from
+
+    def __getattr__(self, name):
+        attribute = getattr(self._target, name)
+        if name.startswith("_") or not callable(attribute) or isinstance(attribute, type):
+            return attribute
+        method = lambda *args: guarded_call(self.label, name, self.budget, attribute, *args)
+        self.__dict__[name] = method  # looked up once
+        return method
+
+
+# -- whole processes --------------------------------------------------------------------------------------------
+
+def run_each(items, work, workers, budget_of):
+    """work(item) for each item, each in a forked process of its own, `workers` at a time, in the order given:
+    yields (index, ("result", value)), or (index, ("lost", why)) where the process died, overran its case budget
+    (budget_of(item).case s: it is killed) or raised; a KeyboardInterrupt there is raised here.  Each process maps at most budget_of(item).memory bytes and
+    ignores Ctrl-C (the terminal sends it to the whole group): this one stops them all (KeyboardInterrupt)."""
+    context = get_context("fork")
+    waiting, running = list(enumerate(items)), {}  # connection -> (index, process, record, deadline, budget)
+    try:
+        while waiting or running:
+            while waiting and len(running) < workers:
+                index, item = waiting.pop(0)
+                budget = budget_of(item)
+                record = Record()
+                receive, send = context.Pipe(duplex=False)
+                process = context.Process(target=_child, args=(work, item, send, record, budget.memory), daemon=True)
+                process.start()
+                send.close()
+                running[receive] = (index, process, record, time.monotonic() + budget.case, budget)
+            ready = connection.wait(list(running) + [p.sentinel for _, p, _, _, _ in running.values()],
+                                    timeout=max(0.0, min(d for _, _, _, d, _ in running.values()) - time.monotonic()))
+            for receive, (index, process, record, deadline, budget) in list(running.items()):
+                outcome = None
+                if receive in ready or process.sentinel in ready:
+                    try:
+                        outcome = receive.recv()
+                    except (EOFError, OSError, pickle.UnpicklingError):
+                        process.join()
+                        outcome = ("lost", _death(process, record))
+                elif time.monotonic() > deadline:
+                    running_call = record.describe()
+                    process.kill()
+                    outcome = ("lost", f"stopped after its budget of {budget.case:g} s for the whole case "
+                                       f"(case.toml [budget] case)" + (f", during {running_call}" if running_call else ""))
+                if outcome is not None:
+                    process.join()
+                    receive.close()
+                    del running[receive]
+                    if outcome[0] == "interrupted":
+                        raise KeyboardInterrupt
+                    yield index, outcome
+    finally:
+        for receive, (_, process, _, _, _) in running.items():
+            process.kill()
+            process.join()
+            receive.close()
+
+
+def machine_memory():
+    """The machine's physical memory, bytes."""
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def _death(process, record):
+    code = process.exitcode
+    how = (f"killed by signal {signal.Signals(-code).name}" if code < 0 else f"exit code {code}")
+    call = record.describe()
+    return f"its process ended ({how})" + (f" during {call}" if call else "")
+
+
+def _child(work, item, send, record, memory):
+    global RECORD
+    RECORD = record
+    faulthandler.disable()  # a crash is the case's row, not a dump of this process's threads (pytest enables it)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+    try:
+        outcome = ("result", work(item))
+    except KeyboardInterrupt:  # raised by code, since this process ignores Ctrl-C: an interruption all the same
+        outcome = ("interrupted", None)
+    except DerivationError as error:
+        outcome = ("lost", str(error))
+    except Exception as error:  # the checks stopped where no row could hold the error: the case's one row says it
+        outcome = ("lost", f"{type(error).__name__}: {error}")
+    try:
+        send.send(outcome)
+    except MemoryError:
+        send.send(("lost", "its results did not fit in the case's memory cap (case.toml [budget] memory)"))
+    send.close()
+    os._exit(0)
+
+
+def supervised(main):
+    """main() in a forked process, its exit code passed on only where main returned it: a process ended by foreign
+    code (os._exit, a signal) gives exit 2 where it was loading a case, else 1, with a line saying what ran."""
+    context = get_context("fork")
+    RECORD.leave()
+    process = context.Process(target=_main_child, args=(main, RECORD))
+    process.start()
+    # The child gets Ctrl-C too (the terminal sends it to the group), and says it was interrupted; a SIGTERM sent to
+    # this process alone (a CI job's time-out) is passed on.
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN), signal.signal(signal.SIGTERM, lambda *_: process.terminate())
+    try:
+        process.join()
+    finally:
+        signal.signal(signal.SIGINT, previous[0])
+        signal.signal(signal.SIGTERM, previous[1])
+    code = RECORD.code
+    if code is not None:
+        return code
+    print(f"dyncheck: error: {_death(process, RECORD)}: a case's own code ended dyncheck", file=sys.stderr)
+    return 2 if RECORD.loading else 1
+
+
+def _main_child(main, record):
+    try:
+        code = main()
+    except SystemExit as error:  # argparse's --help and usage errors
+        code = error.code if isinstance(error.code, int) else (0 if error.code is None else 2)
+    except KeyboardInterrupt:  # wherever Ctrl-C lands that main does not expect it
+        print("dyncheck: interrupted", file=sys.stderr)
+        code = 130
+    sys.stdout.flush()
+    sys.stderr.flush()
+    record.done(code)
+    os._exit(code)

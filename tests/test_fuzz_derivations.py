@@ -1,0 +1,171 @@
+"""A researcher's derivation as hostile code (issue 34), beside tests/test_fuzz.py's hostile case files: modules
+that exit, raise, loop, sleep, allocate, kill their process or return what is not a vector of numbers, in a
+region of the state space few random states fall into; and derivations wrong only in a region of 5 % of it.
+Each must give a failing row that says what happened, within its budget: never exit 0, never a traceback, never a
+hang.  DYNCHECK_FUZZ_EXAMPLES raises the number of random regions (the long form: `pytest -m slow`)."""
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dyncheck
+from dyncheck.checks import pointwise
+from dyncheck.cli import exit_code, run_cases
+
+GUIDE = Path(__file__).resolve().parent.parent / "docs" / "own-case.md"
+FILES = {}  # the guide's first scene.xml and equations.py, as written (before its planted error)
+for name, text in re.findall(r"```(?:xml|python) file=cart_pendulum/(\S+)\n(.*?)```", GUIDE.read_text(), re.S):
+    FILES.setdefault(name, text)
+CALL_BUDGET = 0.3  # s: a case.toml [budget] call, so that a looping derivation costs the test seconds, not minutes
+
+
+def make_case(folder, equations, toml=""):
+    """The guide's cart-pendulum in `folder`/cart_pendulum with `equations` for its equations.py."""
+    case = folder / "cart_pendulum"
+    case.mkdir(parents=True)
+    (case / "scene.xml").write_text(FILES["scene.xml"])
+    (case / "equations.py").write_text(equations)
+    if toml:
+        (case / "case.toml").write_text(toml)
+    return folder
+
+
+def misbehaving(action, where="abs(q[1]) > 2.5", function="accelerations"):
+    """The guide's correct equations, with `action` done by `function` where `where` holds (theta beyond 2.5 rad:
+    a few random states, and no state of the runs, which stay within 0.5 rad)."""
+    source = FILES["equations.py"]
+    head = f"def {function}("
+    start = source.index(head)
+    body = source.index(":\n", start) + 2
+    guard = textwrap.indent(f"if {where}:\n" + textwrap.indent(action, "    ") + "\n", "    ")
+    return "import os, sys, time, signal, ctypes\n" + source[:body] + guard + source[body:]
+
+
+BUDGETED = f"[budget]\ncall = {CALL_BUDGET}\n"
+
+# (name, what the derivation does in its region, the words its failing row must hold)
+MISCHIEF = [
+    ("sys.exit(0)", "sys.exit(0)", "it ended the process (sys.exit(0))"),
+    ("raise SystemExit", "raise SystemExit", "it ended the process (sys.exit(None))"),
+    ("os._exit(0)", "os._exit(0)", "its process ended (exit code 0) during cart_pendulum/equations.py: accelerations"),
+    ("SIGKILL", "os.kill(os.getpid(), signal.SIGKILL)", "killed by signal SIGKILL"),
+    ("segfault", "ctypes.string_at(0)", "killed by signal SIGSEGV"),
+    ("loop", "while True: pass", f"past its budget of {CALL_BUDGET:g} s for one call"),
+    ("sleep", "time.sleep(1e6)", f"past its budget of {CALL_BUDGET:g} s for one call"),
+    ("swallowed time-out", "while True:\n    try:\n        time.sleep(1e6)\n    except BaseException:\n        pass",
+     "stopped after its budget of 3 s for the whole case"),  # it outlives every CallTimeout: its process is killed
+    ("40 GB", "x = np.ones(5 * 10**9)", "it ran out of memory"),
+    ("raise", "raise KeyError('theta')", "KeyError: 'theta'"),
+    ("NaN", "return np.array([np.nan, 0.0])", "is nan at random state"),
+    ("wrong shape", "return np.zeros(3)", "not (2,)"),
+]
+
+
+@pytest.mark.parametrize("name, action, said", MISCHIEF, ids=[m[0] for m in MISCHIEF])
+def test_a_derivation_misbehaving_in_a_small_region_fails_saying_what_it_did(name, action, said, tmp_path):
+    toml = BUDGETED + ("case = 3\n" if name == "swallowed time-out" else "")
+    folder = make_case(tmp_path, misbehaving(action), toml)
+    case = dyncheck.load_case("cart_pendulum", folder)
+    start = time.perf_counter()
+    results, interrupted = run_cases([case], localise=False)
+    elapsed = time.perf_counter() - start
+    assert interrupted is None and exit_code(results) == 1
+    failing = [r for r in results[0].rows if not r.status.ok]
+    assert any(said in (r.detail or "") for r in failing), [r.detail for r in failing][:5]
+    assert elapsed < 60, f"{name}: {elapsed:.0f} s"
+
+
+def test_the_state_of_a_misbehaving_call_is_in_its_row(tmp_path):
+    folder = make_case(tmp_path, misbehaving("os._exit(3)"))
+    results, _ = run_cases([dyncheck.load_case("cart_pendulum", folder)], localise=False)
+    (row,) = results[0].rows
+    assert re.search(r"accelerations at t = \S+ s, q = \[\S+, -?2\.[5-9]\d*\], v = \[", row.detail), row.detail
+
+
+def test_a_derivation_that_exits_at_import_or_on_load_is_bad_input_for_the_command(tmp_path):
+    """Through the console command, whose supervisor sees the process end: exit 2 while loading, never 0."""
+    for where, source in (("import", "import os\nos._exit(0)\n" + FILES["equations.py"]),
+                          ("load", misbehaving("os._exit(0)", where="True"))):
+        folder = make_case(tmp_path / where, source)
+        for command in ("run", "list"):
+            done = subprocess.run(["dyncheck", command, "--cases", str(folder)], capture_output=True, text=True,
+                                  timeout=120)
+            assert done.returncode == 2, (where, command, done.stdout[-500:], done.stderr[-500:])
+            assert "a case's own code ended dyncheck" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_ctrl_c_during_a_run_exits_130_without_a_traceback(tmp_path):
+    folder = make_case(tmp_path, misbehaving("time.sleep(1e6)", where="True"), "[budget]\ncall = 100\n")
+    process = subprocess.Popen(["dyncheck", "run", "--cases", str(folder)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, start_new_session=True)
+    time.sleep(8)  # loading, then the first call that sleeps
+    os.killpg(process.pid, signal.SIGINT)  # as a terminal sends it: to the whole group
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err[-500:]
+    assert "Traceback" not in err and "interrupted" in err
+
+
+# -- wrong only in a region of 5 % of the state space ------------------------------------------------
+
+def regions(case, count, seed):
+    """`count` random regions of at most 5 % of the case's state space: an interval of one of t, x, theta, their
+    rates (times within the horizon), or a box over two of them whose sides multiply to 5 % of their ranges."""
+    sample = case.spec["sample"]
+    names = ["t", "q[0]", "q[1]", "v[0]", "v[1]"]
+    box = [(0.0, case.initial[2])] + [tuple(case.value(x) for x in pair) for pair in sample["q"] + sample["v"]]
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        axes = rng.choice(len(names), size=rng.integers(1, 3), replace=False)
+        share = 0.05 ** (1 / len(axes))
+        condition = []
+        for axis in axes:
+            lo, hi = box[axis]
+            width = share * (hi - lo)
+            start = rng.uniform(lo, hi - width)
+            condition.append(f"{start!r} <= {names[axis]} <= {start + width!r}")
+        yield " and ".join(condition)
+
+
+WRONG = ["return np.array([np.nan, 0.0])", "return -accelerations_right(t, q, v, p)",
+         "return accelerations_right(t, q, v, p) + np.array([0.0, 1e-3])"]
+
+
+def region_variant(where, wrong):
+    source = FILES["equations.py"].replace("def accelerations(", "def accelerations_right(")
+    return source + (f"\n\ndef accelerations(t, q, v, p):\n    if {where}:\n        {wrong}\n"
+                     f"    return accelerations_right(t, q, v, p)\n")
+
+
+@pytest.mark.parametrize("count", [int(os.environ.get("DYNCHECK_FUZZ_EXAMPLES", "20"))])
+def test_a_derivation_wrong_only_in_a_region_of_5_percent_fails(count, tmp_path):
+    right = dyncheck.load_case("cart_pendulum", make_case(tmp_path / "right", FILES["equations.py"]))
+    missed = []
+    for i, where in enumerate(regions(right, count, seed=34)):
+        folder = make_case(tmp_path / f"region{i}", region_variant(where, WRONG[i % len(WRONG)]))
+        rows, _ = pointwise(dyncheck.load_case("cart_pendulum", folder))
+        if all(r.status.ok for r in rows):
+            missed.append(where)
+    assert not missed, f"{len(missed)} of {count} regions passed: {missed}"
+
+
+def test_the_regions_test_can_fail(tmp_path):
+    """A region between two neighbouring states' theta holds no state: there the same wrong derivation passes, so
+    the failures above mean the states reached the regions."""
+    right = dyncheck.load_case("cart_pendulum", make_case(tmp_path / "right", FILES["equations.py"]))
+    theta = np.sort([q[1] for _, q, _ in right.sample_states()])
+    gap = np.argmax(np.diff(theta))
+    where = f"{theta[gap]!r} < q[1] < {theta[gap + 1]!r}"
+    folder = make_case(tmp_path / "gap", region_variant(where, WRONG[0]))
+    rows, _ = pointwise(dyncheck.load_case("cart_pendulum", folder))
+    assert all(r.status.ok for r in rows)
+    folder = make_case(tmp_path / "state", region_variant(f"{theta[gap]!r} <= q[1] < {theta[gap + 1]!r}", WRONG[0]))
+    rows, _ = pointwise(dyncheck.load_case("cart_pendulum", folder))
+    assert not all(r.status.ok for r in rows)  # the same region with one state in it
