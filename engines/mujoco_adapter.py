@@ -814,7 +814,8 @@ def _refuse_nan(path):
 
 
 def _write(spec, location, value):
-    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia_about_origin, joint stiffness, option gravity."""
+    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia_about_origin, joint stiffness, damping, springref
+    (a hinge's in rad), option gravity."""
     element, name, attribute = location["element"], location.get("name"), location.get("attribute")
     index = location.get("index", 0)
     if element == "option":
@@ -825,6 +826,8 @@ def _write(spec, location, value):
         target = spec.joint(name)
     if target is None:
         raise KeyError(f"no {element} named '{name}'")
+    if attribute == "springref" and spec.compiler.degree and target.type == mujoco.mjtJoint.mjJNT_HINGE:
+        value = math.degrees(value)  # the case's rad, the file's degrees (<compiler angle>, MJCF's default degree)
     if attribute == "inertia_about_origin":
         # The moment of inertia about body axis `index` through the body origin: subtract the
         # parallel-axis term of the centre of mass and the body's ball-joint armature (see the top).

@@ -360,6 +360,9 @@ RULES = [
     Rule("MJCF", "body-camera", "*", NO_EFFECT, "rendering"),
     Rule("MJCF", "body-light", "*", NO_EFFECT, "rendering"),
     Rule("MJCF", "body-attach", "*", NO_EFFECT, "inserts bodies, which are compared"),
+    Rule("MJCF", "body-frame", "*", REFUSED, "where Pinocchio reads the MJCF (no scene.urdf): its MJCF reader (4.1)"
+         " drops the bodies inside it without a word, which MuJoCo's compiler places in the frame; with a scene.urdf"
+         " they are compared", "write its pos and orientation into the bodies inside it"),
     Rule("MJCF", "body-flexcomp", "*", REFUSED, "deformable bodies; " + NO_COUNTERPART),
     Rule("MJCF", "body-plugin", "*", REFUSED, "engine plugins; " + NO_COUNTERPART),
     Rule("MJCF", "geom-plugin", "*", REFUSED, "engine plugins; " + NO_COUNTERPART),
