@@ -727,8 +727,8 @@ def _text(values):
 
 DEFAULT_OPTION = mujoco.MjModel.from_xml_string("<mujoco/>").opt
 OPTION_ATTRIBUTES = {"disableactuator": "actuatorgroupdisable"}  # MjOption's fields named otherwise in <option>
-FLAGS = [(bits, field, prefix, value) for bits, field, prefix, value in (
-    (mujoco.mjtDisableBit, "disableflags", "mjDSBL_", "disable"), (mujoco.mjtEnableBit, "enableflags", "mjENBL_", "enable"))]
+FLAGS = ((mujoco.mjtDisableBit, "disableflags", "mjDSBL_", "disable"),  # each <flag>'s bits, and its value when set
+         (mujoco.mjtEnableBit, "enableflags", "mjENBL_", "enable"))
 
 
 def options_set(opt):

@@ -263,7 +263,9 @@ RULES = [
       for flag in ("constraint", "equality")],
     Rule("MJCF", "option-flag", "frictionloss", NO_EFFECT, "switches off dry friction, which is refused"),
     Rule("MJCF", "option-flag", "limit", NO_EFFECT, "switches off joint and tendon limits, which are refused"),
-    Rule("MJCF", "option-flag", "contact", NO_EFFECT, "switches off contacts: " + NO_CONTACTS),
+    Rule("MJCF", "option-flag", "contact", NO_EFFECT, "switches off contacts, and no two geoms can touch (see geom"
+         " contype)"),
+    Rule("MJCF", "option-flag", "override", NO_EFFECT, "overrides contacts' parameters: " + NO_CONTACTS),
     Rule("MJCF", "option-flag", "spring", REFUSED, "disabling springs: the case's stiffness would not act"),
     Rule("MJCF", "option-flag", "damper", REFUSED, "disabling dampers: MuJoCo alone would drop the joints' damping,"
          " which the Pinocchio side applies and the case binds"),
@@ -281,7 +283,7 @@ RULES = [
     Rule("MJCF", "option-flag", "filterparent", NO_EFFECT, "adds parent-child pairs of geoms to contacts; every"
          " pair of geoms on two bodies that could touch is refused, parent and child included (geom contype)"),
     *[Rule("MJCF", "option-flag", collision, NO_EFFECT, "collision detection: " + NO_CONTACTS)
-      for collision in ("midphase", "nativeccd", "multiccd", "speculative", "override")],
+      for collision in ("midphase", "nativeccd", "multiccd", "speculative")],
     Rule("MJCF", "option-flag", "sensor", REFUSED, "disabling sensors: the reactions would read zeros"),
     Rule("MJCF", "option-flag", "eulerdamp", REFUSED, "makes MuJoCo's Euler integrator step the joints' damping"
          " explicitly, unlike the Euler runs that body-joint damping describes (measured: 2.5e-5 of the tutorial's"
