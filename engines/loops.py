@@ -94,10 +94,6 @@ class MujocoLoops:
 
     def _refuse_unsupported(self):
         m, path = self.m, self.path
-        for flag in ("equality", "constraint"):
-            if m.neq and m.opt.disableflags & getattr(mujoco.mjtDisableBit, "mjDSBL_" + flag.upper()):
-                raise _refusal(path, "<option>", f'<flag {flag}="disable">', "opens every loop in MuJoCo alone",
-                               "remove the flag")
         for e in range(m.neq):
             kind = mujoco.mjtEq(m.eq_type[e]).name[5:].lower()
             owner = f"equality '{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, e) or e}'"

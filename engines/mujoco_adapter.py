@@ -80,6 +80,9 @@ class MujocoModel:
             raise scene_rules.refusal(self.path, "MJCF", *unmodelled)
         if self.loops.loops:
             self._refuse_unclosable(scene)
+        # The evaluations' mj_forward under one integrator: the file's "discrete" changes a loop's accelerations
+        # (by 51 rad/s^2 of the slider-crank's phi''); the others give the same numbers.  Runs set their own (`stepping`).
+        self.m.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
         if not self.m.neq:
             # No constraint row can arise but a loop's (`_unmodelled` refuses contacts, joint limits, friction loss,
             # tendons): MuJoCo's constraint stage, a sixth of an RK4 step here, would find none.  The same numbers.
@@ -562,22 +565,18 @@ class MujocoModel:
                 ends.append((force_q.T, force_v.T))  # mjd_inverseFD's are transposed: a row per perturbed dof
             return [(forward + backward) / 2 for forward, backward in zip(*ends)]
 
-        # mjd_inverseFD refuses RK4; mj_inverse ignores the integrator (in continuous time: invdiscrete is refused)
-        integrator, self.m.opt.integrator = self.m.opt.integrator, mujoco.mjtIntegrator.mjINT_EULER
-        try:
-            mujoco.mj_inverse(self.m, self.d)
-            inertial = self.d.qfrc_inverse - self.d.qfrc_bias + self.d.qfrc_passive  # M qacc
-            size = max(np.max(np.abs(x)) for x in (inertial, self.d.qfrc_bias, self.d.qfrc_passive))
-            # the step whose estimate, truncation (falling as step^4) plus rounding (growing as 1/step), is least:
-            # a fast spin curves the forces on a shorter scale than the default step's
-            best = None
-            for step in scene_rules.DIFFERENCE_STEPS:
-                (force_q, force_v), truncation = scene_rules.extrapolated_differences(centred, step)
-                error = truncation + scene_rules.difference_rounding(size, step)
-                if best is None or error < best[2]:
-                    best = force_q, force_v, error
-        finally:
-            self.m.opt.integrator = integrator
+        # the evaluation model's Euler (mjd_inverseFD refuses RK4); mj_inverse in continuous time: invdiscrete is refused
+        mujoco.mj_inverse(self.m, self.d)
+        inertial = self.d.qfrc_inverse - self.d.qfrc_bias + self.d.qfrc_passive  # M qacc
+        size = max(np.max(np.abs(x)) for x in (inertial, self.d.qfrc_bias, self.d.qfrc_passive))
+        # the step whose estimate, truncation (falling as step^4) plus rounding (growing as 1/step), is least:
+        # a fast spin curves the forces on a shorter scale than the default step's
+        best = None
+        for step in scene_rules.DIFFERENCE_STEPS:
+            (force_q, force_v), truncation = scene_rules.extrapolated_differences(centred, step)
+            error = truncation + scene_rules.difference_rounding(size, step)
+            if best is None or error < best[2]:
+                best = force_q, force_v, error
         return best
 
     def points(self, t, q):
@@ -726,6 +725,29 @@ def _text(values):
     return " ".join(f"{x:g}" for x in np.atleast_1d(values))
 
 
+DEFAULT_OPTION = mujoco.MjModel.from_xml_string("<mujoco/>").opt
+OPTION_ATTRIBUTES = {"disableactuator": "actuatorgroupdisable"}  # MjOption's fields named otherwise in <option>
+FLAGS = ((mujoco.mjtDisableBit, "disableflags", "mjDSBL_", "disable"),  # each <flag>'s bits, and its value when set
+         (mujoco.mjtEnableBit, "enableflags", "mjENBL_", "enable"))
+
+
+def options_set(opt):
+    """(element, attribute, value) of every <option> attribute and <flag> that `opt` (an MjOption) holds otherwise
+    than MuJoCo's default, walked from MuJoCo's own lists (MjOption's fields, mjtDisableBit, mjtEnableBit), named as
+    in MJCF: ("option", "density", "1.2"), ("option-flag", "damper", "disable")."""
+    for field in dir(DEFAULT_OPTION):
+        if field.startswith("_") or field in ("disableflags", "enableflags"):
+            continue
+        value = getattr(opt, field)
+        if np.any(np.asarray(value) != np.asarray(getattr(DEFAULT_OPTION, field))):
+            yield "option", OPTION_ATTRIBUTES.get(field, field), (mujoco.mjtSolver(value).name[6:] if field == "solver"
+                                                                  else _text(value))
+    for bits, field, prefix, value in FLAGS:
+        for name, bit in bits.__members__.items():
+            if name.startswith(prefix) and (getattr(opt, field) ^ getattr(DEFAULT_OPTION, field)) & bit:
+                yield "option-flag", name[len(prefix):].lower(), value
+
+
 def _unmodelled(m, scene):
     """What the compiled model holds that dyncheck does not model, as (element, attribute, owner, value) of
     engines.scene.RULES: forces and constraints that the Pinocchio side lacks, joints the case does not move."""
@@ -736,15 +758,10 @@ def _unmodelled(m, scene):
                                  (m.nflex, "deformable-flex", obj.mjOBJ_FLEX), (m.npair, "contact-pair", obj.mjOBJ_PAIR)):
         if count:
             yield element, "*", named(kind, 0), ""
-    for attribute in ("density", "viscosity"):
-        if getattr(m.opt, attribute):
-            yield "option", attribute, "<option>", _text(getattr(m.opt, attribute))
-    for flag in ("gravity", "spring", "sensor"):
-        if m.opt.disableflags & getattr(mujoco.mjtDisableBit, "mjDSBL_" + flag.upper()):
-            yield "option-flag", flag, "<option>", "disable"
-    for flag in ("sleep", "invdiscrete"):
-        if m.opt.enableflags & getattr(mujoco.mjtEnableBit, "mjENBL_" + flag.upper()):
-            yield "option-flag", flag, "<option>", "enable"
+    for element, attribute, value in options_set(m.opt):
+        found = scene_rules.judged("MJCF", element, attribute)
+        if found.status == scene_rules.REFUSED and (m.neq or not found.with_loops):
+            yield element, attribute, "<option>", value
     for g1 in range(m.ngeom):  # a pair of geoms on two bodies that MuJoCo's contact filter lets touch
         for g2 in range(g1 + 1, m.ngeom):
             if m.geom_bodyid[g1] == m.geom_bodyid[g2]:
@@ -797,7 +814,8 @@ def _refuse_nan(path):
 
 
 def _write(spec, location, value):
-    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia_about_origin, joint stiffness, option gravity."""
+    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia_about_origin, joint stiffness, damping, springref
+    (a hinge's in rad), option gravity."""
     element, name, attribute = location["element"], location.get("name"), location.get("attribute")
     index = location.get("index", 0)
     if element == "option":
@@ -808,6 +826,8 @@ def _write(spec, location, value):
         target = spec.joint(name)
     if target is None:
         raise KeyError(f"no {element} named '{name}'")
+    if attribute == "springref" and spec.compiler.degree and target.type == mujoco.mjtJoint.mjJNT_HINGE:
+        value = math.degrees(value)  # the case's rad, the file's degrees (<compiler angle>, MJCF's default degree)
     if attribute == "inertia_about_origin":
         # The moment of inertia about body axis `index` through the body origin: subtract the
         # parallel-axis term of the centre of mass and the body's ball-joint armature (see the top).

@@ -48,7 +48,7 @@ class PinocchioModel:
             else:
                 self.m = pin.buildModelFromUrdf(self.path)
         except (ValueError, RuntimeError) as error:
-            raise ValueError(f"{self.path}: {error}") from error
+            raise ValueError(f"{self.path}: {_reader_error(self.path, error)}") from error
         try:
             document = ET.parse(self.path).getroot()
         except ET.ParseError as error:  # stricter than urdfdom's parser
@@ -138,6 +138,9 @@ class PinocchioModel:
         a ball joint's armature a on a body on the world as what it is there, the isotropic inertia a I about
         the joint (MujocoModel.tree), held in the body's inertia so that `tree`, `read` and `_write` count it
         as the URDF side's inertia does.  Refuses what the parser reads otherwise than MuJoCo's compiler."""
+        for frame in document.iter("frame"):
+            owner = f"frame '{frame.get('name')}'" if frame.get("name") else "a frame"
+            raise scene_rules.refusal(self.path, "MJCF", "body-frame", "*", owner, "")
         misread = next(_misread(document), None)
         if misread:
             raise ValueError(f"{self.path}: {misread}")
@@ -620,6 +623,19 @@ def _is_mjcf(path):
     return str(path).endswith(".xml")
 
 
+def _reader_error(path, error):
+    """Pinocchio's reader's error in words: its message without the C++ file and function it comes from, and
+    for an MJCF body that it finds no inertia of, which one and what to write."""
+    message = str(error).split("message:", 1)[-1].strip()
+    if "Cannot get inertia from geom" not in message:
+        return message
+    root = ET.parse(path).getroot()  # parsed by Pinocchio's reader already
+    body = next(b.get("name", "?") for b in root.iter("body") if b.find("geom") is not None and b.find("inertial") is None)
+    return (f"body '{body}' has a geom and no <inertial>, and <compiler inertiafromgeom=\"false\"> keeps MuJoCo from "
+            f"taking its inertia from its geoms: Pinocchio's MJCF reader then finds none and stops; give body '{body}' "
+            "an <inertial>, or remove inertiafromgeom=\"false\"")
+
+
 def _equalities(path):
     """The <equality> constraints of an MJCF, in the file's order (Pinocchio's reader keeps it, not their names)."""
     try:
@@ -675,37 +691,42 @@ def _misread(document):
 
 
 JOINT_VALUES = {"stiffness": "spring", "springref": "spring's rest position", "damping": "damper"}
+JOINT_DEFAULTS = {**dict.fromkeys(JOINT_VALUES, "0"), "type": "hinge"}  # MuJoCo's, where no class sets them
 
 
 def _joint_values(document, path):
     """{attribute: {joint: value}} of an MJCF's named joints for each of JOINT_VALUES, where not 0, as MuJoCo's
     compiler resolves it: the joint's own attribute, else the joint default of its class (its `class`, else the
     `childclass` of the nearest element around it that has one, else "main"), else of the classes around that
-    one.  ValueError for a polynomial spring or damper ("a b c"): this adapter's are linear."""
+    one; a hinge's springref in rad, from the file's degrees under <compiler angle="degree"> (MJCF's default).
+    ValueError for a polynomial spring or damper ("a b c"): this adapter's are linear."""
     defaults = {}
 
     def collect(default, inherited):
         joint = default.find("joint")
-        own = {a: joint.get(a, inherited[a]) for a in JOINT_VALUES} if joint is not None else inherited
+        own = {a: joint.get(a, inherited[a]) for a in JOINT_DEFAULTS} if joint is not None else inherited
         defaults[default.get("class", "main")] = own
         for child in default.findall("default"):
             collect(child, own)
 
     for default in document.findall("default"):
-        collect(default, dict.fromkeys(JOINT_VALUES, "0"))
+        collect(default, JOINT_DEFAULTS)
+    degrees = all(compiler.get("angle", "degree") == "degree" for compiler in document.iter("compiler"))
     values = {attribute: {} for attribute in JOINT_VALUES}
 
     def walk(element, childclass):
         childclass = element.get("childclass", childclass)
         for child in element:
             if child.tag == "joint" and child.get("name"):  # an unnamed joint: the case cannot move it (refused)
-                inherited = defaults.get(child.get("class", childclass), dict.fromkeys(JOINT_VALUES, "0"))
+                inherited = defaults.get(child.get("class", childclass), JOINT_DEFAULTS)
                 for attribute, what in JOINT_VALUES.items():
                     text = child.get(attribute, inherited[attribute])
                     a, *higher = [float(x) for x in text.split()]
                     if any(higher):
                         raise ValueError(f'{path}: joint \'{child.get("name")}\' {attribute}="{text}": a polynomial '
                                          f"{what}, which the Pinocchio side does not model; give the linear term only")
+                    if attribute == "springref" and degrees and child.get("type", inherited["type"]) == "hinge":
+                        a = math.radians(a)
                     if a:
                         values[attribute][child.get("name")] = a
             else:
@@ -727,10 +748,10 @@ def _unmodelled(robot, scene):
     for joint in robot.iter("joint"):
         name, kind = joint.get("name"), joint.get("type")
         owner = f"joint '{name}'"
+        if kind not in ("revolute", "continuous", "prismatic"):  # no coordinate, named in the case or not
+            yield "joint", "type", owner, kind
         if name not in moved:
             yield "joint", "name", owner, name
-        if kind not in ("revolute", "continuous", "prismatic"):
-            yield "joint", "type", owner, kind
         limit = joint.find("limit")
         if limit is not None and kind != "continuous":  # a continuous joint's limits are ignored by urdfdom
             for bound in ("lower", "upper"):

@@ -45,6 +45,7 @@ class Rule:
     status: str
     why: str
     fix: str = "remove it"  # what a refusal asks the author to do
+    with_loops: bool = False  # refused only in a scene with a loop (<connect>), without effect in one without
 
 
 def case_mass_matrix(mass, layout, q):
@@ -228,26 +229,76 @@ NO_COUNTERPART = "URDF and Pinocchio have no counterpart"
 SET_BY_HARNESS = "the harness sets it for every run and never steps the evaluation model"
 COMPILED = "acts only through the compiled model, whose bodies and gravity are compared"
 NO_CONTACTS = "acts only on contacts, and no two geoms can touch (see geom contype)"
-NO_CONSTRAINTS = "acts only on constraints, and every constraint is refused"
+NO_ACTUATORS = "acts only on actuators, which are refused"
+LOOP_SOLVER = ("MuJoCo steps a loop (<connect>) with its constraint solver, and the allowance for its runs measures the"
+               " loop's softness with the default solver; without a loop no constraint row arises")
 
 RULES = [
     # -- MJCF: what the compiled mjModel must say ------------------------------------------------
     Rule("MJCF", "mujoco", "model", NO_EFFECT, "a name"),
-    Rule("MJCF", "option", "gravity", COMPARED, "every component, against the case's g (the URDF side's gravity)"),
+    # every <option> attribute and <flag> of MuJoCo's, each with its own rule (tests/test_scene_options.py walks
+    # the installed MuJoCo's): a flag's rule judges its value other than the default
     Rule("MJCF", "option", "timestep", NO_EFFECT, SET_BY_HARNESS),
-    Rule("MJCF", "option", "integrator", NO_EFFECT, SET_BY_HARNESS),
+    Rule("MJCF", "option", "integrator", NO_EFFECT, "the harness sets it for every run, and evaluates under MuJoCo's"
+         " Euler (the discrete integrator changes mj_forward's accelerations in a loop)"),
+    Rule("MJCF", "option", "gravity", COMPARED, "every component, against the case's g (the URDF side's gravity)"),
     Rule("MJCF", "option", "density", REFUSED, "fluid forces; " + NO_COUNTERPART),
     Rule("MJCF", "option", "viscosity", REFUSED, "fluid forces; " + NO_COUNTERPART),
     Rule("MJCF", "option", "wind", NO_EFFECT, "acts only through density and viscosity, which are refused"),
     Rule("MJCF", "option", "magnetic", NO_EFFECT, "read only by magnetometer sensors"),
-    Rule("MJCF", "option", "*", NO_EFFECT, "solver, collision and sleeping settings: " + NO_CONSTRAINTS),
-    Rule("MJCF", "option-flag", "gravity", REFUSED, "disabling gravity: the case's g would not act"),
+    *[Rule("MJCF", "option", solver, REFUSED, LOOP_SOLVER, with_loops=True)
+      for solver in ("solver", "iterations", "tolerance", "ls_iterations", "ls_tolerance")],
+    Rule("MJCF", "option", "jacobian", NO_EFFECT, "dense or sparse constraint Jacobian: the same loop forces up to"
+         " rounding (measured on the slider-crank's runs: 1e-12)"),
+    Rule("MJCF", "option", "noslip_iterations", REFUSED, "the noslip solver acts only on contacts and dry friction"
+         " (refused), and MuJoCo's derivatives (mjd_inverseFD), which the linearisation takes, refuse it"),
+    Rule("MJCF", "option", "noslip_tolerance", NO_EFFECT, "acts only through noslip_iterations, which are refused"),
+    *[Rule("MJCF", "option", contact, NO_EFFECT, NO_CONTACTS)
+      for contact in ("impratio", "cone", "o_margin", "o_solref", "o_solimp", "o_friction", "ccd_iterations",
+                      "ccd_tolerance", "sdf_iterations", "sdf_initpoints")],
+    Rule("MJCF", "option", "sleep_tolerance", NO_EFFECT, "acts only with the sleep flag, which is refused"),
+    Rule("MJCF", "option", "actuatorgroupdisable", NO_EFFECT, NO_ACTUATORS),
+    *[Rule("MJCF", "option-flag", flag, REFUSED, "opens every loop in MuJoCo alone; without a loop no constraint"
+           " row arises (the harness switches MuJoCo's constraint stage off)", with_loops=True)
+      for flag in ("constraint", "equality")],
+    Rule("MJCF", "option-flag", "frictionloss", NO_EFFECT, "switches off dry friction, which is refused"),
+    Rule("MJCF", "option-flag", "limit", NO_EFFECT, "switches off joint and tendon limits, which are refused"),
+    Rule("MJCF", "option-flag", "contact", NO_EFFECT, "switches off contacts, and no two geoms can touch (see geom"
+         " contype)"),
+    Rule("MJCF", "option-flag", "override", NO_EFFECT, "overrides contacts' parameters: " + NO_CONTACTS),
     Rule("MJCF", "option-flag", "spring", REFUSED, "disabling springs: the case's stiffness would not act"),
+    Rule("MJCF", "option-flag", "damper", REFUSED, "disabling dampers: MuJoCo alone would drop the joints' damping,"
+         " which the Pinocchio side applies and the case binds"),
+    Rule("MJCF", "option-flag", "gravity", REFUSED, "disabling gravity: the case's g would not act"),
+    Rule("MJCF", "option-flag", "clampctrl", NO_EFFECT, NO_ACTUATORS),
+    Rule("MJCF", "option-flag", "actuation", NO_EFFECT, NO_ACTUATORS),
+    Rule("MJCF", "option-flag", "warmstart", NO_EFFECT, "the constraint solver's starting point: a loop's same"
+         " forces to the solver's tolerance (measured on the slider-crank's runs: 1.3e-10 of its rates)"),
+    Rule("MJCF", "option-flag", "island", NO_EFFECT, "splits the constraint solve into independent islands: the"
+         " same loop forces (measured on the slider-crank's runs: bit for bit)"),
+    Rule("MJCF", "option-flag", "refsafe", REFUSED, "lets a loop's stabilisation be faster than MuJoCo's steps"
+         " resolve; " + LOOP_SOLVER, with_loops=True),
+    Rule("MJCF", "option-flag", "diagexact", REFUSED, "changes the impedance of a loop's soft constraint (measured:"
+         " 4e-5 of the slider-crank's runs); " + LOOP_SOLVER, with_loops=True),
+    Rule("MJCF", "option-flag", "filterparent", NO_EFFECT, "adds parent-child pairs of geoms to contacts; every"
+         " pair of geoms on two bodies that could touch is refused, parent and child included (geom contype)"),
+    *[Rule("MJCF", "option-flag", collision, NO_EFFECT, "collision detection: " + NO_CONTACTS)
+      for collision in ("midphase", "nativeccd", "multiccd", "speculative")],
     Rule("MJCF", "option-flag", "sensor", REFUSED, "disabling sensors: the reactions would read zeros"),
+    Rule("MJCF", "option-flag", "eulerdamp", REFUSED, "makes MuJoCo's Euler integrator step the joints' damping"
+         " explicitly, unlike the Euler runs that body-joint damping describes (measured: 2.5e-5 of the tutorial's"
+         " cart-pendulum's Euler run with a damper)"),
+    Rule("MJCF", "option-flag", "autoreset", NO_EFFECT, "a run's blow-up is found from its state and MuJoCo's"
+         " warnings, which it counts with or without the reset (dyncheck.simulate)"),
+    Rule("MJCF", "option-flag", "energy", NO_EFFECT, "fills mjData.energy in mj_forward; the harness computes the"
+         " energy itself (mj_energyPos, mj_energyVel)"),
+    Rule("MJCF", "option-flag", "fwdinv", NO_EFFECT, "a diagnostic (mjData.solver_fwdinv) that the harness does not"
+         " read (measured: every evaluation bit for bit)"),
     Rule("MJCF", "option-flag", "sleep", REFUSED, "sleeping freezes slow bodies; " + NO_COUNTERPART),
     Rule("MJCF", "option-flag", "invdiscrete", REFUSED,
          "changes mj_inverse, which gives the reactions, for the one-step integrators"),
-    Rule("MJCF", "option-flag", "*", NO_EFFECT, "switch off or on what is refused or unused here, or diagnostics"),
+    Rule("MJCF", "option-flag", "ipc", REFUSED, "the discrete integrator's contact mode: needs that integrator,"
+         " which the harness replaces, and has no inverse dynamics (mj_inverse gives the reactions)"),
     Rule("MJCF", "compiler", "*", NO_EFFECT, COMPILED),
     Rule("MJCF", "size", "*", NO_EFFECT, "memory sizes"),
     Rule("MJCF", "statistic", "*", NO_EFFECT, "rendering scales"),
@@ -311,6 +362,9 @@ RULES = [
     Rule("MJCF", "body-camera", "*", NO_EFFECT, "rendering"),
     Rule("MJCF", "body-light", "*", NO_EFFECT, "rendering"),
     Rule("MJCF", "body-attach", "*", NO_EFFECT, "inserts bodies, which are compared"),
+    Rule("MJCF", "body-frame", "*", REFUSED, "where Pinocchio reads the MJCF (no scene.urdf): its MJCF reader (4.1)"
+         " drops the bodies inside it without a word, which MuJoCo's compiler places in the frame; with a scene.urdf"
+         " they are compared", "write its pos and orientation into the bodies inside it"),
     Rule("MJCF", "body-flexcomp", "*", REFUSED, "deformable bodies; " + NO_COUNTERPART),
     Rule("MJCF", "body-plugin", "*", REFUSED, "engine plugins; " + NO_COUNTERPART),
     Rule("MJCF", "geom-plugin", "*", REFUSED, "engine plugins; " + NO_COUNTERPART),
@@ -395,9 +449,19 @@ def rule(file, element, attribute):
     raise KeyError(f"no rule for {file} {element} {attribute}")
 
 
+def judged(file, element, attribute):
+    """`rule`, or for what RULES does not name (an option or flag of a newer MuJoCo: <option> has no "*") a
+    refusal that says so."""
+    try:
+        return rule(file, element, attribute)
+    except KeyError:
+        return Rule(file, element, attribute, REFUSED, "not yet classified against both engines: a MuJoCo newer"
+                    " than engines.scene.RULES", "remove it, or classify it in engines/scene.py")
+
+
 def refusal(path, file, element, attribute, owner, value):
     """The one-line error for a refused attribute; `owner` names the element in its file, e.g. "joint 'psi'"."""
-    found = rule(file, element, attribute)
+    found = judged(file, element, attribute)
     assert found.status != NO_EFFECT, found  # refused, or a compared attribute's value that cannot be compared
     tag = element.replace("-", "/").split("/")[-1]
     if attribute == "*":
@@ -417,9 +481,13 @@ def markdown():
              "", "Every element and attribute of a case's scene.xml (MJCF) and scene.urdf (URDF) is either modelled"
              " by both engines and compared between the two files when both are loaded, refused on load (exit 2,"
              " naming the file, the element and the attribute), or without effect on these scenes' dynamics.",
+             "Every `<option>` attribute and `<flag>` of MuJoCo has its own rule (a test walks the installed MuJoCo's);"
+             " a flag's judges its value other than the default.  \"refused with a loop\": refused in a scene with a"
+             " `<connect>`, without effect in one without.",
              "MJCF elements are the anchors of MuJoCo's XML reference (`body-joint` is `<joint>` in a `<body>`); a"
              " rule for an element covers the elements below it, `*` every attribute not listed.",
              "The comparison's tolerances are in `dyncheck/case.py` (`compare_scenes`).", "",
              "| file | element | attribute | status | why |", "|---|---|---|---|---|"]
-    lines += [f"| {r.file} | {r.element} | {r.attribute} | {r.status} | {r.why} |" for r in RULES]
+    lines += [f"| {r.file} | {r.element} | {r.attribute} | {r.status}{' with a loop' * r.with_loops} | {r.why} |"
+              for r in RULES]
     return "\n".join(lines) + "\n"

@@ -233,13 +233,6 @@ def test_an_unsupported_equality_is_refused_by_name(tmp_path, equality, shown):
         MujocoLoops(mujoco.MjModel.from_xml_path(str(path)), path)
 
 
-def test_mujoco_with_its_equalities_disabled_is_refused(tmp_path):
-    path = _variant(tmp_path, '<option gravity="0 0 -9.81"/>',
-                    '<option gravity="0 0 -9.81"><flag equality="disable"/></option>')
-    with pytest.raises(ValueError, match='<flag equality="disable">'):
-        MujocoLoops(mujoco.MjModel.from_xml_path(str(path)), path)
-
-
 def test_a_weld_read_by_pinocchio_is_refused(tmp_path):
     path = _variant(tmp_path, CONNECT, '<weld name="clamp" body1="rod" body2="slider"/>')
     with pytest.raises(ValueError, match=r"joints 'psi' and 'x' \(CONTACT_6D\) is not modelled"):
