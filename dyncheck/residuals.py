@@ -72,10 +72,24 @@ class Residuals:
         if kind in ("acceleration", "numerator"):
             factor = np.linalg.det(self.mass) if kind == "numerator" else np.ones(len(self.t))
             mine, theirs = factor * self.derived_acc[:, i], factor * self.engine_acc[:, i]
-        else:
-            mine = (self.derivation_forces if kind == "residual" else self.given_forces)[:, i]
-            theirs = self.engine_forces[:, i]
-        return mine - theirs, max(np.max(np.abs(mine)), np.max(np.abs(theirs)))
+            return mine - theirs, max(np.max(np.abs(mine)), np.max(np.abs(theirs)))
+        mine = (self.derivation_forces if kind == "residual" else self.given_forces)[:, i]
+        theirs = self.engine_forces[:, i]
+        summed = [self.terms(self.engine_acc, i)] + ([self.terms(self.derived_acc, i)] if kind == "residual" else [])
+        return mine - theirs, max([np.max(np.abs(mine)), np.max(np.abs(theirs))] + [np.max(each) for each in summed])
+
+    def terms(self, acc, i):
+        """sum_j |M_e,ij q''_j| over the states: the size of the terms that equation i sums, the scale of its
+        residual's rounding.  An accelerations vector solved from M q'' = f in a backward-stable way satisfies
+        (M + dM) q'' = f with |dM| <= c n eps |M| entry by entry, so M q'' - f, and M_e q''_d - M_e q''_e with the
+        entries of M_e and M_d apart by their rounding, is a few n eps of this sum in row i whatever cond(M): the
+        residual judged against it is rounding-limited to ~1e-15 where its own force vanishes (g = 0: the
+        cart-pendulum's theta force is 0, its M q'' terms 1 N m each) or is the small difference of large terms (a
+        spring of 1e9 N/m: 7.5e6 N m in the theta row that cancel to 1.5; its MuJoCo placeholder inertia of 1e-14
+        kg m^2 times theta'' = 1e8 rad/s^2 adds 1e-6 N m, 1.3e-13 of the terms).  It is at least the force itself,
+        |f_i| = |sum_j M_ij q''_j|, so nothing judged against the force passes more easily by more than the terms'
+        cancellation."""
+        return np.sum(np.abs(self.mass[:, i, :] * acc), axis=1)
 
 
 # Where a wrong equation's terms are looked for, in order, and what the terms are added to: its force
@@ -111,13 +125,14 @@ def places(case, r):
     equation's residual; each entry of a given M (both triangles: a derivation's M may be asymmetric,
     which is itself an error); each given force side."""
     coords, out = case.coords, []
-    out += [(quantity(c), ("residual", i), "M_e (q''_d - q''_e), relative to the equation's largest generalised force")
-            for i, c in enumerate(coords)]
+    out += [(quantity(c), ("residual", i), "M_e (q''_d - q''_e), relative to the largest sum of its terms' sizes, "
+             "sum_j |M_e,ij q''_j|") for i, c in enumerate(coords)]
     if r.given_mass is not None:
         out += [(f"M[{a},{b}]", ("M", i, j), "mass matrix entry, relative to the engine's largest entry")
                 for i, a in enumerate(coords) for j, b in enumerate(coords)]
     if r.given_forces is not None:
-        out += [(f"f[{a}]", ("f", i), "force side against M_e q''_e, relative to its largest") for i, a in enumerate(coords)]
+        out += [(f"f[{a}]", ("f", i), "force side against M_e q''_e, relative to the larger of its largest and of "
+                 "sum_j |M_e,ij q''_e,j|") for i, a in enumerate(coords)]
     return out
 
 
