@@ -175,6 +175,27 @@ def localise(case, rows, found, drawn):
                and (r.sources[0], "mujoco") in found}  # not where a source gave no numbers: its row says why
     if not failing:
         return ()
+    try:
+        return _localised(case, failing, found, drawn)
+    except Exception as error:  # whatever the search meets (a MemoryError, a set's arithmetic), the rows stay
+        out = []
+        for source, name in sorted(failing):
+            place = {name: place for name, place, _ in places(case, found[source, "mujoco"])}[name]
+            out.append(not_localised(case, source, place, name, found[source, "mujoco"], 1, error))
+        return tuple(out)
+
+
+def not_localised(case, source, place, name, r, sets, error):
+    """The Localisation of the comparison `name` at `place` whose term search raised `error`: where, and why."""
+    kind, i, *_ = place
+    return Localisation(source=source, equation=case.coords[i], place=_place(case, kind, i, name),
+                        text=f"not localised: the term search failed ({type(error).__name__}: {error})",
+                        exact=False, identified=False, residual=float(np.max(np.abs(r.of(place)[0]))), left=0.0,
+                        sets=sets)
+
+
+def _localised(case, failing, found, drawn):
+    """localise's Localisations of the comparisons `failing`, {(source, row quantity)}."""
     others = parameter_cases(case, drawn)
     units = case.spec["coord_units"]
     driven = driven_units(case)
@@ -196,12 +217,17 @@ def localise(case, rows, found, drawn):
                 continue
             forms = FORMS if kind == "residual" else [(kind, "it" if kind == "M" else "its force side f (M q'' = f)")]
             fits = []
-            for form, where in forms:
-                fit = fit_at(case, samples, (form, *place[1:]), units, driven)
-                if fit is not None:
-                    fits.append((fit, where.format(c=case.coords[i])))
-                    if fit.identified:
-                        break
+            try:
+                for form, where in forms:
+                    fit = fit_at(case, samples, (form, *place[1:]), units, driven)
+                    if fit is not None:
+                        fits.append((fit, where.format(c=case.coords[i])))
+                        if fit.identified or fit.unsearched:  # the other forms' libraries are as large
+                            break
+            except Exception as error:  # a MemoryError, say: this equation's rows and the others' localisations stay
+                if not fits:
+                    out.append(not_localised(case, source, place, name, samples[0][2], len(samples), error))
+                    continue
             if not fits:  # a source's arithmetic failed at every set: its rows say where
                 continue
             # the first that names parameter products, else the first exact, else the force side's closest
@@ -211,11 +237,15 @@ def localise(case, rows, found, drawn):
                 text = (f"{where} agrees with the engines (to {fit.before:.1e}): this equation's residual comes "
                         "through the mass matrix from another acceleration's error")
                 identified = False
-            out.append(Localisation(source=source, equation=case.coords[i],
-                                    place=f"equation {case.coords[i]}" if kind != "M" else name,
+            out.append(Localisation(source=source, equation=case.coords[i], place=_place(case, kind, i, name),
                                     text=text, exact=fit.exact, identified=identified,
                                     residual=fit.before, left=fit.left, sets=fit.sets))
     return tuple(out)
+
+
+def _place(case, kind, i, name):
+    """Where a Localisation is: "equation x" (its residual or force side), or the mass matrix entry "M[x,theta]"."""
+    return f"equation {case.coords[i]}" if kind != "M" else name
 
 
 def fit_at(case, samples, place, units, driven):
@@ -341,10 +371,17 @@ def localise_values(case, rows, sample, drawn, wrong_equations):
                                 0.0 if name == "energy" else case.least_reaction_scale(name))
         if scale is None:  # no numbers at the case's own parameters: the pointwise rows say why
             continue
-        fit = terms.fit(case.coords, case.spec["coord_units"], list(case.params), samples,
-                        case.tolerance["pointwise"]["value"] * scale, driven)
-        out.append(Localisation(source=source, equation="", place="energy" if name == "energy" else f"reaction {name}",
-                                text=fit.says("it"),
+        place = "energy" if name == "energy" else f"reaction {name}"
+        try:
+            fit = terms.fit(case.coords, case.spec["coord_units"], list(case.params), samples,
+                            case.tolerance["pointwise"]["value"] * scale, driven)
+        except Exception as error:  # a MemoryError, say: the rows stay, and this says where the search failed
+            out.append(Localisation(source=source, equation="", place=place, text=f"not localised: the term search "
+                                    f"failed ({type(error).__name__}: {error})", exact=False, identified=False,
+                                    residual=max(float(np.max(np.abs(d))) for *_, d in samples), left=0.0,
+                                    sets=len(samples)))
+            continue
+        out.append(Localisation(source=source, equation="", place=place, text=fit.says("it"),
                                 exact=fit.exact, identified=fit.identified, residual=fit.before, left=fit.left,
                                 sets=fit.sets))
     return tuple(out)
