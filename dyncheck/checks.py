@@ -268,9 +268,51 @@ def parameter_sets(case, count=None):
                 schema.check_params(case.spec, {**case.params, **drawn}, case.overrides, case.file)
             except ValueError:
                 continue
-            sets.append(drawn)
-            break
+            if scene_breaks(case, drawn) is None:
+                sets.append(drawn)
+                break
     return sets, count - len(sets)
+
+
+# MuJoCo's compiler refuses principal moments that break A + B >= C beyond its rounding; this much of their sum
+# is taken as rounding (a flat plate's A + B = C, to a few ulps).
+TRIANGLE_ROUNDING = 1e-12
+
+
+def scene_breaks(case, drawn):
+    """Why the scene has no rigid bodies at the parameters `drawn` over the case's, or None: the constraints its
+    bindings imply, which no bound of one parameter states.  A body whose mass, centre of mass or moment of
+    inertia about its origin is bound to parameters must keep a positive mass and, about its centre of mass,
+    principal moments that are positive and satisfy the triangle inequality A + B >= C: a moment about the origin,
+    I_o,i, leaves I_o,i - m (|c|^2 - c_i^2) about the centre of mass c, which a drawn mass or centre of mass (or
+    the moment itself) can make impossible (a Furuta pendulum's arm with its moments about the hub bound).  As the
+    engines write them (engines' `_write`): the moments about the origin are about the body's axes, the others
+    stay as the scene gives them about the centre of mass."""
+    bindings = case.spec["scene"].get("bindings", {})
+    params = {**case.params, **drawn}
+    bodies = {}  # name: {attribute: {index: value}}
+    for param, locations in bindings.items():
+        for location in locations:
+            if location["element"] == "body" and location.get("attribute") in ("mass", "ipos", "inertia_about_origin"):
+                bodies.setdefault(location["name"], {}).setdefault(location["attribute"], {})[
+                    location.get("index", 0)] = params[param] * location.get("scale", 1.0)
+    if not bodies:
+        return None
+    tree = {body.name: body for body in case.model("mujoco").tree()}
+    for name, written in bodies.items():
+        body = tree[name]
+        mass = written.get("mass", {}).get(0, body.mass)
+        com = np.array([written.get("ipos", {}).get(i, x) for i, x in enumerate(body.com)])
+        inertia = np.array(body.inertia, dtype=float)
+        for i, about_origin in written.get("inertia_about_origin", {}).items():
+            inertia[i, i] = about_origin - mass * (com @ com - com[i] ** 2)
+        if not mass > 0:
+            return f"body '{name}': mass {mass:.4g} kg is not positive"
+        moments = np.sort(np.linalg.eigvalsh(inertia))
+        if not (moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - TRIANGLE_ROUNDING)):
+            return (f"body '{name}': principal moments of inertia about its centre of mass "
+                    f"{', '.join(f'{x:.4g}' for x in moments)} kg m^2 are not a rigid body's (each > 0, A + B >= C)")
+    return None
 
 
 def random_parameters(case):
@@ -287,11 +329,21 @@ def random_parameters(case):
     if missing:
         rows.append(no_number("random parameters", "parameter sets", ("every source",),
                                  f"{missing} of {spec['sets']} sets (seed {seed}) not physical in {DRAWS} draws each "
-                                 f"beside the overrides {named(case.overrides)}", Status.FAIL))
+                                 "(the case file's bounds and constraints, and rigid bodies in the scene: scene_breaks)"
+                                 + (f" beside the overrides {named(case.overrides)}" if case.overrides else ""),
+                                 Status.FAIL))
     tolerance = case.tolerance["pointwise"]["value"]
     worst = {}  # comparison -> (error beyond its tolerance, error, its tolerance, quantity, set, placeholders' effect)
     for params in sets:
-        other = case.with_params(**params)
+        try:  # a set that the constraints allow and the engines still cannot load: their reason, in the row
+            other = case.with_params(**params)
+            for source in ENGINES:
+                other.model(source)
+        except Exception as failure:  # MuJoCo's compiler, Pinocchio's reader, a binding the engine did not take
+            rows.append(no_number("random parameters", "every quantity", ("every source",),
+                                  f"at {named(params)}: the scene cannot be loaded there: {type(failure).__name__}: "
+                                  f"{failure}", Status.FAIL))
+            continue
         states = other.sample_states(count)
         try:
             values = {source: evaluate(other, source, states) for source in ENGINES}
