@@ -168,9 +168,9 @@ def inertia_share(case, states, model, doubled):
     the placeholders are most of a coordinate's inertia (the cart-pendulum's bob at l = 1e-7 m, whose m l^2 =
     3e-15 kg m^2, is a third of its placeholder's 1e-14: MuJoCo puts its centre of mass at the hinge there, so that
     its theta'' is 0 with the placeholders and with them doubled, and its M[theta,theta] is the placeholder's) it is
-    of the order of 1.  At the book's numbers it is at most 8.5e-11 (the double pendulum's theta1), beside the
-    values' change of 3.3e-11 there; at the documented edges it agrees with the values' (the double pendulum's m1 =
-    5e-3 kg: 5.8e-10, refused either way; the rotating pendulum's m = 8e-4 kg: 2.5e-10, accepted).  Raises
+    of the order of 1.  At the book's numbers it is at most 8.5e-11, beside the values' change of 3.3e-11 in that
+    case; at the edges docs/own-case.md gives it agrees with the values' (5.8e-10, refused either way; 2.5e-10,
+    accepted).  Raises
     ArithmeticError as `evaluate` does."""
     with np.errstate(all="ignore"):
         try:
