@@ -156,7 +156,30 @@ def placeholders_effect(case, states, values=None):
     if not case.placeholders():
         return {}
     values = evaluate(case, "mujoco", states) if values is None else values
-    return compare(case, values, evaluate(case, "mujoco", states, case.approximations_doubled()))
+    doubled = case.approximations_doubled()
+    return {**compare(case, values, evaluate(case, "mujoco", states, doubled)),
+            **inertia_share(case, states, case.model("mujoco"), doubled)}
+
+
+def inertia_share(case, states, model, doubled):
+    """{"M[c,c]": the share of each coordinate's own inertia, MuJoCo's mass matrix's diagonal entry, that doubling
+    the placeholders adds}, the largest over `states`: the placeholders' part of that inertia.  The change of a
+    value that vanishes in both scenes says nothing (0 of 0), while the diagonal is positive at every state: where
+    the placeholders are most of a coordinate's inertia (the cart-pendulum's bob at l = 1e-7 m, whose m l^2 =
+    3e-15 kg m^2, is a third of its placeholder's 1e-14: MuJoCo puts its centre of mass at the hinge there, so that
+    its theta'' is 0 with the placeholders and with them doubled, and its M[theta,theta] is the placeholder's) it is
+    of the order of 1.  At the book's numbers it is at most 8.5e-11, beside the values' change of 3.3e-11 in that
+    case; at the edges docs/own-case.md gives it agrees with the values' (5.8e-10, refused either way; 2.5e-10,
+    accepted).  Raises
+    ArithmeticError as `evaluate` does."""
+    with np.errstate(all="ignore"):
+        try:
+            diagonals = [np.array([np.diagonal(np.reshape(each.mass_matrix(t, q, v), (len(q), len(q))))
+                                   for t, q, v in states]) for each in (model, doubled)]
+        except Exception as error:  # MuJoCo's arithmetic, as evaluate says it
+            raise ArithmeticError(f"mujoco: mass matrix: {type(error).__name__}: {error}") from None
+    share = np.max(np.abs(diagonals[1] - diagonals[0]) / np.abs(diagonals[0]), axis=0)
+    return {f"M[{c},{c}]": float(x) if np.isfinite(x) else np.inf for c, x in zip(case.coords, share)}
 
 
 def validate_placeholders(case):
@@ -279,9 +302,51 @@ def parameter_sets(case, count=None):
                 schema.check_params(case.spec, {**case.params, **drawn}, case.overrides, case.file)
             except ValueError:
                 continue
-            sets.append(drawn)
-            break
+            if scene_breaks(case, drawn) is None:
+                sets.append(drawn)
+                break
     return sets, count - len(sets)
+
+
+# MuJoCo's compiler refuses principal moments that break A + B >= C beyond its rounding; this much of their sum
+# is taken as rounding (a flat plate's A + B = C, to a few ulps).
+TRIANGLE_ROUNDING = 1e-12
+
+
+def scene_breaks(case, drawn):
+    """Why the scene has no rigid bodies at the parameters `drawn` over the case's, or None: the constraints its
+    bindings imply, which no bound of one parameter states.  A body whose mass, centre of mass or moment of
+    inertia about its origin is bound to parameters must keep a positive mass and, about its centre of mass,
+    principal moments that are positive and satisfy the triangle inequality A + B >= C: a moment about the origin,
+    I_o,i, leaves I_o,i - m (|c|^2 - c_i^2) about the centre of mass c, which a drawn mass or centre of mass (or
+    the moment itself) can make impossible (a Furuta pendulum's arm with its moments about the hub bound).  As the
+    engines write them (engines' `_write`): the moments about the origin are about the body's axes, the others
+    stay as the scene gives them about the centre of mass."""
+    bindings = case.spec["scene"].get("bindings", {})
+    params = {**case.params, **drawn}
+    bodies = {}  # name: {attribute: {index: value}}
+    for param, locations in bindings.items():
+        for location in locations:
+            if location["element"] == "body" and location.get("attribute") in ("mass", "ipos", "inertia_about_origin"):
+                bodies.setdefault(location["name"], {}).setdefault(location["attribute"], {})[
+                    location.get("index", 0)] = params[param] * location.get("scale", 1.0)
+    if not bodies:
+        return None
+    tree = {body.name: body for body in case.model("mujoco").tree()}
+    for name, written in bodies.items():
+        body = tree[name]
+        mass = written.get("mass", {}).get(0, body.mass)
+        com = np.array([written.get("ipos", {}).get(i, x) for i, x in enumerate(body.com)])
+        inertia = np.array(body.inertia, dtype=float)
+        for i, about_origin in written.get("inertia_about_origin", {}).items():
+            inertia[i, i] = about_origin - mass * (com @ com - com[i] ** 2)
+        if not mass > 0:
+            return f"body '{name}': mass {mass:.4g} kg is not positive"
+        moments = np.sort(np.linalg.eigvalsh(inertia))
+        if not (moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - TRIANGLE_ROUNDING)):
+            return (f"body '{name}': principal moments of inertia about its centre of mass "
+                    f"{', '.join(f'{x:.4g}' for x in moments)} kg m^2 are not a rigid body's (each > 0, A + B >= C)")
+    return None
 
 
 def random_parameters(case):
@@ -298,11 +363,21 @@ def random_parameters(case):
     if missing:
         rows.append(no_number("random parameters", "parameter sets", ("every source",),
                                  f"{missing} of {spec['sets']} sets (seed {seed}) not physical in {DRAWS} draws each "
-                                 f"beside the overrides {named(case.overrides)}", Status.FAIL))
+                                 "(the case file's bounds and constraints, and rigid bodies in the scene: scene_breaks)"
+                                 + (f" beside the overrides {named(case.overrides)}" if case.overrides else ""),
+                                 Status.FAIL))
     tolerance = case.tolerance["pointwise"]["value"]
     worst = {}  # comparison -> (error beyond its tolerance, error, its tolerance, quantity, set, placeholders' effect)
     for i, params in enumerate(sets):
-        other = case.with_params(**params)
+        try:  # a set that the constraints allow and the engines still cannot load: their reason, in the row
+            other = case.with_params(**params)
+            for source in ENGINES:
+                other.model(source)
+        except Exception as failure:  # MuJoCo's compiler, Pinocchio's reader, a binding the engine did not take
+            rows.append(no_number("random parameters", "every quantity", ("every source",),
+                                  f"at {named(params)}: the scene cannot be loaded there: {type(failure).__name__}: "
+                                  f"{failure}", Status.FAIL))
+            continue
         states = other.sample_states(count, stream=i + 1)  # each set its own states: together they cover more
         try:
             values = {source: evaluate(other, source, states) for source in ENGINES}

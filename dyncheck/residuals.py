@@ -72,10 +72,24 @@ class Residuals:
         if kind in ("acceleration", "numerator"):
             factor = np.linalg.det(self.mass) if kind == "numerator" else np.ones(len(self.t))
             mine, theirs = factor * self.derived_acc[:, i], factor * self.engine_acc[:, i]
-        else:
-            mine = (self.derivation_forces if kind == "residual" else self.given_forces)[:, i]
-            theirs = self.engine_forces[:, i]
-        return mine - theirs, max(np.max(np.abs(mine)), np.max(np.abs(theirs)))
+            return mine - theirs, max(np.max(np.abs(mine)), np.max(np.abs(theirs)))
+        mine = (self.derivation_forces if kind == "residual" else self.given_forces)[:, i]
+        theirs = self.engine_forces[:, i]
+        summed = [self.terms(self.engine_acc, i)] + ([self.terms(self.derived_acc, i)] if kind == "residual" else [])
+        return mine - theirs, max([np.max(np.abs(mine)), np.max(np.abs(theirs))] + [np.max(each) for each in summed])
+
+    def terms(self, acc, i):
+        """sum_j |M_e,ij q''_j| over the states: the size of the terms that equation i sums, the scale of its
+        residual's rounding.  An accelerations vector solved from M q'' = f in a backward-stable way satisfies
+        (M + dM) q'' = f with |dM| <= c n eps |M| entry by entry, so M q'' - f, and M_e q''_d - M_e q''_e with the
+        entries of M_e and M_d apart by their rounding, is a few n eps of this sum in row i whatever cond(M): the
+        residual judged against it is rounding-limited to ~1e-15 where its own force vanishes (g = 0: the
+        cart-pendulum's theta force is 0, its M q'' terms 1 N m each) or is the small difference of large terms (a
+        spring of 1e9 N/m: 7.5e6 N m in the theta row that cancel to 1.5; its MuJoCo placeholder inertia of 1e-14
+        kg m^2 times theta'' = 1e8 rad/s^2 adds 1e-6 N m, 1.3e-13 of the terms).  It is at least the force itself,
+        |f_i| = |sum_j M_ij q''_j|, so nothing judged against the force passes more easily by more than the terms'
+        cancellation."""
+        return np.sum(np.abs(self.mass[:, i, :] * acc), axis=1)
 
 
 # Where a wrong equation's terms are looked for, in order, and what the terms are added to: its force
@@ -111,13 +125,14 @@ def places(case, r):
     equation's residual; each entry of a given M (both triangles: a derivation's M may be asymmetric,
     which is itself an error); each given force side."""
     coords, out = case.coords, []
-    out += [(quantity(c), ("residual", i), "M_e (q''_d - q''_e), relative to the equation's largest generalised force")
-            for i, c in enumerate(coords)]
+    out += [(quantity(c), ("residual", i), "M_e (q''_d - q''_e), relative to the largest sum of its terms' sizes, "
+             "sum_j |M_e,ij q''_j|") for i, c in enumerate(coords)]
     if r.given_mass is not None:
         out += [(f"M[{a},{b}]", ("M", i, j), "mass matrix entry, relative to the engine's largest entry")
                 for i, a in enumerate(coords) for j, b in enumerate(coords)]
     if r.given_forces is not None:
-        out += [(f"f[{a}]", ("f", i), "force side against M_e q''_e, relative to its largest") for i, a in enumerate(coords)]
+        out += [(f"f[{a}]", ("f", i), "force side against M_e q''_e, relative to the larger of its largest and of "
+                 "sum_j |M_e,ij q''_e,j|") for i, a in enumerate(coords)]
     return out
 
 
@@ -160,6 +175,27 @@ def localise(case, rows, found, drawn):
                and (r.sources[0], "mujoco") in found}  # not where a source gave no numbers: its row says why
     if not failing:
         return ()
+    try:
+        return _localised(case, failing, found, drawn)
+    except Exception as error:  # whatever the search meets (a MemoryError, a set's arithmetic), the rows stay
+        out = []
+        for source, name in sorted(failing):
+            place = {name: place for name, place, _ in places(case, found[source, "mujoco"])}[name]
+            out.append(not_localised(case, source, place, name, found[source, "mujoco"], 1, error))
+        return tuple(out)
+
+
+def not_localised(case, source, place, name, r, sets, error):
+    """The Localisation of the comparison `name` at `place` whose term search raised `error`: where, and why."""
+    kind, i, *_ = place
+    return Localisation(source=source, equation=case.coords[i], place=_place(case, kind, i, name),
+                        text=f"not localised: the term search failed ({type(error).__name__}: {error})",
+                        exact=False, identified=False, residual=float(np.max(np.abs(r.of(place)[0]))), left=0.0,
+                        sets=sets)
+
+
+def _localised(case, failing, found, drawn):
+    """localise's Localisations of the comparisons `failing`, {(source, row quantity)}."""
     others = parameter_cases(case, drawn)
     units = case.spec["coord_units"]
     driven = driven_units(case)
@@ -181,12 +217,17 @@ def localise(case, rows, found, drawn):
                 continue
             forms = FORMS if kind == "residual" else [(kind, "it" if kind == "M" else "its force side f (M q'' = f)")]
             fits = []
-            for form, where in forms:
-                fit = fit_at(case, samples, (form, *place[1:]), units, driven)
-                if fit is not None:
-                    fits.append((fit, where.format(c=case.coords[i])))
-                    if fit.identified:
-                        break
+            try:
+                for form, where in forms:
+                    fit = fit_at(case, samples, (form, *place[1:]), units, driven)
+                    if fit is not None:
+                        fits.append((fit, where.format(c=case.coords[i])))
+                        if fit.identified or fit.unsearched:  # the other forms' libraries are as large
+                            break
+            except Exception as error:  # a MemoryError, say: this equation's rows and the others' localisations stay
+                if not fits:
+                    out.append(not_localised(case, source, place, name, samples[0][2], len(samples), error))
+                    continue
             if not fits:  # a source's arithmetic failed at every set: its rows say where
                 continue
             # the first that names parameter products, else the first exact, else the force side's closest
@@ -196,11 +237,15 @@ def localise(case, rows, found, drawn):
                 text = (f"{where} agrees with the engines (to {fit.before:.1e}): this equation's residual comes "
                         "through the mass matrix from another acceleration's error")
                 identified = False
-            out.append(Localisation(source=source, equation=case.coords[i],
-                                    place=f"equation {case.coords[i]}" if kind != "M" else name,
+            out.append(Localisation(source=source, equation=case.coords[i], place=_place(case, kind, i, name),
                                     text=text, exact=fit.exact, identified=identified,
                                     residual=fit.before, left=fit.left, sets=fit.sets))
     return tuple(out)
+
+
+def _place(case, kind, i, name):
+    """Where a Localisation is: "equation x" (its residual or force side), or the mass matrix entry "M[x,theta]"."""
+    return f"equation {case.coords[i]}" if kind != "M" else name
 
 
 def fit_at(case, samples, place, units, driven):
@@ -326,10 +371,17 @@ def localise_values(case, rows, sample, drawn, wrong_equations):
                                 0.0 if name == "energy" else case.least_reaction_scale(name))
         if scale is None:  # no numbers at the case's own parameters: the pointwise rows say why
             continue
-        fit = terms.fit(case.coords, case.spec["coord_units"], list(case.params), samples,
-                        case.tolerance["pointwise"]["value"] * scale, driven)
-        out.append(Localisation(source=source, equation="", place="energy" if name == "energy" else f"reaction {name}",
-                                text=fit.says("it"),
+        place = "energy" if name == "energy" else f"reaction {name}"
+        try:
+            fit = terms.fit(case.coords, case.spec["coord_units"], list(case.params), samples,
+                            case.tolerance["pointwise"]["value"] * scale, driven)
+        except Exception as error:  # a MemoryError, say: the rows stay, and this says where the search failed
+            out.append(Localisation(source=source, equation="", place=place, text=f"not localised: the term search "
+                                    f"failed ({type(error).__name__}: {error})", exact=False, identified=False,
+                                    residual=max(float(np.max(np.abs(d))) for *_, d in samples), left=0.0,
+                                    sets=len(samples)))
+            continue
+        out.append(Localisation(source=source, equation="", place=place, text=fit.says("it"),
                                 exact=fit.exact, identified=fit.identified, residual=fit.before, left=fit.left,
                                 sets=fit.sets))
     return tuple(out)

@@ -10,7 +10,9 @@ to two of them, times the velocities to degree 0, 1 or 2 (as Lagrange's equation
 over the parameter sets (the same terms in every set): every single term, every pair, then the best
 pairs extended greedily to three; each candidate support is verified by least squares and is exact
 when what it leaves is under the noise floor.  Each term's coefficient, one per set, is then identified
-as a simple number times a product of integer powers of the parameters.
+as a simple number times a product of integer powers of the parameters.  The library grows as n^6 in n
+angles and the search as its square: a library beyond a budget of memory and work (MEMORY, WORK) is
+narrowed to one position factor per term, and one still beyond it is not searched, which the fit says.
 """
 
 from dataclasses import dataclass, replace
@@ -105,6 +107,8 @@ class TermFit:
     sets: int  # parameter sets fitted
     unvaried: tuple[str, ...]  # parameters equal in every set: their powers are inside the numbers
     alternatives: tuple[tuple[Term, ...], ...]  # other sets of as many terms that fit as exactly
+    narrowed: str = ""  # how the library was narrowed to fit the budget (MEMORY, WORK), else ""
+    unsearched: str = ""  # why no term was searched (even the narrowed library beyond the budget), else ""
 
     @property
     def relative(self):
@@ -123,6 +127,8 @@ class TermFit:
     def says(self, where):
         """A sentence fragment to follow the name of what was fitted, e.g. "equation x:"; `where`: what
         the terms are added to, e.g. "its force side f (M q'' = f)", "it"."""
+        if self.unsearched:
+            return f"its terms not searched ({self.unsearched}); its residual is up to {self.before:.2g}"
         if not self.terms and self.exact:
             return f"nothing to add: its residual {self.before:.1e} is at the noise floor"
         if not self.terms:
@@ -137,15 +143,15 @@ class TermFit:
 
     def _notes(self):
         if not self.exact:
-            return []
+            return [self.narrowed] if self.narrowed else []
         if self.sets == 1:
-            return ["one parameter set: numbers only"]
+            return ["one parameter set: numbers only"] + ([self.narrowed] if self.narrowed else [])
         notes = [f"the coefficient of {_state_text(term)} is no product of parameters' powers: its value at "
                  "the first set" for term in self.terms if not term.identified]
         if self.unvaried and any(term.identified for term in self.terms):
             notes.append(f"{', '.join(self.unvaried)} the same in every set: inside the numbers")
         notes += [f"as well explained by {_signed(other)}" for other in self.alternatives[:2]]
-        return notes
+        return notes + ([self.narrowed] if self.narrowed else [])
 
 
 def _power(name, power):
@@ -183,11 +189,36 @@ def _simple(number):
     return None
 
 
-def library(coords, units, driven=()):
+def library(coords, units, driven=(), products=2):
     """The candidate terms' state parts, fewest factors first, each a tuple of Factors: products of up
-    to two position factors times velocities to degree 0 to 2.  `driven`: (name, unit) of prescribed
-    motions, whose positions (functions of time) enter as position factors (their rates are parameters),
-    and (name, FORCE) of applied forces that are laws of time and state, each a candidate on its own."""
+    to `products` (2 or 1) position factors times velocities to degree 0 to 2.  `driven`: (name, unit) of
+    prescribed motions, whose positions (functions of time) enter as position factors (their rates are
+    parameters), and (name, FORCE) of applied forces that are laws of time and state, each a candidate on its
+    own.  As many as library_size counts."""
+    positions, velocities, forces = _factors(coords, units, driven)
+    # cos^2 = 1 - sin^2 of the same angle: with all three, a constant plus sin^2 would fit three ways
+    position_parts = [()] + [(factor,) for factor in positions] + ([
+        _product(a, b) for a, b in combinations_with_replacement(positions, 2)
+        if not (a == b and a.function == "cos")] if products == 2 else [])
+    velocity_parts = [()] + [(factor,) for factor in velocities] + [
+        _product(a, b) for a, b in combinations_with_replacement(velocities, 2)]
+    parts = [position + velocity for position in position_parts for velocity in velocity_parts] + forces
+    return sorted(parts, key=lambda part: sum(factor.power for factor in part))
+
+
+def library_size(coords, units, driven=(), products=2):
+    """len(library(...)), counted without building it: the full library grows as n^6 in n angles (1,810 terms
+    at 3, 27,321 at 5, 176,436 at 7)."""
+    positions, velocities, forces = _factors(coords, units, driven)
+    p, n = len(positions), len(velocities)
+    cosines = sum(factor.function == "cos" for factor in positions)
+    position_parts = 1 + p + ((p * (p + 1) // 2 - cosines) if products == 2 else 0)
+    return position_parts * (1 + n + n * (n + 1) // 2) + len(forces)
+
+
+def _factors(coords, units, driven):
+    """The library's position factors, velocity factors and applied forces' candidates; ValueError for a unit
+    the terms do not know."""
     if len(units) != len(coords):
         raise ValueError(f"units: {len(units)} given for {len(coords)} coordinates {', '.join(coords)}")
     forces = [(Factor("coordinate", (name,)),) for name, unit in driven if unit == FORCE]
@@ -200,14 +231,30 @@ def library(coords, units, driven=()):
                  for function in (("sin", "cos") if unit == "rad" else ("coordinate",))]
     positions += [Factor(function, pair, sum=total) for pair in combinations(angles, 2) for total in (False, True)
                   for function in ("sin", "cos")]
-    # cos^2 = 1 - sin^2 of the same angle: with all three, a constant plus sin^2 would fit three ways
-    position_parts = [()] + [(factor,) for factor in positions] + [
-        _product(a, b) for a, b in combinations_with_replacement(positions, 2) if not (a == b and a.function == "cos")]
-    velocities = [Factor("velocity", (name,)) for name in coords]
-    velocity_parts = [()] + [(factor,) for factor in velocities] + [
-        _product(a, b) for a, b in combinations_with_replacement(velocities, 2)]
-    parts = [position + velocity for position in position_parts for velocity in velocity_parts] + forces
-    return sorted(parts, key=lambda part: sum(factor.power for factor in part))
+    return positions, [Factor("velocity", (name,)) for name in coords], forces
+
+
+# What a fit may take.  The search's largest arrays are L x L for L candidate terms: a Gram matrix per parameter set,
+# and at two terms the residual left by every pair with its temporaries (about six more: the base's columns, their
+# solve, the pairs' cross terms, norms, residuals and their ranking), so its peak is about 8 (sets + 6) L^2 bytes
+# (measured: 249 MB for the top's 1,810 terms over 9 sets, 8 (9 + 6) L^2 = 393 MB), and its time grows as sets L^2
+# (2.7 s there, 9e-8 s per set and pair).  MEMORY is a twentieth of the 23 GB of the machine the reports are made on
+# and four times the top's peak; WORK, sets x L^2, is some 10 s of one fit (the top's is 3e7).  A library over
+# either is built with one position factor per term (products=1: 1,071 terms at 5 angles); one that is still over
+# is not searched, and the fit says so.
+MEMORY = 1e9  # bytes
+TEMPORARIES = 6
+WORK = 1e8
+
+
+def cost(size, sets):
+    """(bytes, sets x pairs) of a search over `size` candidate terms and `sets` parameter sets."""
+    return 8.0 * (sets + TEMPORARIES) * size**2, float(sets) * size**2
+
+
+def within_budget(size, sets):
+    memory, work = cost(size, sets)
+    return memory <= MEMORY and work <= WORK
 
 
 def _product(a, b):
@@ -223,13 +270,28 @@ def fit(coords, units, param_names, samples, floor, driven=()):
     v (N, n), residual (N,)) per parameter set; floor: the absolute residual that is noise (the
     engines' rounding), under which a fit is exact.  `driven`: (name, unit) of prescribed motions, whose
     positions at each state follow the coordinates in q (library)."""
-    parts = library(coords, units, driven)
     if not samples:
         raise ValueError("samples: none given; a fit needs at least one parameter set")
     positions = list(coords) + [name for name, _ in driven]
     sets = [_sample(number, sample, coords, positions, param_names) for number, sample in enumerate(samples)]
     params = [values for values, *_ in sets]
     targets = [-residual for *_, residual in sets]  # what the derivation's force side lacks
+    unvaried = tuple(name for name in param_names if len({values[name] for values in params}) == 1)
+    before = max(float(np.max(np.abs(target))) for target in targets)
+    if before <= floor:
+        return TermFit((), before, before, True, len(sets), unvaried, ())
+    full = library_size(coords, units, driven)
+    products = next((products for products in (2, 1)
+                     if within_budget(library_size(coords, units, driven, products), len(sets))), None)
+    if products is None:
+        size = library_size(coords, units, driven, products=1)
+        memory, work = cost(size, len(sets))
+        return TermFit((), before, before, False, len(sets), unvaried, (), unsearched=(
+            f"even {size:,} candidate terms of one position factor each, over {len(sets)} parameter sets, would take "
+            f"{memory / 1e9:.3g} GB and {work:.2g} set-pairs, beyond the budget of {MEMORY / 1e9:g} GB and {WORK:g}"))
+    narrowed = "" if products == 2 else (f"candidates of one position factor each: the {full:,} of up to two "
+                                         f"would not fit the budget of {MEMORY / 1e9:g} GB")
+    parts = library(coords, units, driven, products)
     index = {name: i for i, name in enumerate(positions)}
     raw = [_columns(parts, q, v, index) for _, q, v, _ in sets]
     scales = np.array([np.linalg.norm(columns, axis=0) for columns in raw])
@@ -237,10 +299,6 @@ def fit(coords, units, param_names, samples, floor, driven=()):
     usable = np.flatnonzero(np.all(scales > 1e-12 * scales.max(axis=1, keepdims=True), axis=0))
     parts, scales = [parts[j] for j in usable], scales[:, usable]
     normalised = [columns[:, usable] / scale for columns, scale in zip(raw, scales)]
-    before = max(float(np.max(np.abs(target))) for target in targets)
-    unvaried = tuple(name for name in param_names if len({values[name] for values in params}) == 1)
-    if before <= floor:
-        return TermFit((), before, before, True, len(sets), unvaried, ())
 
     def terms(support, coefficients):
         numbers = coefficients / scales[:, list(support)]  # per set, of the columns as evaluated
@@ -248,10 +306,10 @@ def fit(coords, units, param_names, samples, floor, driven=()):
 
     exact, closest = _search(normalised, targets, floor)
     if closest is None and not exact:
-        return TermFit((), before, before, False, len(sets), unvaried, ())
+        return TermFit((), before, before, False, len(sets), unvaried, (), narrowed)
     if not exact:
         support, left, coefficients = closest
-        return TermFit(terms(support, coefficients), before, left, False, len(sets), unvaried, ())
+        return TermFit(terms(support, coefficients), before, left, False, len(sets), unvaried, (), narrowed)
     explanations = [(terms(support, coefficients), left) for support, left, coefficients in exact]
     # the first in the library's order whose coefficients are all products of parameters
     explanations.sort(key=lambda explanation: not all(term.identified for term in explanation[0]))
@@ -259,7 +317,7 @@ def fit(coords, units, param_names, samples, floor, driven=()):
     # as ambiguous as it gets: others as small whose coefficients are as well identified
     alternatives = tuple(other for other, _ in others if all(term.identified for term in other)
                          == all(term.identified for term in chosen))
-    return TermFit(chosen, before, left, True, len(sets), unvaried, alternatives)
+    return TermFit(chosen, before, left, True, len(sets), unvaried, alternatives, narrowed=narrowed)
 
 
 def _sample(number, sample, coords, positions, param_names):
