@@ -143,8 +143,8 @@ pointwise tolerance, at the case's parameters.  Every comparison with MuJoCo's e
 printed-row and linearisation rows) holds them negligible; beyond the tolerance a derivation would be blamed for them,
 and within it they may take half, the rest left to rounding (1e-13) and to the rows that amplify them (a Floquet
 monodromy matrix integrates the linearisation's error over a period: 135 times on one of the book's cases).  The
-book's cases keep them below 3.6e-11; near the share every row at a case's parameters passed (measured at 4.7e-10
-and 5.8e-10: docs/own-case.md).  At the random parameter sets, where nothing is measured before the run, a failing
+book's cases keep them below 8.9e-11; near the share every row at a case's parameters passed (measured at 4.7e-10
+and 8.1e-10: docs/own-case.md).  At the random parameter sets, where nothing is measured before the run, a failing
 MuJoCo row is judged again with its set's effect allowed (random_parameters)."""
 
 
@@ -168,9 +168,8 @@ def inertia_share(case, states, model, doubled):
     the placeholders are most of a coordinate's inertia (the cart-pendulum's bob at l = 1e-7 m, whose m l^2 =
     3e-15 kg m^2, is a third of its placeholder's 1e-14: MuJoCo puts its centre of mass at the hinge there, so that
     its theta'' is 0 with the placeholders and with them doubled, and its M[theta,theta] is the placeholder's) it is
-    of the order of 1.  At the book's numbers it is at most 8.5e-11, beside the values' change of 3.3e-11 in that
-    case; at the edges docs/own-case.md gives it agrees with the values' (5.8e-10, refused either way; 2.5e-10,
-    accepted).  Raises
+    of the order of 1.  At the book's numbers it is at most 8.9e-11 (the double pendulum's M[theta1,theta1]); at the
+    edges docs/own-case.md gives, 8.1e-10 (refused) and, beside the values' change of 4.7e-10, accepted.  Raises
     ArithmeticError as `evaluate` does."""
     with np.errstate(all="ignore"):
         try:
