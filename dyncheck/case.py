@@ -169,7 +169,7 @@ class Case:
         # version of the equations even if their file is edited meanwhile.
         self.folder = Path(folder).absolute()  # saved with the results: they must not depend on the working folder
         self.file = self.folder / "case.toml"
-        self.spec = self._read() if spec is None else spec
+        self.spec = self._read(overrides or {}) if spec is None else spec
         schema.validate(self.spec, self.file, where=spec is None)
         self.name = self.spec["name"]
         self.section = self.spec.get("section", "")
@@ -254,9 +254,10 @@ class Case:
         spec = {**self.spec, "initial": {**self.spec["initial"], "t_end": t_end}}
         return Case(self.folder, self.overrides, spec, self.derivation)
 
-    def _read(self):
+    def _read(self, overrides):
         """The case file: case.toml as written, or, for a plain equations module beside a scene.xml, the case
-        file they imply with case.toml (if any) over it (dyncheck.derived)."""
+        file they imply at the parameters `overrides` change (its time scales follow them), with case.toml (if
+        any) over it (dyncheck.derived)."""
         given = self._toml() if self.file.is_file() or not (self.folder / derived.EQUATIONS).is_file() else {}
         where = given.get("derivation", derived.EQUATIONS)
         if isinstance(where, str) and where.endswith(".py") and (self.folder / where).is_file() \
@@ -266,7 +267,7 @@ class Case:
                                        f"{self.folder.name}/{where}", isolation.IMPORT_BUDGET)
             if derived.is_plain(module):
                 from engines.mjcf import describe  # the harness reads a scene only through engines/
-                return derived.case_file(self.folder, module, describe(self.folder / derived.SCENE), given)
+                return derived.case_file(self.folder, module, describe(self.folder / derived.SCENE), given, overrides)
         if not given:
             raise ValueError(f"{self.file}: no such file, and {self.folder / derived.EQUATIONS} defines no COORDS and "
                              "accelerations(t, q, v, p) (docs/own-case.md)")

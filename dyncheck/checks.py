@@ -168,7 +168,7 @@ def inertia_share(case, states, model, doubled):
     the placeholders are most of a coordinate's inertia (the cart-pendulum's bob at l = 1e-7 m, whose m l^2 =
     3e-15 kg m^2, is a third of its placeholder's 1e-14: MuJoCo puts its centre of mass at the hinge there, so that
     its theta'' is 0 with the placeholders and with them doubled, and its M[theta,theta] is the placeholder's) it is
-    of the order of 1.  At the book's numbers it is at most 8.9e-11 (the double pendulum's M[theta1,theta1]); at the
+    of the order of 1.  At the book's numbers it is at most 8.9e-11 (of an inner link's M entry); at the
     edges docs/own-case.md gives, 8.1e-10 (refused) and, beside the values' change of 4.7e-10, accepted.  Raises
     ArithmeticError as `evaluate` does."""
     with np.errstate(all="ignore"):

@@ -210,9 +210,11 @@ def reaction_sensors(names, scene, file):
     return out
 
 
-def case_file(folder, module, scene, given):
+def case_file(folder, module, scene, given, overrides=None):
     """The case file that `module` (a plain equations module) and `scene` (engines.mjcf.SceneFile) imply,
-    with `given` (a case.toml's tables, or {}) over it: what a case file says, it says."""
+    with `given` (a case.toml's tables, or {}) over it: what a case file says, it says.  Its time scales
+    (horizon, steps, the studies' settings) come from the fastest frequency at the parameters with `overrides`
+    (a stiffer spring: a faster motion, shorter steps); its parameters' values stay the module's."""
     file = folder / EQUATIONS
     coords, params = module_values(module, file)
     joints = coordinate_joints(coords, scene, file)
@@ -237,7 +239,7 @@ def case_file(folder, module, scene, given):
         raise ValueError(f"{file}: case.toml's initial q and v must have one value per coordinate ({', '.join(coords)})")
     try:
         with np.errstate(all="ignore"):
-            omega = frequency(module, coords, params, q0, v0)
+            omega = frequency(module, coords, {**params, **numbers(overrides or {}, params)}, q0, v0)
             reactions = sorted(module.reactions(0.0, q0, v0, params)) if hasattr(module, "reactions") else []
     except Exception as error:  # the derivation's own error, as the checks would report it: refused here
         raise ValueError(f"{file}: at the initial state q = {q0.tolist()}, v = {v0.tolist()}: "
@@ -293,6 +295,17 @@ def case_file(folder, module, scene, given):
         "work_precision": work_precision(omega),
     }
     return merged(derived, given)
+
+
+def numbers(overrides, params):
+    """The overrides of the module's parameters that are numbers (Case checks them all, and says so, after)."""
+    out = {}
+    for name, value in overrides.items():
+        try:
+            out[name] = float(value)
+        except (TypeError, ValueError):
+            continue
+    return {name: x for name, x in out.items() if name in params and math.isfinite(x)}
 
 
 def summary(docstring):
