@@ -7,6 +7,7 @@ import xml.etree.ElementTree as ET
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
+from dyncheck import expressions
 from dyncheck.messages import plural, statuses_in_words
 from dyncheck.results import Status, consequences, reason, status_counts
 
@@ -63,6 +64,22 @@ def recap(results, seconds):
     cases = plural(len(results), "case")
     verdict = f"FAIL: {failed_cases} of {cases}" if rows else f"PASS: {cases}"
     return lines + [f"dyncheck: {verdict}; {tally([r for result in results for r in result.rows])} ({seconds:.0f} s)"]
+
+
+def states_covered(result):
+    """Where a case's pointwise checks looked, in one line: its random states and the box they span (t, each
+    coordinate and rate), its parameter sets' states (their own, over the same box)."""
+    spec, sample = result.spec, result.spec["sample"]
+    params = {**{name: float(p["value"]) for name, p in spec["params"].items()}, **result.overrides}
+    names = expressions.of_parameters(params)
+    value = lambda x: float(expressions.evaluate(x, names)) if isinstance(x, str) else float(x)
+    spans = [("t", sample["t"], "s")] + list(zip(spec["coords"], sample["q"], spec["coord_units"])) + \
+        [(f"{c}'", span, f"{unit}/s") for c, span, unit in zip(spec["coords"], sample["v"], spec["coord_units"])]
+    sets = sample.get("params")
+    return (f"{result.name}: {plural(sample['count'], 'random state')} over "
+            + ", ".join(f"{name} [{value(lo):.3g}, {value(hi):.3g}] {unit}" for name, (lo, hi), unit in spans)
+            + (f"; {plural(sets['sets'], 'random parameter set')}, {sets['states']} states of its own each"
+               if sets else ""))
 
 
 def wrong_equations(result):

@@ -393,6 +393,7 @@ def print_results(results, table=True):
             print(f"\n== {result.name}: {heading(spec)}"
                   + (f", with {result.overrides_text}" if result.overrides else ""))
             print(format_rows(rows).to_string(index=False))
+            print(ci.states_covered(result))
         for line in ci.wrong_equations(result):
             print(line)
         print(f"{result.name}: {result.status}: {ci.tally(rows)} ({result.wall:.1f} s)")

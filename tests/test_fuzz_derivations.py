@@ -24,7 +24,7 @@ GUIDE = Path(__file__).resolve().parent.parent / "docs" / "own-case.md"
 FILES = {}  # the guide's first scene.xml and equations.py, as written (before its planted error)
 for name, text in re.findall(r"```(?:xml|python) file=cart_pendulum/(\S+)\n(.*?)```", GUIDE.read_text(), re.S):
     FILES.setdefault(name, text)
-CALL_BUDGET = 0.3  # s: a case.toml [budget] call, so that a looping derivation costs the test seconds, not minutes
+CALL_BUDGET = 0.1  # s: a case.toml [budget] call, so that a looping derivation costs the test seconds, not minutes
 
 
 def make_case(folder, equations, toml=""):
@@ -106,7 +106,7 @@ def test_ctrl_c_during_a_run_exits_130_without_a_traceback(tmp_path):
     folder = make_case(tmp_path, misbehaving("time.sleep(1e6)", where="True"), "[budget]\ncall = 100\n")
     process = subprocess.Popen(["dyncheck", "run", "--cases", str(folder)], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, start_new_session=True)
-    time.sleep(8)  # loading, then the first call that sleeps
+    time.sleep(4)  # loading (about 2 s), then the first call, which sleeps
     os.killpg(process.pid, signal.SIGINT)  # as a terminal sends it: to the whole group
     out, err = process.communicate(timeout=60)
     assert process.returncode == 130, err[-500:]
