@@ -256,8 +256,9 @@ class Case:
         file they imply with case.toml (if any) over it (dyncheck.derived)."""
         given = self._toml() if self.file.is_file() or not (self.folder / derived.EQUATIONS).is_file() else {}
         where = given.get("derivation", derived.EQUATIONS)
-        if isinstance(where, str) and where.endswith(".py") and (self.folder / where).is_file() \
-                and (self.folder / derived.SCENE).is_file():
+        if isinstance(where, str) and where.endswith(".py") and (self.folder / derived.SCENE).is_file() \
+                and schema.own_file(self.folder, where, "derivation",
+                                    self.file if "derivation" in given else self.folder / where).is_file():
             module = load_file(self.folder / where, f"{self.file}: derivation = {where!r}" if "derivation" in given
                                else str(self.folder / where))
             if derived.is_plain(module):
@@ -376,12 +377,13 @@ class Case:
 
     @cached_property
     def derivation(self):
-        """The module of the case's equations (its `derivation`: a module name, or a .py file in the case
-        folder), with its classes Reference, Book and, where the book prints one, Program."""
+        """The module of the case's equations (its `derivation`: a .py file in the case folder, or a module of
+        the package's reference/), with its classes Reference, Book and, where the book prints one, Program."""
         where = self.spec["derivation"]
+        path = schema.derivation_file(where, self.folder, self.file)  # refused before anything runs
         if not where.endswith(".py"):
             return guarded(self._where_derived, lambda: importlib.import_module(where))
-        return load_file(self.folder / where, self._where_derived)
+        return load_file(path, self._where_derived)
 
     @property
     def _where_derived(self):

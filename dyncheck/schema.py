@@ -13,7 +13,6 @@ docs/case-file.md, the reference of the case file, is `markdown()`.
 
 import ast
 import functools
-import importlib.util
 import math
 import operator
 import re
@@ -197,7 +196,10 @@ def validate(spec, file, where=True):
     if where:
         if spec["name"] != Path(file).parent.name:  # the command line finds a case by its folder, pages by its name
             raise _error(file, "name", spec["name"], f"is not the name of the case's folder, '{Path(file).parent.name}'")
-        _derivation(spec["derivation"], file)
+        derivation_file(spec["derivation"], Path(file).parent, file)
+        module = spec.get("stability", {}).get("module")
+        if isinstance(module, str):  # its own studies, loaded by dyncheck.stability once the models are built
+            own_file(Path(file).parent, module, "stability.module", file)
 
 
 def check_params(spec, params, overrides, file):
@@ -490,22 +492,37 @@ def _course(spec, file):
                          "[vibration]")
 
 
-def _derivation(derivation, file):
-    """The case's equations: a module importable from the checkout, or a .py file in the case's folder."""
+# The package's own derivations, the one place outside a case's folder that its `derivation` may name.
+REFERENCE = Path(__file__).resolve().parent.parent / "reference"
+
+
+def own_file(folder, name, field, file):
+    """The file `name` that the case file's `field` gives, as a path inside the case's `folder` (symbolic links
+    and .. resolved): a case file names only files of its own folder, so that reading a case runs no code
+    from elsewhere.  ValueError for a path that leaves it; whether the file is there is the caller's to say."""
+    path = (Path(folder) / name).resolve()
+    if not path.is_relative_to(Path(folder).resolve()):
+        raise _error(file, field, name, f"is not a file of the case's folder {folder} (it is {path}): a case file "
+                     "names only files of its own folder")
+    return path
+
+
+def derivation_file(derivation, folder, file):
+    """The file of the case's equations, checked before anything is imported: a .py file in the case's
+    `folder` (own_file), or `reference.<name>`, the package's own reference/<name>.py (never any other
+    module: finding one would import its parent packages, and loading it runs whatever is installed)."""
     if derivation.endswith(".py"):
-        found = (Path(file).parent / derivation).is_file()
-    elif all(part.isidentifier() for part in derivation.split(".")):
-        try:
-            found = importlib.util.find_spec(derivation) is not None
-        except ImportError:  # a parent package that does not exist, or is a module
-            found = False
+        path = own_file(folder, derivation, "derivation", file)
+        where = "no file in the case folder"
     else:
-        raise _error(file, "derivation", derivation,
-                     "is neither a module name (dotted identifiers) nor a path ending in .py")
-    if not found:
-        raise _error(file, "derivation", derivation,
-                     f"names no {'file in the case folder' if derivation.endswith('.py') else 'importable module'}"
-                     " (where the case's equations live)")
+        package, _, name = derivation.partition(".")
+        if package != REFERENCE.name or not name.isidentifier():
+            raise _error(file, "derivation", derivation, f"is neither a module of the package's {REFERENCE.name}/ "
+                         f"({REFERENCE.name}.<name>) nor a path ending in .py of the case's folder")
+        path, where = REFERENCE / f"{name}.py", f"no module of the package's {REFERENCE.name}/"
+    if not path.is_file():
+        raise _error(file, "derivation", derivation, f"names {where} (where the case's equations live)")
+    return path
 
 
 def _of_the_book(source):
@@ -594,9 +611,11 @@ MEANINGS = {
     "section": "The book's section of the example, e.g. 1.8.3; a case of your own may have none.",
     "title": "The example's title in the reports.",
     "summary": "The example in a paragraph: the scene, its coordinates, what moves it; it opens the case's report.",
-    "derivation": "Where the case's equations live: a module importable from the checkout (e.g. "
-                  "`reference.<case>`), or a path ending in .py relative to the case's folder.  It defines the "
-                  "sources `Book`, `Reference` and, if the book prints a program, `Program`.",
+    "derivation": "Where the case's equations live: a path ending in .py of a file in the case's folder, or "
+                  "`reference.<name>`, a module of the package's own `reference/` (the book's cases).  Nothing "
+                  "else: a path that leaves the folder (.., an absolute path, a symbolic link to elsewhere) or any "
+                  "other module is refused before anything is loaded.  It defines the sources `Book`, `Reference` "
+                  "and, if the book prints a program, `Program`.",
     "coords": "The generalized coordinates, in the order of the book's equations; their rates are `<coord>_rate`.",
     "reactions": "The reactions (force or moment components) the derivation computes, by name; compared between "
                  "the sources.",
@@ -798,7 +817,7 @@ MEANINGS = {
                          f"{ceilings.DATA:g}).",
     "data[i].relation": "equal: printed = formula; at most: printed <= formula.  Absent: equal.",
     "stability": "The stability studies of `dyncheck report`, each in a sub-table named after it; `module` names "
-                 "a .py file in the case's folder with the case's own studies.  Validated by dyncheck/stability.",
+                 "a .py file in the case's folder (not outside it) with the case's own studies.  Validated by dyncheck/stability.",
     "vibration": "Vibration analysis (dyncheck/vibration.py): an equilibrium found by Newton-Raphson, the equations "
                  "linearised about it by the derivation and by both engines, their frequencies, modes and stability, "
                  "each frequency checked in a run.  Rows with check `vibration`; the page's section \"Vibration "

@@ -46,7 +46,7 @@ def run(tmp_path, capsys, *args):
      "Reference.reaction_names is ('R',)"),
     ("equations.py", f"np.array([{ACC}])", f"np.array([{ACC}, 5.0])",
      "Reference.accelerations gives shape (2,) at the initial state, not (1,)"),
-    ("case.toml", 'derivation = "equations.py"', 'derivation = "os"', "derivation = 'os' defines no class Reference"),
+    ("case.toml", 'derivation = "equations.py"', 'derivation = "os"', "derivation = 'os' is neither a module of the package's reference/"),
 ])
 def test_a_broken_derivation_is_refused_before_any_work(tmp_path, capsys, file, old, new, message):
     case_folder(tmp_path, **{file: (old, new)})

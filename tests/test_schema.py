@@ -243,11 +243,14 @@ def test_a_bad_constraint_gives_a_clean_error(cases, capsys, expression, message
 
 
 @pytest.mark.parametrize("derivation, message", [
-    ("reference.spring_pendulm", "derivation = 'reference.spring_pendulm' names no importable module"),
-    ("nowhere.spring_pendulum", "derivation = 'nowhere.spring_pendulum' names no importable module"),
-    ("reference.spring_pendulum.x", "derivation = 'reference.spring_pendulum.x' names no importable module"),
+    ("reference.spring_pendulm", "derivation = 'reference.spring_pendulm' names no module of the package's reference/"),
+    ("nowhere.spring_pendulum", "derivation = 'nowhere.spring_pendulum' is neither a module of the package's "
+                                "reference/"),
+    ("reference.spring_pendulum.x", "derivation = 'reference.spring_pendulum.x' is neither a module of the package's "
+                                    "reference/"),
     ("equations.py", "derivation = 'equations.py' names no file in the case folder"),
-    ("reference/spring_pendulum", "derivation = 'reference/spring_pendulum' is neither a module name"),
+    ("reference/spring_pendulum", "derivation = 'reference/spring_pendulum' is neither a module of the package's "
+                                  "reference/"),
 ])
 def test_a_derivation_that_is_not_there_is_refused(cases, derivation, message):
     edit(cases / "spring_pendulum", "case.toml", 'derivation = "reference.spring_pendulum"',

@@ -18,7 +18,7 @@ integrators' error level can be expected to agree to a tolerance, from the finit
 perturbations along the book's initial conditions (cheap: five trajectories over the case's horizon).
 """
 
-from dyncheck import ceilings
+from dyncheck import ceilings, schema
 from dyncheck.results import heading
 
 from dyncheck.case import load_file
@@ -40,7 +40,7 @@ def case_module(case):
     module = case.spec.get("stability", {}).get("module")
     if module is None:
         return None
-    path = case.folder / module
+    path = schema.own_file(case.folder, module, "stability.module", case.file)
     if not path.is_file():  # also when saved results are rendered after their case folder moved
         raise ValueError(f"{case.file}: stability.module = {module!r}: no such Python file {path} (the case's "
                          "studies and the figures of their saved results need it)")
