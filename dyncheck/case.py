@@ -83,6 +83,7 @@ class AppliedForce:
 
 
 PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
+PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # an override given as text
 
 
 def prose_fields(spec, path=""):
@@ -180,6 +181,10 @@ class Case:
             if key not in self.defaults:
                 raise ValueError(f"{self.file}: case '{self.name}' has no parameter '{key}'"
                                  f"{suggest(key, self.defaults)}; its parameters are {', '.join(self.defaults)}")
+            # float() reads more than numbers: "2_0" as 20, Arabic-Indic and fullwidth digits
+            if isinstance(value, str) and not PLAIN_NUMBER.fullmatch(value):
+                raise ValueError(f"{self.file}: override {key} = {value!r} is not a number (a decimal in ASCII "
+                                 "digits, such as 2000, 0.25 or 2e3)")
             try:
                 number = float(value)
             except (TypeError, ValueError):

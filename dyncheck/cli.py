@@ -357,8 +357,6 @@ def parse_overrides(pairs):
             raise ValueError(f"--set '{pair}': expected NAME=VALUE")
         if name in overrides:
             raise ValueError(f"--set {name}: given twice ({name}={overrides[name]} and {name}={value}); give it once")
-        if not value.isascii():  # float() reads Arabic-Indic or fullwidth digits: a value nobody typed as a number
-            raise ValueError(f"--set {name}={value}: not a number in ASCII digits")
         overrides[name] = value
     return overrides
 

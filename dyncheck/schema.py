@@ -249,15 +249,7 @@ def check_values(spec, file, value):
             raise _error(file, field, x, f"is {v}, not a finite number")
         if condition and not CONDITIONS[condition][0](v):
             raise _error(file, field, x, CONDITIONS[condition][1] + (f" (it is {v:g})" if isinstance(x, str) else ""))
-    setting = spec["integration"]
-    steps = values["integration.output_step"] / values["integration.mujoco_step"]
-    if round(steps) < 1 or abs(steps - round(steps)) > 1e-9 * steps:
-        raise _error(file, "integration.output_step", setting["output_step"],
-                     f"is not a multiple of integration.mujoco_step = {setting['mujoco_step']!r}"
-                     + (f" = {values['integration.mujoco_step']:g}" if isinstance(setting["mujoco_step"], str) else ""))
-    if values["integration.tight_rtol"] >= values["integration.rtol"]:
-        raise _error(file, "integration.tight_rtol", setting["tight_rtol"],
-                     f"is not below integration.rtol = {setting['rtol']!r}: the tight twin must be tighter")
+    _check_integration(spec, values, file)
     _check_sizes(spec, values, file)
     for i, runaway in enumerate(spec.get("runaway", [])):  # true or false, it must evaluate (its why: Case.prose)
         value(runaway["when"], f"runaway[{i}].when")
@@ -276,6 +268,33 @@ def check_values(spec, file, value):
             if not all(RELATIONS[relation](values[f"sample.params.ranges.{p}[{i}]"], bound) for i in (0, 1)):
                 raise _error(file, f"sample.params.ranges.{p}", bounds,
                              f"leaves the physical values: {p} must be {relation} {bound:g} ({reason})")
+
+
+def _check_integration(spec, values, file):
+    """The runs' settings, each one that the integrators can honour and that makes its rows mean something."""
+    from dyncheck.simulate import LEAST_RTOL  # here, not at the top: it loads scipy and pandas
+    setting = spec["integration"]
+    shown = lambda key: (f"integration.{key} = {setting[key]!r}"
+                         + (f" = {values['integration.' + key]:g}" if isinstance(setting[key], str) else ""))
+    whole = lambda ratio: round(ratio) >= 1 and abs(ratio - round(ratio)) <= 1e-9 * ratio  # as simulate's grid
+    if not whole(values["integration.output_step"] / values["integration.mujoco_step"]):
+        raise _error(file, "integration.output_step", setting["output_step"],
+                     f"is not a multiple of {shown('mujoco_step')}")
+    if not whole(values["initial.t_end"] / values["integration.output_step"]):  # every run ends on an output
+        raise _error(file, "initial.t_end", spec["initial"]["t_end"],
+                     f"is not a whole number of output steps ({shown('output_step')})")
+    for key in ("rtol", "tight_rtol"):
+        if values[f"integration.{key}"] < LEAST_RTOL:
+            raise _error(file, f"integration.{key}", setting[key],
+                         f"is below {LEAST_RTOL:.3g}, 100 machine epsilons: scipy's integrators raise a smaller rtol "
+                         "to that, so the run would not be the one its rows say (dyncheck.simulate.LEAST_RTOL)")
+    if values["integration.rtol"] > ceilings.RUN:
+        raise _error(file, "integration.rtol", setting["rtol"],
+                     f"is above {ceilings.RUN:g}: a run's error, about rtol of each quantity, would be beyond the "
+                     "ceiling where an error estimate means anything, and every row judged by one inconclusive")
+    if values["integration.tight_rtol"] >= values["integration.rtol"]:
+        raise _error(file, "integration.tight_rtol", setting["tight_rtol"],
+                     f"is not below integration.rtol = {setting['rtol']!r}: the tight twin must be tighter")
 
 
 # How much work one case file may ask for, so that a run ends in minutes (dyncheck.simulate bounds
@@ -639,7 +658,7 @@ MEANINGS = {
     "initial": "The initial conditions of the integrated runs.",
     "initial.q": "The coordinates at t = 0, one per coordinate.",
     "initial.v": "Their rates at t = 0, one per coordinate.",
-    "initial.t_end": "The end of the runs, which start at t = 0.",
+    "initial.t_end": "The end of the runs, which start at t = 0: a whole number of `integration.output_step`s.",
     "runaway": "Where the case's physics runs away: conditions of the parameters under which a coordinate grows "
                "without bound, so that the runs past them are reported as `runaway`, not as `unstable` (see "
                "Runaway).",
@@ -674,8 +693,10 @@ MEANINGS = {
     "integration": "How the checks integrate the equations.",
     "integration.output_step": "The interval between a run's output rows; a multiple of mujoco_step.",
     "integration.rtol": "The relative and absolute tolerance of scipy's DOP853 for the runs of reference, book and "
-                        "Pinocchio.",
-    "integration.tight_rtol": "The tolerance of the tight solution the runs are compared with; below rtol.",
+                        "Pinocchio: from 100 machine epsilons (2.2e-14: scipy raises a smaller rtol to that) to "
+                        f"{ceilings.RUN:g} (above it a run's error estimate means nothing).",
+    "integration.tight_rtol": "The tolerance of the tight solution the runs are compared with; below rtol, and at "
+                              "least 100 machine epsilons.",
     "integration.mujoco_step": "MuJoCo's fixed time step; an expression of the parameters may make it follow the scene's fastest motion (the longest step that divides an output_step of 1 ms with omega dt at most c: \"1e-3 / max(1, ceil(omega / c))\", omega written out in the parameters).",
     "tolerance": "The allowed errors of the checks, each with its argument.",
     "tolerance.pointwise": "The pointwise check: every source at the random states.",

@@ -108,10 +108,13 @@ def test_a_case_named_twice_runs_once(monkeypatch, results, capsys):
 
 @pytest.mark.parametrize("sets, message", [
     (["m=1", "m=2"], "--set m: given twice (m=1 and m=2)"),
-    (["m=١٢"], "--set m=١٢: not a number in ASCII digits"),  # float() reads it as 12.0
-    (["m=１"], "--set m=１: not a number in ASCII digits"),  # fullwidth 1
+    (["m=١٢"], "override m = '١٢' is not a number (a decimal in ASCII digits"),  # float() reads it as 12.0
+    (["m=１"], "override m = '１' is not a number"),  # fullwidth 1
+    (["m=2_0"], "override m = '2_0' is not a number"),  # float() reads it as 20.0
+    (["m=1e1_0"], "override m = '1e1_0' is not a number"),
+    (["m=infinity"], "override m = 'infinity' is not a number"),
 ])
-def test_a_repeated_or_non_ascii_set_exits_2(sets, message, no_run, capsys):
+def test_a_repeated_or_non_numeric_set_exits_2(sets, message, no_run, capsys):
     argv = ["run", "piston"] + [arg for s in sets for arg in ("--set", s)]
     assert cli.main(argv) == 2
     assert message in capsys.readouterr().err
