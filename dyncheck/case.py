@@ -21,6 +21,9 @@ from dyncheck.results import overrides_in_words
 
 CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 SOURCES = ("reference", "book", "mujoco", "pinocchio")
+# What a derivation's model answers at a state (docs/model-interface.md): for a plain module each it has is tried
+# at the initial state on load (Case._derived), so that one that fails there is refused before any work.
+INTERFACE = ("accelerations", "reactions", "energy", "drive_power", "mass_matrix", "forces")
 # Scene values are parsed from decimal text by each loader; they must equal case.toml's to
 # within a few ulps (binding scales are exact: +-1).
 BINDING_RTOL = 4 * np.finfo(float).eps
@@ -392,7 +395,10 @@ class Case:
 
     @property
     def _where_derived(self):
-        """The case file's `derivation` field, as errors about the derivation name it."""
+        """The case file's `derivation` field, as errors about the derivation name it; for a case of two files
+        and no case.toml, the equations file."""
+        if not self.file.is_file():
+            return str(self.folder / self.spec["derivation"])
         return f"{self.file}: derivation = {self.spec['derivation']!r}"
 
     @property
@@ -477,7 +483,8 @@ class Case:
 
     def _derived(self, name):
         """The derivation's class `name` at the case's parameters, checked against the case file: its
-        coordinates and reactions, and the shape of its accelerations at the initial state."""
+        coordinates and reactions, and at the initial state the shape of its accelerations and, for a plain module,
+        every function of INTERFACE it has (whose answers must be real numbers of their shapes: derived.real)."""
         what = self._where_derived
         cls = getattr(self.derivation, name, None)
         if derived.is_plain(self.derivation) and name != "Program":  # one derivation: the equations under test
@@ -494,14 +501,21 @@ class Case:
             raise ValueError(f"{what}: {name}.reaction_names is {reactions!r}, but case.toml's reactions are "
                              f"{list(self.reaction_names)}")
         q0, v0, _ = self.initial
-        try:
-            with np.errstate(all="ignore"):
-                acc = np.asarray(model.accelerations(0.0, q0, v0), dtype=float)
-        except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
-            return model
-        except Exception as error:
-            raise ValueError(f"{what}: {name}.accelerations at the initial state: {type(error).__name__}: "
-                             f"{error}") from None
+        answers = {}
+        # A class may decline a question on purpose (a printed program computes no energy: NotImplementedError),
+        # which its rows then say; a plain module's functions (derived.Equations) are all meant as answers.
+        asked = [f for f in INTERFACE if callable(getattr(model, f, None))] if isinstance(model, derived.Equations) \
+            else ["accelerations"]
+        for function in asked:
+            try:
+                with np.errstate(all="ignore"):
+                    answers[function] = getattr(model, function)(0.0, q0, v0)
+            except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
+                return model
+            except Exception as error:  # also what a plain module returns that is not real numbers (derived.real)
+                raise ValueError(f"{what}: {name}.{function} at the initial state: {type(error).__name__}: "
+                                 f"{error}") from None
+        acc = np.asarray(answers["accelerations"], dtype=float)
         if acc.shape != (len(self.coords),):
             raise ValueError(f"{what}: {name}.accelerations gives shape {acc.shape} at the initial state, not "
                              f"({len(self.coords)},), one per coordinate")

@@ -6,21 +6,16 @@ import pytest
 
 from dyncheck.cli import main
 from test_architecture import doc_example
-from test_own_case_doc import steps
 
 # A module that leaves a marker beside itself when it is executed.
 EVIL = "from pathlib import Path\n(Path(__file__).parent / 'MARKER').write_text('executed')\n"
 
 
 @pytest.fixture
-def tutorial(tmp_path):
-    """docs/own-case.md's two-file cart pendulum in tmp_path/cases/cart_pendulum, and an evil file beside cases/."""
-    for kind, path, text in steps():
-        if kind == "file" and path.startswith("cart_pendulum/"):
-            (tmp_path / "cases" / path).parent.mkdir(parents=True, exist_ok=True)
-            (tmp_path / "cases" / path).write_text(text)
+def tutorial(tutorial, tmp_path):
+    """The guide's two-file case (conftest), and an evil file beside its cases/ folder."""
     (tmp_path / "evil.py").write_text(EVIL)
-    return tmp_path / "cases" / "cart_pendulum"
+    return tutorial
 
 
 def refused(tmp_path, capsys, command, field):

@@ -119,3 +119,57 @@ def test_a_case_s_studies_may_not_replace_dyncheck_s_own(tmp_path, capsys):
     (folder / "studies.py").write_text(STUDIES)
     status, _, err = run(tmp_path, capsys)
     assert status == 2 and "STUDIES names ['lyapunov'], which are dyncheck's own studies" in err
+
+
+SOLVE = "    return np.linalg.solve(mass_matrix(q, p), forces(t, q, v, p))"
+ENERGY = "    return kinetic + 0.5 * k * x**2 - m * g * l * np.cos(theta)"
+
+
+def alone(function, wrong):
+    """Lines that make the guide's `function` return `wrong` (of its own answer `right`), its accelerations kept."""
+    return f"""
+_right = {{"mass_matrix": mass_matrix, "forces": forces}}
+def accelerations(t, q, v, p):
+    return np.linalg.solve(_right["mass_matrix"](q, p), _right["forces"](t, q, v, p))
+def {function}(*args):
+    right = _right["{function}"](*args)
+    return {wrong}
+"""
+
+
+@pytest.mark.parametrize("old, new, function, returned", [
+    (SOLVE, SOLVE + " + 1e-3j", "accelerations", "complex128"),  # numpy would drop the 1e-3j with a warning
+    (SOLVE, SOLVE + " + 0j", "accelerations", "complex128"),  # complex, if its imaginary part is 0
+    (SOLVE, SOLVE.replace("return ", "return [str(a) for a in ") + "]", "accelerations", "<U"),  # "1.0"
+    (SOLVE, SOLVE.replace("return ", "return list(") + ") + [1.0]", "accelerations", "shape (3,)"),
+    (ENERGY, ENERGY + " + 0j", "energy", "complex128"),
+    (ENERGY, ENERGY.replace("return ", "return str(") + ")", "energy", "<U"),
+    (ENERGY, ENERGY.replace("return ", "return [") + "]", "energy", "shape (1,)"),
+    ("", alone("mass_matrix", "right + 0j"), "mass_matrix", "complex128"),
+    ("", alone("mass_matrix", "right > 0"), "mass_matrix", "bool"),
+    ("", alone("mass_matrix", "right[0]"), "mass_matrix", "shape (2,)"),
+    ("", alone("forces", "right.astype(object)"), "forces", "object"),
+])
+def test_equations_that_return_what_is_not_real_numbers_are_refused(tutorial, capsys, old, new, function, returned):
+    """A plain module's function that returns complex numbers, strings, booleans, objects or the wrong shape at
+    the initial state: exit 2 on load, one line (no warning) naming the equations file, the function and what it
+    returned."""
+    equations = tutorial / "equations.py"
+    text = equations.read_text()
+    assert old in text, old
+    equations.write_text(text.replace(old, new, 1) if old else text + new)
+    status = main(["run", "--cases", str(tutorial.parent)])
+    err = capsys.readouterr().err
+    assert status == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"dyncheck: error: {equations}: ") and f" {function}(" in err and returned in err, err
+
+
+def test_equations_that_return_complex_numbers_after_the_start_fail_their_rows(tutorial, capsys):
+    """Where the initial state gives real numbers and other states do not, the rows that meet them fail and say
+    why (numpy dropped the imaginary part and every row passed before)."""
+    equations = tutorial / "equations.py"
+    equations.write_text(equations.read_text().replace(SOLVE, SOLVE + " + (0 if t == 0 else 1e-3j)"))
+    assert main(["run", "--cases", str(tutorial.parent)]) == 1
+    out = capsys.readouterr().out
+    assert "pointwise every quantity (derivation vs mujoco): fail: reference: accelerations at random state 0: " \
+           "ValueError: accelerations(t, q, v, p) returned array([" in out and "complex128" in out, out
