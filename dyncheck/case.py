@@ -86,6 +86,11 @@ class AppliedForce:
 
 
 PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
+# A number's format spec in prose (Python's: [[fill]align][sign][z][#][0][width][grouping][.precision][type]), its
+# width and precision of at most 3 digits each: a double holds 17 significant digits and a page's line is under
+# 200 characters, so 999 already writes nothing but padding and noise, while format() would build whatever is
+# asked (width 99999999999: a MemoryError; precision 999999999: a 1 GB string, 73 s).
+FORMAT_SPEC = re.compile(r"(?:.?[<>=^])?[-+ ]?z?#?0?(?P<width>[0-9]*)[,_]?(?:\.(?P<precision>[0-9]+))?[eEfFgGn%]?")
 PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # an override given as text
 
 
@@ -271,7 +276,11 @@ class Case:
                                else str(self.folder / where))
             if derived.is_plain(module):
                 from engines.mjcf import describe  # the harness reads a scene only through engines/
-                return derived.case_file(self.folder, module, describe(self.folder / derived.SCENE), given)
+                scene = describe(self.folder / derived.SCENE)
+                _, params = derived.module_values(module, self.folder / where)
+                schema.check_bindings(given.get("scene", {}).get("bindings", {}), params, self.file,
+                                      {"body": scene.masses, "joint": [j.name for j in scene.joints]})
+                return derived.case_file(self.folder, module, scene, given)
         if not given:
             raise ValueError(f"{self.file}: no such file, and {self.folder / derived.EQUATIONS} defines no COORDS and "
                              "accelerations(t, q, v, p) (docs/own-case.md)")
@@ -310,6 +319,10 @@ class Case:
         def number(match):
             expression, _, spec = match[1].rpartition(":") if ":" in match[1] else (match[1], "", ".3g")
             value = self.value(expression.strip(), field)
+            form = FORMAT_SPEC.fullmatch(spec.strip())
+            if not form or len(form["width"]) > 3 or len(form["precision"] or "") > 3:
+                raise ValueError(f"{self.file}: {field}: cannot write {match[0]!r}: {spec.strip()!r} is not a format "
+                                 "spec of a number with a width and a precision of at most 3 digits each")
             try:
                 return format(value, spec.strip() or ".3g")
             except ValueError as error:  # a format spec that is not one

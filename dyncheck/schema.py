@@ -431,8 +431,7 @@ def _cross_references(spec, file):
     for p, locations in scene.get("bindings", {}).items():
         if p not in params:
             raise _error(file, f"scene.bindings.{p}", locations, "binds no parameter" + _hint(p, params))
-        for i, location in enumerate(locations):
-            _binding(location, f"scene.bindings.{p}[{i}]", params, file)
+    check_bindings(scene.get("bindings", {}), params, file)
     for p, bounds in spec["sample"].get("params", {}).get("ranges", {}).items():
         if p not in params:
             raise _error(file, f"sample.params.ranges.{p}", bounds, "is not a parameter's range" + _hint(p, params))
@@ -563,6 +562,25 @@ def _ceilings(spec, file):
         if item["tolerance"] > ceilings.DATA:
             raise _error(file, f"data[{i}].tolerance", item["tolerance"],
                          f"is above the ceiling {ceilings.DATA:g}: it could not tell a printing error from the printed rounding")
+
+
+def check_bindings(bindings, params, file, elements=None):
+    """[scene.bindings]: their types (also for a case of two files, whose case file dyncheck.derived.case_file
+    derives from them before the whole is validated), each parameter bound somewhere, each location one that a
+    binding can set, its index within the attribute's components; with `elements` ({"body": names, "joint":
+    names} of the scene), each name one of the scene's."""
+    _walk(bindings, SCHEMA[1]["scene"][1]["bindings?"], "scene.bindings", file)
+    for p, locations in bindings.items():
+        if not locations:
+            raise _error(file, f"scene.bindings.{p}", locations, "binds the parameter to nothing: give its locations "
+                         "in the scene, or leave it out")
+        for i, location in enumerate(locations):
+            field = f"scene.bindings.{p}[{i}]"
+            _binding(location, field, params, file)
+            names = (elements or {}).get(location["element"])
+            if names is not None and location["name"] not in names:
+                raise _error(file, f"{field}.name", location["name"], f"is no {location['element']} of the scene"
+                             + _hint(location["name"], sorted(names)))
 
 
 def _binding(location, field, params, file):
@@ -1023,7 +1041,8 @@ def markdown():
               "## Numbers in prose", "",
               "A text that a page shows (`summary`, `report.modelling`, `tolerance.<name>.why`, a finding's "
               "`explanation` and `effect`, `runaway[i].why`, ...) may write a number as `{= expression}` or "
-              "`{= expression :format}` (a Python format spec, default `.3g`): it is computed at the parameters "
+              "`{= expression :format}` (a Python format spec of a number, default `.3g`, its width and precision of at "
+              "most 3 digits each): it is computed at the parameters "
               "of the run, so that the page stays true under `--set`.  For example `sqrt(k/m) = "
               "{= sqrt(k/m) :.0f} rad/s` reads `sqrt(k/m) = 100 rad/s` at the book's k = 2000 N/m and `50 rad/s` "
               "at k = 500.  Every such number is evaluated on load (a bad one is refused, exit 2).  A number "

@@ -7,6 +7,7 @@ import time
 
 import pytest
 
+from dyncheck.case import Case
 from dyncheck.cli import main
 from test_architecture import doc_example
 
@@ -173,3 +174,33 @@ def test_equations_that_return_complex_numbers_after_the_start_fail_their_rows(t
     out = capsys.readouterr().out
     assert "pointwise every quantity (derivation vs mujoco): fail: reference: accelerations at random state 0: " \
            "ValueError: accelerations(t, q, v, p) returned array([" in out and "complex128" in out, out
+
+
+@pytest.mark.parametrize("toml, message", [
+    ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "__class__" }]',  # a KeyError before
+     "scene.bindings.m[0].attribute = '__class__' is not a bindable attribute of a body; those are mass, pos, ipos"),
+    ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "pos", index = 99 }]',  # an IndexError
+     "scene.bindings.m[0].index = 99 is not within 0..2 (body pos)"),
+    ('[scene.bindings]\nm = []', "scene.bindings.m = [] binds the parameter to nothing"),
+    ('[scene.bindings]\nm = "bob"', "scene.bindings.m = 'bob' is a string, not an array"),
+    ('[scene.bindings]\nk = [{ element = "joint", name = "spring", attribute = "stiffness" }]',  # a KeyError
+     "scene.bindings.k[0].name = 'spring' is no joint of the scene; expected one of: theta, x"),
+    ('summary = "a {= m :99999999999}"', "summary: cannot write '{= m :99999999999}': '99999999999' is not a format "
+                                         "spec of a number with a width and a precision of at most 3 digits each"),
+    ('summary = "a {= m :.999999999f}"', "summary: cannot write '{= m :.999999999f}': '.999999999f' is not a format spec"),  # 1 GB and 73 s before
+    ('[report]\nmodelling = "{= m :1000.3}"', "report.modelling: cannot write '{= m :1000.3}'"),
+])
+def test_a_case_toml_beside_two_files_that_asks_the_impossible_exits_2(tutorial, capsys, toml, message):
+    """Bindings that name what the scene has not, and numbers in prose that would be written wider or longer than
+    any page: one line, exit 2, before the case file is derived or its prose written."""
+    (tutorial / "case.toml").write_text(toml + "\n")
+    status = main(["list", "--cases", str(tutorial.parent)])
+    err = capsys.readouterr().err
+    assert status == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"dyncheck: error: {tutorial / 'case.toml'}: {message}"), err
+
+
+def test_a_number_in_prose_may_be_as_wide_and_precise_as_three_digits(tutorial):
+    (tutorial / "case.toml").write_text('summary = "m = {= m :>12.3f} kg, {= m :.999f}"\n')
+    case = Case(tutorial)
+    assert case.prose(case.spec["summary"], "summary").startswith("m =        0.300 kg, 0.2999999999999999888977697537")
