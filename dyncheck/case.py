@@ -543,8 +543,17 @@ class Case:
                 if abs(found - expected) > BINDING_RTOL * max(abs(expected), abs(found)):
                     where = f"{loc['element']} '{loc['name']}' {loc.get('attribute', '')}[{loc.get('index', 0)}]"
                     raise ValueError(f"{path.name} of case '{self.name}': {where} is {found!r}, but "
-                                     f"{self.file.name} gives {param} = {self.params[param]!r}"
+                                     f"{self._given_by(param)} gives {param} = {self.params[param]!r}"
                                      + (f" (x {loc['scale']})" if loc.get("scale", 1.0) != 1.0 else ""))
+
+    def _given_by(self, param):
+        """What gives the value of parameter `param`, as a message names it: an override, the case.toml that
+        sets it, or else, for a case whose case file is derived from a plain module, that module's PARAMS."""
+        if param in self.overrides:
+            return "the override"
+        if derived.is_plain(self.derivation) and not (self.file.is_file() and param in self._toml().get("params", {})):
+            return f"{self.spec['derivation']}'s PARAMS"
+        return self.file.name
 
     def __repr__(self):
         return f"Case({self.name!r}, overrides={self.overrides})"

@@ -29,6 +29,17 @@ from dyncheck.results import format_rows, heading, load_results, save_results, t
 
 
 def main(argv=None):
+    """The command line; its exit code.  Ctrl-C, wherever it lands (loading the cases, a derivation's import, the
+    studies, writing: the JSON and the report are replaced whole), ends it with one line and 130."""
+    try:
+        return command(argv)
+    except KeyboardInterrupt:
+        print("dyncheck: interrupted", file=sys.stderr)
+        return 130
+
+
+def command(argv):
+    """The command line's command, run; its exit code."""
     start = time.perf_counter()
     parser = argparse.ArgumentParser(prog="dyncheck", description=__doc__)
     parser.add_argument("--version", action="version", version=f"dyncheck {version('dyncheck')}")
@@ -133,9 +144,6 @@ def main(argv=None):
         if not interrupted:  # a JUnit file has no word for "some cases did not run": it would pass for all
             writing = f"--junit {args.junit}"  # the one file that close() writes
             close(results, args.junit, start)
-    except KeyboardInterrupt:  # in the studies or while writing: the JSON and the report are replaced whole
-        print("dyncheck: interrupted", file=sys.stderr)
-        return 130
     except OSError as error:  # the output passed its checks before the run but failed now (a full disk)
         return error_exit(f"{writing}: cannot write it: {error.strerror or error}")
     if interrupted:

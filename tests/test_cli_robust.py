@@ -5,7 +5,10 @@ from dataclasses import replace
 import multiprocessing
 import os
 import shutil
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -136,6 +139,17 @@ def test_ctrl_c_during_run_prints_what_finished_and_exits_130(monkeypatch, resul
     data = json.loads(path.read_text())
     assert [c["case"] for c in data["cases"]] == ["piston"]
     assert data["incomplete"] == "interrupted (Ctrl-C) during case rotating_particle"
+
+
+@pytest.mark.parametrize("command", ["run", "list"])
+def test_ctrl_c_while_a_derivation_is_imported_exits_130_in_one_line(tutorial, command):
+    """Ctrl-C while the cases load (here: a derivation's import sends it), in a process of its own as at a terminal."""
+    equations = tutorial / "equations.py"
+    equations.write_text("import os, signal\nos.kill(os.getpid(), signal.SIGINT)\n" + equations.read_text())
+    done = subprocess.run([sys.executable, "-m", "dyncheck.cli", command, "--cases", str(tutorial.parent)],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": str(Path(cli.__file__).resolve().parent.parent)})
+    assert (done.returncode, done.stderr) == (130, "dyncheck: interrupted\n"), done.stderr
 
 
 def test_ctrl_c_during_report_leaves_it_unchanged_and_exits_130(monkeypatch, tmp_path, capsys):

@@ -204,3 +204,14 @@ def test_a_number_in_prose_may_be_as_wide_and_precise_as_three_digits(tutorial):
     (tutorial / "case.toml").write_text('summary = "m = {= m :>12.3f} kg, {= m :.999f}"\n')
     case = Case(tutorial)
     assert case.prose(case.spec["summary"], "summary").startswith("m =        0.300 kg, 0.2999999999999999888977697537")
+
+
+@pytest.mark.parametrize("params, given_by", [
+    ("", "equations.py's PARAMS gives m = 0.3"),  # the case.toml there gives no m: it said "case.toml gives m"
+    ('\n[params.m]\nvalue = 0.3\nunit = "kg"\nabout = "the bob"', "case.toml gives m = 0.3"),
+])
+def test_a_scene_number_that_is_not_its_parameter_names_the_file_that_gives_it(tutorial, capsys, params, given_by):
+    (tutorial / "case.toml").write_text('[scene.bindings]\nm = [{ element = "body", name = "cart", attribute = "mass" }]'
+                                        + params + "\n")
+    assert main(["run", "--cases", str(tutorial.parent)]) == 2
+    assert f"scene.xml of case 'cart_pendulum': body 'cart' mass[0] is 1.0, but {given_by}" in capsys.readouterr().err
