@@ -23,6 +23,9 @@ from dyncheck.results import overrides_in_words
 
 CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 SOURCES = ("reference", "book", "mujoco", "pinocchio")
+# What a derivation's model answers at a state (docs/model-interface.md): for a plain module each it has is tried
+# at the initial state on load (Case._derived), so that one that fails there is refused before any work.
+INTERFACE = ("accelerations", "reactions", "energy", "drive_power", "mass_matrix", "forces")
 # Scene values are parsed from decimal text by each loader; they must equal case.toml's to
 # within a few ulps (binding scales are exact: +-1).
 BINDING_RTOL = 4 * np.finfo(float).eps
@@ -85,6 +88,12 @@ class AppliedForce:
 
 
 PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
+# A number's format spec in prose (Python's: [[fill]align][sign][z][#][0][width][grouping][.precision][type]), its
+# width and precision of at most 3 digits each: a double holds 17 significant digits and a page's line is under
+# 200 characters, so 999 already writes nothing but padding and noise, while format() would build whatever is
+# asked (width 99999999999: a MemoryError; precision 999999999: a 1 GB string, 73 s).
+FORMAT_SPEC = re.compile(r"(?:.?[<>=^])?[-+ ]?z?#?0?(?P<width>[0-9]*)[,_]?(?:\.(?P<precision>[0-9]+))?[eEfFgGn%]?")
+PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # an override given as text
 
 
 def prose_fields(spec, path=""):
@@ -183,6 +192,10 @@ class Case:
             if key not in self.defaults:
                 raise ValueError(f"{self.file}: case '{self.name}' has no parameter '{key}'"
                                  f"{suggest(key, self.defaults)}; its parameters are {', '.join(self.defaults)}")
+            # float() reads more than numbers: "2_0" as 20, Arabic-Indic and fullwidth digits
+            if isinstance(value, str) and not PLAIN_NUMBER.fullmatch(value):
+                raise ValueError(f"{self.file}: override {key} = {value!r} is not a number (a decimal in ASCII "
+                                 "digits, such as 2000, 0.25 or 2e3)")
             try:
                 number = float(value)
             except (TypeError, ValueError):
@@ -260,14 +273,19 @@ class Case:
         any) over it (dyncheck.derived)."""
         given = self._toml() if self.file.is_file() or not (self.folder / derived.EQUATIONS).is_file() else {}
         where = given.get("derivation", derived.EQUATIONS)
-        if isinstance(where, str) and where.endswith(".py") and (self.folder / where).is_file() \
-                and (self.folder / derived.SCENE).is_file():
+        if isinstance(where, str) and where.endswith(".py") and (self.folder / derived.SCENE).is_file() \
+                and schema.own_file(self.folder, where, "derivation",
+                                    self.file if "derivation" in given else self.folder / where).is_file():
             module = isolation.Guarded(load_file(self.folder / where, f"{self.file}: derivation = {where!r}"
                                                  if "derivation" in given else str(self.folder / where)),
                                        f"{self.folder.name}/{where}", isolation.IMPORT_BUDGET)
             if derived.is_plain(module):
                 from engines.mjcf import describe  # the harness reads a scene only through engines/
-                return derived.case_file(self.folder, module, describe(self.folder / derived.SCENE), given, overrides)
+                scene = describe(self.folder / derived.SCENE)
+                _, params = derived.module_values(module, self.folder / where)
+                schema.check_bindings(given.get("scene", {}).get("bindings", {}), params, self.file,
+                                      {"body": scene.masses, "joint": [j.name for j in scene.joints]})
+                return derived.case_file(self.folder, module, scene, given, overrides)
         if not given:
             raise ValueError(f"{self.file}: no such file, and {self.folder / derived.EQUATIONS} defines no COORDS and "
                              "accelerations(t, q, v, p) (docs/own-case.md)")
@@ -306,6 +324,10 @@ class Case:
         def number(match):
             expression, _, spec = match[1].rpartition(":") if ":" in match[1] else (match[1], "", ".3g")
             value = self.value(expression.strip(), field)
+            form = FORMAT_SPEC.fullmatch(spec.strip())
+            if not form or len(form["width"]) > 3 or len(form["precision"] or "") > 3:
+                raise ValueError(f"{self.file}: {field}: cannot write {match[0]!r}: {spec.strip()!r} is not a format "
+                                 "spec of a number with a width and a precision of at most 3 digits each")
             try:
                 return format(value, spec.strip() or ".3g")
             except ValueError as error:  # a format spec that is not one
@@ -384,14 +406,15 @@ class Case:
 
     @cached_property
     def derivation(self):
-        """The module of the case's equations (its `derivation`: a module name, or a .py file in the case
-        folder), with its classes Reference, Book and, where the book prints one, Program."""
+        """The module of the case's equations (its `derivation`: a .py file in the case folder, or a module of
+        the package's reference/), with its classes Reference, Book and, where the book prints one, Program."""
         where = self.spec["derivation"]
+        path = schema.derivation_file(where, self.folder, self.file)  # refused before anything runs
         if not where.endswith(".py"):
             return guarded(self._where_derived, lambda: importlib.import_module(where))
         # code of the case's own folder: its calls bounded and recorded (isolation), within IMPORT_BUDGET until
         # _derived has measured what one costs
-        return isolation.Guarded(load_file(self.folder / where, self._where_derived), f"{self.folder.name}/{where}",
+        return isolation.Guarded(load_file(path, self._where_derived), f"{self.folder.name}/{where}",
                                  isolation.IMPORT_BUDGET)
 
     @property
@@ -414,7 +437,10 @@ class Case:
 
     @property
     def _where_derived(self):
-        """The case file's `derivation` field, as errors about the derivation name it."""
+        """The case file's `derivation` field, as errors about the derivation name it; for a case of two files
+        and no case.toml, the equations file."""
+        if not self.file.is_file():
+            return str(self.folder / self.spec["derivation"])
         return f"{self.file}: derivation = {self.spec['derivation']!r}"
 
     @property
@@ -499,7 +525,8 @@ class Case:
 
     def _derived(self, name):
         """The derivation's class `name` at the case's parameters, checked against the case file: its
-        coordinates and reactions, and the shape of its accelerations at the initial state."""
+        coordinates and reactions, and at the initial state the shape of its accelerations and, for a plain module,
+        every function of INTERFACE it has (whose answers must be real numbers of their shapes: derived.real)."""
         what = self._where_derived
         cls = getattr(self.derivation, name, None)
         if derived.is_plain(self.derivation) and name != "Program":  # one derivation: the equations under test
@@ -520,19 +547,26 @@ class Case:
             raise ValueError(f"{what}: {name}.reaction_names is {reactions!r}, but case.toml's reactions are "
                              f"{list(self.reaction_names)}")
         q0, v0, _ = self.initial
-        try:
-            with np.errstate(all="ignore"):
-                start = time.perf_counter()
-                acc = np.asarray(model.accelerations(0.0, q0, v0), dtype=float)
-                if own is not None and name == "Reference":  # its calls' budget follows from their cost
-                    own.cost = time.perf_counter() - start
-                    own.budget = self.spec.get("budget", {}).get(
-                        "call", max(isolation.CALL_FLOOR, isolation.CALLS_PER_BUDGET * own.cost))
-        except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
-            return model
-        except Exception as error:
-            raise ValueError(f"{what}: {name}.accelerations at the initial state: {type(error).__name__}: "
-                             f"{error}") from None
+        answers = {}
+        # A class may decline a question on purpose (a printed program computes no energy: NotImplementedError),
+        # which its rows then say; a plain module's functions (derived.Equations) are all meant as answers.
+        asked = [f for f in INTERFACE if callable(getattr(model, f, None))] if isinstance(model, derived.Equations) \
+            else ["accelerations"]
+        for function in asked:
+            try:
+                with np.errstate(all="ignore"):
+                    start = time.perf_counter()
+                    answers[function] = getattr(model, function)(0.0, q0, v0)
+                    if own is not None and name == "Reference" and function == "accelerations":
+                        own.cost = time.perf_counter() - start  # its calls' budget follows from their cost
+                        own.budget = self.spec.get("budget", {}).get(
+                            "call", max(isolation.CALL_FLOOR, isolation.CALLS_PER_BUDGET * own.cost))
+            except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
+                return model
+            except Exception as error:  # also what a plain module returns that is not real numbers (derived.real)
+                raise ValueError(f"{what}: {name}.{function} at the initial state: {type(error).__name__}: "
+                                 f"{error}") from None
+        acc = np.asarray(answers["accelerations"], dtype=float)
         if acc.shape != (len(self.coords),):
             raise ValueError(f"{what}: {name}.accelerations gives shape {acc.shape} at the initial state, not "
                              f"({len(self.coords)},), one per coordinate")
@@ -547,8 +581,17 @@ class Case:
                 if abs(found - expected) > BINDING_RTOL * max(abs(expected), abs(found)):
                     where = f"{loc['element']} '{loc['name']}' {loc.get('attribute', '')}[{loc.get('index', 0)}]"
                     raise ValueError(f"{path.name} of case '{self.name}': {where} is {found!r}, but "
-                                     f"{self.file.name} gives {param} = {self.params[param]!r}"
+                                     f"{self._given_by(param)} gives {param} = {self.params[param]!r}"
                                      + (f" (x {loc['scale']})" if loc.get("scale", 1.0) != 1.0 else ""))
+
+    def _given_by(self, param):
+        """What gives the value of parameter `param`, as a message names it: an override, the case.toml that
+        sets it, or else, for a case whose case file is derived from a plain module, that module's PARAMS."""
+        if param in self.overrides:
+            return "the override"
+        if derived.is_plain(self.derivation) and not (self.file.is_file() and param in self._toml().get("params", {})):
+            return f"{self.spec['derivation']}'s PARAMS"
+        return self.file.name
 
     def __repr__(self):
         return f"Case({self.name!r}, overrides={self.overrides})"

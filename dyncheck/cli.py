@@ -37,6 +37,17 @@ def entry():
 
 
 def main(argv=None):
+    """The command line; its exit code.  Ctrl-C, wherever it lands (loading the cases, a derivation's import, the
+    studies, writing: the JSON and the report are replaced whole), ends it with one line and 130."""
+    try:
+        return command(argv)
+    except KeyboardInterrupt:
+        print("dyncheck: interrupted", file=sys.stderr)
+        return 130
+
+
+def command(argv):
+    """The command line's command, run; its exit code."""
     start = time.perf_counter()
     parser = argparse.ArgumentParser(prog="dyncheck", description=__doc__)
     parser.add_argument("--version", action="version", version=f"dyncheck {version('dyncheck')}")
@@ -143,9 +154,6 @@ def main(argv=None):
         if not interrupted:  # a JUnit file has no word for "some cases did not run": it would pass for all
             writing = f"--junit {args.junit}"  # the one file that close() writes
             close(results, args.junit, start)
-    except KeyboardInterrupt:  # in the studies or while writing: the JSON and the report are replaced whole
-        print("dyncheck: interrupted", file=sys.stderr)
-        return 130
     except OSError as error:  # the output passed its checks before the run but failed now (a full disk)
         return error_exit(f"{writing}: cannot write it: {error.strerror or error}")
     if interrupted:
@@ -358,8 +366,6 @@ def parse_overrides(pairs):
             raise ValueError(f"--set '{pair}': expected NAME=VALUE")
         if name in overrides:
             raise ValueError(f"--set {name}: given twice ({name}={overrides[name]} and {name}={value}); give it once")
-        if not value.isascii():  # float() reads Arabic-Indic or fullwidth digits: a value nobody typed as a number
-            raise ValueError(f"--set {name}={value}: not a number in ASCII digits")
         overrides[name] = value
     return overrides
 

@@ -40,39 +40,62 @@ def is_plain(module):
     return hasattr(module, "COORDS") and callable(getattr(module, "accelerations", None))
 
 
+# numpy's kinds of real numbers: float, signed and unsigned integer.  Not bool, nor complex (numpy would drop the
+# imaginary part, even a nonzero one, with only a warning), nor str ("1.0" read as 1.0), nor object.
+REAL_KINDS = "fiu"
+
+
+def real(values, shape, function):
+    """What a module's `function` returned, as a float array of `shape`; ValueError saying which function
+    returned what otherwise.  On every right-hand side: one dtype and one shape test of the array numpy makes."""
+    try:
+        array = np.asarray(values)
+    except ValueError as error:  # a ragged list
+        raise ValueError(f"{function} returned {values!r:.80}: {error}") from None
+    if array.dtype.kind not in REAL_KINDS or array.shape != shape:
+        raise ValueError(f"{function} returned {values!r:.80} (numpy dtype {array.dtype}, shape {array.shape}), not "
+                         f"real numbers of shape {shape}")
+    return array.astype(float, copy=False)
+
+
 class Equations:
     """A plain equations module at one parameter set, behind the model interface (docs/model-interface.md):
     each function f(t, q, v, p) becomes a method f(t, q, v); those of OPTIONAL only where the module has them
-    (mass_matrix(q, p) and a closed loop's dependent(q, v, p) become mass_matrix(t, q, v), dependent(t, q, v))."""
+    (mass_matrix(q, p) and a closed loop's dependent(q, v, p) become mass_matrix(t, q, v), dependent(t, q, v)).
+    What each returns must be real numbers of its shape (`real`): ValueError naming the function otherwise."""
 
     def __init__(self, module, params, reaction_names):
         self.coords, self.reaction_names = tuple(module.COORDS), tuple(reaction_names)
         self._module, self._p = module, params
+        self._vector, self._matrix = (len(self.coords),), (len(self.coords),) * 2
         for name in OPTIONAL:
             if callable(getattr(module, name, None)):
                 setattr(self, name, getattr(self, "_" + name))
 
     def accelerations(self, t, q, v):
-        return np.asarray(self._module.accelerations(t, q, v, self._p), dtype=float)
+        return real(self._module.accelerations(t, q, v, self._p), self._vector, "accelerations(t, q, v, p)")
 
     def reactions(self, t, q, v):
-        return dict(self._module.reactions(t, q, v, self._p)) if self.reaction_names else {}
+        if not self.reaction_names:
+            return {}
+        return {name: float(real(value, (), f"reactions(t, q, v, p)['{name}']"))
+                for name, value in dict(self._module.reactions(t, q, v, self._p)).items()}
 
     def _energy(self, t, q, v):
-        return float(self._module.energy(t, q, v, self._p))
+        return float(real(self._module.energy(t, q, v, self._p), (), "energy(t, q, v, p)"))
 
     def _drive_power(self, t, q, v):
-        return float(self._module.drive_power(t, q, v, self._p))
+        return float(real(self._module.drive_power(t, q, v, self._p), (), "drive_power(t, q, v, p)"))
 
     def _mass_matrix(self, t, q, v):
-        return np.asarray(self._module.mass_matrix(q, self._p), dtype=float).reshape(len(self.coords), -1)
+        return real(self._module.mass_matrix(q, self._p), self._matrix, "mass_matrix(q, p)")
 
     def _dependent(self, t, q, v):
         positions, rates = self._module.dependent(q, v, self._p)
         return dict(positions), dict(rates)
 
     def _forces(self, t, q, v):
-        return np.asarray(self._module.forces(t, q, v, self._p), dtype=float)
+        return real(self._module.forces(t, q, v, self._p), self._vector, "forces(t, q, v, p)")
 
 
 def module_values(module, file):
@@ -182,8 +205,8 @@ def frequency(module, coords, params, q0, v0):
     jacobian = np.empty((n, n))
     for j in range(n):
         step = np.eye(n)[j] * h
-        plus = np.asarray(module.accelerations(0.0, q0 + step, v0, params), dtype=float)
-        minus = np.asarray(module.accelerations(0.0, q0 - step, v0, params), dtype=float)
+        plus, minus = (real(module.accelerations(0.0, q, v0, params), (n,), "accelerations(t, q, v, p)")
+                       for q in (q0 + step, q0 - step))
         jacobian[:, j] = (plus - minus) / (2 * h)
     largest = float(np.max(np.abs(np.linalg.eigvals(jacobian)))) if np.all(np.isfinite(jacobian)) else 1.0
     return max(math.sqrt(largest), 1.0)

@@ -13,7 +13,6 @@ docs/case-file.md, the reference of the case file, is `markdown()`.
 
 import ast
 import functools
-import importlib.util
 import math
 import operator
 import re
@@ -199,7 +198,10 @@ def validate(spec, file, where=True):
     if where:
         if spec["name"] != Path(file).parent.name:  # the command line finds a case by its folder, pages by its name
             raise _error(file, "name", spec["name"], f"is not the name of the case's folder, '{Path(file).parent.name}'")
-        _derivation(spec["derivation"], file)
+        derivation_file(spec["derivation"], Path(file).parent, file)
+        module = spec.get("stability", {}).get("module")
+        if isinstance(module, str):  # its own studies, loaded by dyncheck.stability once the models are built
+            own_file(Path(file).parent, module, "stability.module", file)
 
 
 def check_params(spec, params, overrides, file):
@@ -249,15 +251,7 @@ def check_values(spec, file, value):
             raise _error(file, field, x, f"is {v}, not a finite number")
         if condition and not CONDITIONS[condition][0](v):
             raise _error(file, field, x, CONDITIONS[condition][1] + (f" (it is {v:g})" if isinstance(x, str) else ""))
-    setting = spec["integration"]
-    steps = values["integration.output_step"] / values["integration.mujoco_step"]
-    if round(steps) < 1 or abs(steps - round(steps)) > 1e-9 * steps:
-        raise _error(file, "integration.output_step", setting["output_step"],
-                     f"is not a multiple of integration.mujoco_step = {setting['mujoco_step']!r}"
-                     + (f" = {values['integration.mujoco_step']:g}" if isinstance(setting["mujoco_step"], str) else ""))
-    if values["integration.tight_rtol"] >= values["integration.rtol"]:
-        raise _error(file, "integration.tight_rtol", setting["tight_rtol"],
-                     f"is not below integration.rtol = {setting['rtol']!r}: the tight twin must be tighter")
+    _check_integration(spec, values, file)
     _check_sizes(spec, values, file)
     for i, runaway in enumerate(spec.get("runaway", [])):  # true or false, it must evaluate (its why: Case.prose)
         value(runaway["when"], f"runaway[{i}].when")
@@ -276,6 +270,33 @@ def check_values(spec, file, value):
             if not all(RELATIONS[relation](values[f"sample.params.ranges.{p}[{i}]"], bound) for i in (0, 1)):
                 raise _error(file, f"sample.params.ranges.{p}", bounds,
                              f"leaves the physical values: {p} must be {relation} {bound:g} ({reason})")
+
+
+def _check_integration(spec, values, file):
+    """The runs' settings, each one that the integrators can honour and that makes its rows mean something."""
+    from dyncheck.simulate import LEAST_RTOL  # here, not at the top: it loads scipy and pandas
+    setting = spec["integration"]
+    shown = lambda key: (f"integration.{key} = {setting[key]!r}"
+                         + (f" = {values['integration.' + key]:g}" if isinstance(setting[key], str) else ""))
+    whole = lambda ratio: round(ratio) >= 1 and abs(ratio - round(ratio)) <= 1e-9 * ratio  # as simulate's grid
+    if not whole(values["integration.output_step"] / values["integration.mujoco_step"]):
+        raise _error(file, "integration.output_step", setting["output_step"],
+                     f"is not a multiple of {shown('mujoco_step')}")
+    if not whole(values["initial.t_end"] / values["integration.output_step"]):  # every run ends on an output
+        raise _error(file, "initial.t_end", spec["initial"]["t_end"],
+                     f"is not a whole number of output steps ({shown('output_step')})")
+    for key in ("rtol", "tight_rtol"):
+        if values[f"integration.{key}"] < LEAST_RTOL:
+            raise _error(file, f"integration.{key}", setting[key],
+                         f"is below {LEAST_RTOL:.3g}, 100 machine epsilons: scipy's integrators raise a smaller rtol "
+                         "to that, so the run would not be the one its rows say (dyncheck.simulate.LEAST_RTOL)")
+    if values["integration.rtol"] > ceilings.RUN:
+        raise _error(file, "integration.rtol", setting["rtol"],
+                     f"is above {ceilings.RUN:g}: a run's error, about rtol of each quantity, would be beyond the "
+                     "ceiling where an error estimate means anything, and every row judged by one inconclusive")
+    if values["integration.tight_rtol"] >= values["integration.rtol"]:
+        raise _error(file, "integration.tight_rtol", setting["tight_rtol"],
+                     f"is not below integration.rtol = {setting['rtol']!r}: the tight twin must be tighter")
 
 
 # How much work one case file may ask for, so that a run ends in minutes (dyncheck.simulate bounds
@@ -412,8 +433,7 @@ def _cross_references(spec, file):
     for p, locations in scene.get("bindings", {}).items():
         if p not in params:
             raise _error(file, f"scene.bindings.{p}", locations, "binds no parameter" + _hint(p, params))
-        for i, location in enumerate(locations):
-            _binding(location, f"scene.bindings.{p}[{i}]", params, file)
+    check_bindings(scene.get("bindings", {}), params, file)
     for p, bounds in spec["sample"].get("params", {}).get("ranges", {}).items():
         if p not in params:
             raise _error(file, f"sample.params.ranges.{p}", bounds, "is not a parameter's range" + _hint(p, params))
@@ -492,22 +512,37 @@ def _course(spec, file):
                          "[vibration]")
 
 
-def _derivation(derivation, file):
-    """The case's equations: a module importable from the checkout, or a .py file in the case's folder."""
+# The package's own derivations, the one place outside a case's folder that its `derivation` may name.
+REFERENCE = Path(__file__).resolve().parent.parent / "reference"
+
+
+def own_file(folder, name, field, file):
+    """The file `name` that the case file's `field` gives, as a path inside the case's `folder` (symbolic links
+    and .. resolved): a case file names only files of its own folder, so that reading a case runs no code
+    from elsewhere.  ValueError for a path that leaves it; whether the file is there is the caller's to say."""
+    path = (Path(folder) / name).resolve()
+    if not path.is_relative_to(Path(folder).resolve()):
+        raise _error(file, field, name, f"is not a file of the case's folder {folder} (it is {path}): a case file "
+                     "names only files of its own folder")
+    return path
+
+
+def derivation_file(derivation, folder, file):
+    """The file of the case's equations, checked before anything is imported: a .py file in the case's
+    `folder` (own_file), or `reference.<name>`, the package's own reference/<name>.py (never any other
+    module: finding one would import its parent packages, and loading it runs whatever is installed)."""
     if derivation.endswith(".py"):
-        found = (Path(file).parent / derivation).is_file()
-    elif all(part.isidentifier() for part in derivation.split(".")):
-        try:
-            found = importlib.util.find_spec(derivation) is not None
-        except ImportError:  # a parent package that does not exist, or is a module
-            found = False
+        path = own_file(folder, derivation, "derivation", file)
+        where = "no file in the case folder"
     else:
-        raise _error(file, "derivation", derivation,
-                     "is neither a module name (dotted identifiers) nor a path ending in .py")
-    if not found:
-        raise _error(file, "derivation", derivation,
-                     f"names no {'file in the case folder' if derivation.endswith('.py') else 'importable module'}"
-                     " (where the case's equations live)")
+        package, _, name = derivation.partition(".")
+        if package != REFERENCE.name or not name.isidentifier():
+            raise _error(file, "derivation", derivation, f"is neither a module of the package's {REFERENCE.name}/ "
+                         f"({REFERENCE.name}.<name>) nor a path ending in .py of the case's folder")
+        path, where = REFERENCE / f"{name}.py", f"no module of the package's {REFERENCE.name}/"
+    if not path.is_file():
+        raise _error(file, "derivation", derivation, f"names {where} (where the case's equations live)")
+    return path
 
 
 def _of_the_book(source):
@@ -529,6 +564,25 @@ def _ceilings(spec, file):
         if item["tolerance"] > ceilings.DATA:
             raise _error(file, f"data[{i}].tolerance", item["tolerance"],
                          f"is above the ceiling {ceilings.DATA:g}: it could not tell a printing error from the printed rounding")
+
+
+def check_bindings(bindings, params, file, elements=None):
+    """[scene.bindings]: their types (also for a case of two files, whose case file dyncheck.derived.case_file
+    derives from them before the whole is validated), each parameter bound somewhere, each location one that a
+    binding can set, its index within the attribute's components; with `elements` ({"body": names, "joint":
+    names} of the scene), each name one of the scene's."""
+    _walk(bindings, SCHEMA[1]["scene"][1]["bindings?"], "scene.bindings", file)
+    for p, locations in bindings.items():
+        if not locations:
+            raise _error(file, f"scene.bindings.{p}", locations, "binds the parameter to nothing: give its locations "
+                         "in the scene, or leave it out")
+        for i, location in enumerate(locations):
+            field = f"scene.bindings.{p}[{i}]"
+            _binding(location, field, params, file)
+            names = (elements or {}).get(location["element"])
+            if names is not None and location["name"] not in names:
+                raise _error(file, f"{field}.name", location["name"], f"is no {location['element']} of the scene"
+                             + _hint(location["name"], sorted(names)))
 
 
 def _binding(location, field, params, file):
@@ -596,9 +650,11 @@ MEANINGS = {
     "section": "The book's section of the example, e.g. 1.8.3; a case of your own may have none.",
     "title": "The example's title in the reports.",
     "summary": "The example in a paragraph: the scene, its coordinates, what moves it; it opens the case's report.",
-    "derivation": "Where the case's equations live: a module importable from the checkout (e.g. "
-                  "`reference.<case>`), or a path ending in .py relative to the case's folder.  It defines the "
-                  "sources `Book`, `Reference` and, if the book prints a program, `Program`.",
+    "derivation": "Where the case's equations live: a path ending in .py of a file in the case's folder, or "
+                  "`reference.<name>`, a module of the package's own `reference/` (the book's cases).  Nothing "
+                  "else: a path that leaves the folder (.., an absolute path, a symbolic link to elsewhere) or any "
+                  "other module is refused before anything is loaded.  It defines the sources `Book`, `Reference` "
+                  "and, if the book prints a program, `Program`.",
     "coords": "The generalized coordinates, in the order of the book's equations; their rates are `<coord>_rate`.",
     "reactions": "The reactions (force or moment components) the derivation computes, by name; compared between "
                  "the sources.",
@@ -622,7 +678,7 @@ MEANINGS = {
     "initial": "The initial conditions of the integrated runs.",
     "initial.q": "The coordinates at t = 0, one per coordinate.",
     "initial.v": "Their rates at t = 0, one per coordinate.",
-    "initial.t_end": "The end of the runs, which start at t = 0.",
+    "initial.t_end": "The end of the runs, which start at t = 0: a whole number of `integration.output_step`s.",
     "runaway": "Where the case's physics runs away: conditions of the parameters under which a coordinate grows "
                "without bound, so that the runs past them are reported as `runaway`, not as `unstable` (see "
                "Runaway).",
@@ -667,8 +723,10 @@ MEANINGS = {
     "integration": "How the checks integrate the equations.",
     "integration.output_step": "The interval between a run's output rows; a multiple of mujoco_step.",
     "integration.rtol": "The relative and absolute tolerance of scipy's DOP853 for the runs of reference, book and "
-                        "Pinocchio.",
-    "integration.tight_rtol": "The tolerance of the tight solution the runs are compared with; below rtol.",
+                        "Pinocchio: from 100 machine epsilons (2.2e-14: scipy raises a smaller rtol to that) to "
+                        f"{ceilings.RUN:g} (above it a run's error estimate means nothing).",
+    "integration.tight_rtol": "The tolerance of the tight solution the runs are compared with; below rtol, and at "
+                              "least 100 machine epsilons.",
     "integration.mujoco_step": "MuJoCo's fixed time step; an expression of the parameters may make it follow the scene's fastest motion (the longest step that divides an output_step of 1 ms with omega dt at most c: \"1e-3 / max(1, ceil(omega / c))\", omega written out in the parameters).",
     "tolerance": "The allowed errors of the checks, each with its argument.",
     "tolerance.pointwise": "The pointwise check: every source at the random states.",
@@ -810,7 +868,7 @@ MEANINGS = {
                          f"{ceilings.DATA:g}).",
     "data[i].relation": "equal: printed = formula; at most: printed <= formula.  Absent: equal.",
     "stability": "The stability studies of `dyncheck report`, each in a sub-table named after it; `module` names "
-                 "a .py file in the case's folder with the case's own studies.  Validated by dyncheck/stability.",
+                 "a .py file in the case's folder (not outside it) with the case's own studies.  Validated by dyncheck/stability.",
     "vibration": "Vibration analysis (dyncheck/vibration.py): an equilibrium found by Newton-Raphson, the equations "
                  "linearised about it by the derivation and by both engines, their frequencies, modes and stability, "
                  "each frequency checked in a run.  Rows with check `vibration`; the page's section \"Vibration "
@@ -997,7 +1055,8 @@ def markdown():
               "## Numbers in prose", "",
               "A text that a page shows (`summary`, `report.modelling`, `tolerance.<name>.why`, a finding's "
               "`explanation` and `effect`, `runaway[i].why`, ...) may write a number as `{= expression}` or "
-              "`{= expression :format}` (a Python format spec, default `.3g`): it is computed at the parameters "
+              "`{= expression :format}` (a Python format spec of a number, default `.3g`, its width and precision of at "
+              "most 3 digits each): it is computed at the parameters "
               "of the run, so that the page stays true under `--set`.  For example `sqrt(k/m) = "
               "{= sqrt(k/m) :.0f} rad/s` reads `sqrt(k/m) = 100 rad/s` at the book's k = 2000 N/m and `50 rad/s` "
               "at k = 500.  Every such number is evaluated on load (a bad one is refused, exit 2).  A number "

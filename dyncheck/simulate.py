@@ -124,6 +124,13 @@ ERROR_EXPONENT = {"RK45": 5, "DOP853": 8, "Radau": 4, "LSODA": 5}
 START_STEPS = 50  # the controller's first steps, which search for the step size
 BUDGET_FACTOR = 10  # allowed steps over the expected ones; the 412 adaptive runs of a report take 0.04 to 1.6 of them
 MAX_STEPS = 10**6  # any one run: a fixed-step run of this length costs 5 s in MuJoCo, 20-400 s in Python
+# The least rtol an adaptive run may ask for.  scipy's solvers raise an rtol below 100 machine epsilons to
+# that (scipy.integrate._ivp.common.validate_tol, with only a warning): a run asked for less is not the run it
+# says, and a tight twin asked for less is its twin's own run, whose difference then estimates an error of 0
+# (rtol 1e-14 with tight_rtol 1e-15 passed every trajectory row so).  With atol = rtol (_scipy) a smaller one
+# would also ask for an absolute error below the rounding of a state of order 1 (eps), which no double-
+# precision step can meet: its step sizes collapse (rtol 1e-300 made every run unstable).
+LEAST_RTOL = 100 * np.finfo(float).eps
 WALL_BUDGET = 120.0  # s of wall time for any one run; the longest of a report takes 9 s
 
 

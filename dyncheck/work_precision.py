@@ -18,7 +18,7 @@ from dyncheck.ceilings import ROUNDING_FLOOR
 from dyncheck.messages import plural
 from dyncheck.results import Status, heading, no_number, row
 from dyncheck.schema import MAX_OUTPUTS
-from dyncheck.simulate import (FIXED_METHODS, MAX_STEPS, METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
+from dyncheck.simulate import (FIXED_METHODS, LEAST_RTOL, MAX_STEPS, METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable,
                                energy_residual, fastest_frequency, simulate, state_columns)
 from dyncheck.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
 from dyncheck.vibration import jacobian, scales_of
@@ -88,6 +88,12 @@ def settings(case):
         if abs(of / step - round(of / step)) > 1e-9 * of / step:
             fail(field, f"= {step:g} must divide {of:g} s (outputs and horizons fall on steps)")
 
+    def honoured(field, rtol):  # scipy raises a smaller rtol to LEAST_RTOL: the point would not be the one it says
+        if rtol < LEAST_RTOL:
+            fail(field, f"= {rtol:g} is below {LEAST_RTOL:.3g}, the least rtol scipy's integrators honour "
+                        "(dyncheck.simulate.LEAST_RTOL)")
+        return rtol
+
     for table, keys, field in ((spec, KEYS, ""), (spec.get("convergence", {}), CONVERGENCE_KEYS, "convergence.")):
         for key in (set(keys) ^ set(table)) - set(OPTIONAL_KEYS):
             fail(field + key, "is missing" if key in keys else
@@ -99,6 +105,7 @@ def settings(case):
     multiple("output_step", out["output_step"], out["t_end"])
     within("output_step", out["output_step"], out["t_end"] / out["output_step"], MAX_OUTPUTS, "output rows per run")
     out["solution"] = {key: positive(f"solution.{key}", spec["solution"].get(key)) for key in ("rtol", "max_step")}
+    honoured("solution.rtol", out["solution"]["rtol"])
     within("solution.max_step", out["solution"]["max_step"], out["t_end"] / out["solution"]["max_step"], MAX_STEPS,
            "steps")
     out["sweep"] = {}
@@ -110,7 +117,9 @@ def settings(case):
             if method not in SWEEP_METHODS[source]:
                 fail(field, f"is not a method of the sweep; {source} runs {', '.join(SWEEP_METHODS[source])}")
             values = [positive(field, x) for x in values]
-            if method not in SCIPY_METHODS:
+            if method in SCIPY_METHODS:
+                values = [honoured(field, rtol) for rtol in values]
+            else:
                 for dt in values:
                     multiple(field, dt, out["output_step"])
                     within(field, dt, out["t_end"] / dt, MAX_STEPS, "steps")

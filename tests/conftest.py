@@ -49,3 +49,15 @@ def rendered(results, example_results, tmp_path_factory):
     write_reports(list(results.values()), root / "reports")  # first: it replaces the folder the examples go into
     write_reports(list(example_results.values()), root / "reports" / "examples")
     return root
+
+
+@pytest.fixture
+def tutorial(tmp_path):
+    """docs/own-case.md's two-file case (scene.xml and a plain equations.py, no case.toml) in
+    tmp_path/cases/cart_pendulum, as the guide writes it."""
+    from test_own_case_doc import steps
+    for kind, path, text in steps():
+        if kind == "file" and path.startswith("cart_pendulum/"):
+            (tmp_path / "cases" / path).parent.mkdir(parents=True, exist_ok=True)
+            (tmp_path / "cases" / path).write_text(text)
+    return tmp_path / "cases" / "cart_pendulum"

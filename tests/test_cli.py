@@ -82,7 +82,8 @@ def test_run_exits_1_when_a_check_fails(monkeypatch, results):
     (["run", "double_pendulum", "--set", "k=3"], "no selected case has a parameter 'k'"),
     (["run", "spring_pendulum", "--set", "k"], "expected NAME=VALUE"),
     (["run", "spring_pendulum", "--set", "k=soft"], "'soft' is not a number"),
-    (["report", "spring_pendulum", "--set", "m=inf"], "inf is not finite"),
+    (["report", "spring_pendulum", "--set", "m=inf"], "override m = 'inf' is not a number"),
+    (["report", "spring_pendulum", "--set", "m=1e400"], "override m = inf is not finite"),
 ])
 def test_bad_input_exits_2_with_a_message(argv, message, capsys):
     assert cli.main(argv) == 2

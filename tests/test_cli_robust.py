@@ -5,7 +5,10 @@ from dataclasses import replace
 import multiprocessing
 import os
 import shutil
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -108,10 +111,13 @@ def test_a_case_named_twice_runs_once(monkeypatch, results, capsys):
 
 @pytest.mark.parametrize("sets, message", [
     (["m=1", "m=2"], "--set m: given twice (m=1 and m=2)"),
-    (["m=١٢"], "--set m=١٢: not a number in ASCII digits"),  # float() reads it as 12.0
-    (["m=１"], "--set m=１: not a number in ASCII digits"),  # fullwidth 1
+    (["m=١٢"], "override m = '١٢' is not a number (a decimal in ASCII digits"),  # float() reads it as 12.0
+    (["m=１"], "override m = '１' is not a number"),  # fullwidth 1
+    (["m=2_0"], "override m = '2_0' is not a number"),  # float() reads it as 20.0
+    (["m=1e1_0"], "override m = '1e1_0' is not a number"),
+    (["m=infinity"], "override m = 'infinity' is not a number"),
 ])
-def test_a_repeated_or_non_ascii_set_exits_2(sets, message, no_run, capsys):
+def test_a_repeated_or_non_numeric_set_exits_2(sets, message, no_run, capsys):
     argv = ["run", "piston"] + [arg for s in sets for arg in ("--set", s)]
     assert cli.main(argv) == 2
     assert message in capsys.readouterr().err
@@ -133,6 +139,17 @@ def test_ctrl_c_during_run_prints_what_finished_and_exits_130(monkeypatch, resul
     data = json.loads(path.read_text())
     assert [c["case"] for c in data["cases"]] == ["piston"]
     assert data["incomplete"] == "interrupted (Ctrl-C) during case rotating_particle"
+
+
+@pytest.mark.parametrize("command", ["run", "list"])
+def test_ctrl_c_while_a_derivation_is_imported_exits_130_in_one_line(tutorial, command):
+    """Ctrl-C while the cases load (here: a derivation's import sends it), in a process of its own as at a terminal."""
+    equations = tutorial / "equations.py"
+    equations.write_text("import os, signal\nos.kill(os.getpid(), signal.SIGINT)\n" + equations.read_text())
+    done = subprocess.run([sys.executable, "-m", "dyncheck.cli", command, "--cases", str(tutorial.parent)],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": str(Path(cli.__file__).resolve().parent.parent)})
+    assert (done.returncode, done.stderr) == (130, "dyncheck: interrupted\n"), done.stderr
 
 
 def test_ctrl_c_during_report_leaves_it_unchanged_and_exits_130(monkeypatch, tmp_path, capsys):

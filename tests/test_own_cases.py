@@ -7,6 +7,7 @@ import time
 
 import pytest
 
+from dyncheck.case import Case
 from dyncheck.cli import main
 from test_architecture import doc_example
 
@@ -46,7 +47,7 @@ def run(tmp_path, capsys, *args):
      "Reference.reaction_names is ('R',)"),
     ("equations.py", f"np.array([{ACC}])", f"np.array([{ACC}, 5.0])",
      "Reference.accelerations gives shape (2,) at the initial state, not (1,)"),
-    ("case.toml", 'derivation = "equations.py"', 'derivation = "os"', "derivation = 'os' defines no class Reference"),
+    ("case.toml", 'derivation = "equations.py"', 'derivation = "os"', "derivation = 'os' is neither a module of the package's reference/"),
 ])
 def test_a_broken_derivation_is_refused_before_any_work(tmp_path, capsys, file, old, new, message):
     case_folder(tmp_path, **{file: (old, new)})
@@ -119,3 +120,98 @@ def test_a_case_s_studies_may_not_replace_dyncheck_s_own(tmp_path, capsys):
     (folder / "studies.py").write_text(STUDIES)
     status, _, err = run(tmp_path, capsys)
     assert status == 2 and "STUDIES names ['lyapunov'], which are dyncheck's own studies" in err
+
+
+SOLVE = "    return np.linalg.solve(mass_matrix(q, p), forces(t, q, v, p))"
+ENERGY = "    return kinetic + 0.5 * k * x**2 - m * g * l * np.cos(theta)"
+
+
+def alone(function, wrong):
+    """Lines that make the guide's `function` return `wrong` (of its own answer `right`), its accelerations kept."""
+    return f"""
+_right = {{"mass_matrix": mass_matrix, "forces": forces}}
+def accelerations(t, q, v, p):
+    return np.linalg.solve(_right["mass_matrix"](q, p), _right["forces"](t, q, v, p))
+def {function}(*args):
+    right = _right["{function}"](*args)
+    return {wrong}
+"""
+
+
+@pytest.mark.parametrize("old, new, function, returned", [
+    (SOLVE, SOLVE + " + 1e-3j", "accelerations", "complex128"),  # numpy would drop the 1e-3j with a warning
+    (SOLVE, SOLVE + " + 0j", "accelerations", "complex128"),  # complex, if its imaginary part is 0
+    (SOLVE, SOLVE.replace("return ", "return [str(a) for a in ") + "]", "accelerations", "<U"),  # "1.0"
+    (SOLVE, SOLVE.replace("return ", "return list(") + ") + [1.0]", "accelerations", "shape (3,)"),
+    (ENERGY, ENERGY + " + 0j", "energy", "complex128"),
+    (ENERGY, ENERGY.replace("return ", "return str(") + ")", "energy", "<U"),
+    (ENERGY, ENERGY.replace("return ", "return [") + "]", "energy", "shape (1,)"),
+    ("", alone("mass_matrix", "right + 0j"), "mass_matrix", "complex128"),
+    ("", alone("mass_matrix", "right > 0"), "mass_matrix", "bool"),
+    ("", alone("mass_matrix", "right[0]"), "mass_matrix", "shape (2,)"),
+    ("", alone("forces", "right.astype(object)"), "forces", "object"),
+])
+def test_equations_that_return_what_is_not_real_numbers_are_refused(tutorial, capsys, old, new, function, returned):
+    """A plain module's function that returns complex numbers, strings, booleans, objects or the wrong shape at
+    the initial state: exit 2 on load, one line (no warning) naming the equations file, the function and what it
+    returned."""
+    equations = tutorial / "equations.py"
+    text = equations.read_text()
+    assert old in text, old
+    equations.write_text(text.replace(old, new, 1) if old else text + new)
+    status = main(["run", "--cases", str(tutorial.parent)])
+    err = capsys.readouterr().err
+    assert status == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"dyncheck: error: {equations}: ") and f" {function}(" in err and returned in err, err
+
+
+def test_equations_that_return_complex_numbers_after_the_start_fail_their_rows(tutorial, capsys):
+    """Where the initial state gives real numbers and other states do not, the rows that meet them fail and say
+    why (numpy dropped the imaginary part and every row passed before)."""
+    equations = tutorial / "equations.py"
+    equations.write_text(equations.read_text().replace(SOLVE, SOLVE + " + (0 if t == 0 else 1e-3j)"))
+    assert main(["run", "--cases", str(tutorial.parent)]) == 1
+    out = capsys.readouterr().out
+    assert "pointwise every quantity (derivation vs mujoco): fail: reference: accelerations at random state 0: " \
+           "ValueError: accelerations(t, q, v, p) returned array([" in out and "complex128" in out, out
+
+
+@pytest.mark.parametrize("toml, message", [
+    ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "__class__" }]',  # a KeyError before
+     "scene.bindings.m[0].attribute = '__class__' is not a bindable attribute of a body; those are mass, pos, ipos"),
+    ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "pos", index = 99 }]',  # an IndexError
+     "scene.bindings.m[0].index = 99 is not within 0..2 (body pos)"),
+    ('[scene.bindings]\nm = []', "scene.bindings.m = [] binds the parameter to nothing"),
+    ('[scene.bindings]\nm = "bob"', "scene.bindings.m = 'bob' is a string, not an array"),
+    ('[scene.bindings]\nk = [{ element = "joint", name = "spring", attribute = "stiffness" }]',  # a KeyError
+     "scene.bindings.k[0].name = 'spring' is no joint of the scene; expected one of: theta, x"),
+    ('summary = "a {= m :99999999999}"', "summary: cannot write '{= m :99999999999}': '99999999999' is not a format "
+                                         "spec of a number with a width and a precision of at most 3 digits each"),
+    ('summary = "a {= m :.999999999f}"', "summary: cannot write '{= m :.999999999f}': '.999999999f' is not a format spec"),  # 1 GB and 73 s before
+    ('[report]\nmodelling = "{= m :1000.3}"', "report.modelling: cannot write '{= m :1000.3}'"),
+])
+def test_a_case_toml_beside_two_files_that_asks_the_impossible_exits_2(tutorial, capsys, toml, message):
+    """Bindings that name what the scene has not, and numbers in prose that would be written wider or longer than
+    any page: one line, exit 2, before the case file is derived or its prose written."""
+    (tutorial / "case.toml").write_text(toml + "\n")
+    status = main(["list", "--cases", str(tutorial.parent)])
+    err = capsys.readouterr().err
+    assert status == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"dyncheck: error: {tutorial / 'case.toml'}: {message}"), err
+
+
+def test_a_number_in_prose_may_be_as_wide_and_precise_as_three_digits(tutorial):
+    (tutorial / "case.toml").write_text('summary = "m = {= m :>12.3f} kg, {= m :.999f}"\n')
+    case = Case(tutorial)
+    assert case.prose(case.spec["summary"], "summary").startswith("m =        0.300 kg, 0.2999999999999999888977697537")
+
+
+@pytest.mark.parametrize("params, given_by", [
+    ("", "equations.py's PARAMS gives m = 0.3"),  # the case.toml there gives no m: it said "case.toml gives m"
+    ('\n[params.m]\nvalue = 0.3\nunit = "kg"\nabout = "the bob"', "case.toml gives m = 0.3"),
+])
+def test_a_scene_number_that_is_not_its_parameter_names_the_file_that_gives_it(tutorial, capsys, params, given_by):
+    (tutorial / "case.toml").write_text('[scene.bindings]\nm = [{ element = "body", name = "cart", attribute = "mass" }]'
+                                        + params + "\n")
+    assert main(["run", "--cases", str(tutorial.parent)]) == 2
+    assert f"scene.xml of case 'cart_pendulum': body 'cart' mass[0] is 1.0, but {given_by}" in capsys.readouterr().err

@@ -18,7 +18,7 @@ integrators' error level can be expected to agree to a tolerance, from the finit
 perturbations along the book's initial conditions (cheap: five trajectories over the case's horizon).
 """
 
-from dyncheck import ceilings
+from dyncheck import ceilings, schema
 from dyncheck.results import heading
 
 from dyncheck.case import load_file
@@ -40,7 +40,7 @@ def case_module(case):
     module = case.spec.get("stability", {}).get("module")
     if module is None:
         return None
-    path = case.folder / module
+    path = schema.own_file(case.folder, module, "stability.module", case.file)
     if not path.is_file():  # also when saved results are rendered after their case folder moved
         raise ValueError(f"{case.file}: stability.module = {module!r}: no such Python file {path} (the case's "
                          "studies and the figures of their saved results need it)")
@@ -65,7 +65,7 @@ def available(case):
 def validate(case):
     """The case's [stability] table: known studies, each with a `why` and its keys, methods that exist,
     numbers that evaluate; ValueError names the file and the field."""
-    from dyncheck.simulate import METHODS
+    from dyncheck.simulate import LEAST_RTOL, METHODS
     table = case.spec.get("stability", {})
     if not isinstance(table, dict):
         raise ValueError(f"{case.file}: stability is not a table")
@@ -93,6 +93,10 @@ def validate(case):
         except ValueError as error:
             raise ValueError(f"stability.{key}.overrides = {value.get('overrides')}: {error}") from None
         settings = settings_of(case, key)  # a ValueError names the file and the field
+        for name in ("rtol", "check_rtol"):  # scipy raises a smaller rtol to LEAST_RTOL: not the run the study says
+            if name in settings and not settings[name] >= LEAST_RTOL:
+                raise ValueError(f"{case.file}: stability.{key}.{name} = {settings[name]!r} is below {LEAST_RTOL:.3g}, "
+                                 "the least rtol scipy's integrators honour (dyncheck.simulate.LEAST_RTOL)")
         if key == "lyapunov":
             _agreement_settings(case.file, settings)
         if key == "energy_drift" and not hasattr(case.model("reference"), "energy"):
