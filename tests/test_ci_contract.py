@@ -36,7 +36,8 @@ def toy(name="toy", overrides=None, failing=True):
                  no_number("trajectory", "psi", ("book", "tight reference"), blew_up),
                  replace(passing, quantity="F3", status=Status.FAIL, finding="0.1-gone",
                          detail="registered finding 0.1-gone no longer reproduces; 100 random states")]
-    spec = {"name": name, "section": "0.1", "title": "a toy", "params": {"k": {"value": 2.0}, "m": {"value": 1.0}}}
+    spec = {"name": name, "section": "0.1", "title": "a toy", "params": {"k": {"value": 2.0}, "m": {"value": 1.0}},
+            "coords": [], "coord_units": [], "sample": {"count": 3, "seed": 0, "t": [0.0, 1.0], "q": [], "v": []}}
     return CaseResult(folder="/nowhere", spec=spec, overrides=overrides or {}, rows=tuple(rows), findings=(),
                       sample={}, runs={}, program={}, drawings={}, wall=1.5)
 

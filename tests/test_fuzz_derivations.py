@@ -65,7 +65,7 @@ MISCHIEF = [
     ("40 GB", "x = np.ones(5 * 10**9)", "it ran out of memory"),
     ("raise", "raise KeyError('theta')", "KeyError: 'theta'"),
     ("NaN", "return np.array([np.nan, 0.0])", "is nan at random state"),
-    ("wrong shape", "return np.zeros(3)", "not (2,)"),
+    ("wrong shape", "return np.zeros(3)", "not real numbers of shape (2,)"),
 ]
 
 
