@@ -30,8 +30,8 @@ HEADER = 4 + 2 * MAX_SHOWN
 NAME_AT, LABEL_AT, DONE_AT = 8 * HEADER, 8 * HEADER + 64, 8 * HEADER + 64 + LABEL_BYTES
 # The defaults of a case's budget (Case.budget).  A call of a derivation costs microseconds to milliseconds (a
 # generated 7-dof inverse dynamics: 2-6 ms); 1000 of them is no honest call's time, and 5 s is a floor that
-# no machine's load reaches.  The checks of a case make at most about a million evaluations of it (the double
-# pendulum's runs: 640,000 DOP853 evaluations), so a million calls' cost bounds a case, with 900 s as its floor
+# no machine's load reaches.  The checks of a case make at most about a million evaluations of it (the six book
+# cases' runs together: 640,000 DOP853 evaluations), so a million calls' cost bounds a case, with 900 s as its floor
 # (the book's slowest case takes 7 s, a 7-dof arm 3 minutes).  An import may compile or lambdify for seconds.
 CALL_FLOOR, CALLS_PER_BUDGET = 5.0, 1000
 CASE_FLOOR, CALLS_PER_CASE = 900.0, 10**6
@@ -54,7 +54,7 @@ class Budget:
     how much memory that process may map (bytes); docs/isolation.md argues the defaults."""
     call: float
     case: float
-    memory: int
+    memory: int | None  # None: the machine's, shared (dyncheck.cli)
 
 
 class Record:
@@ -224,8 +224,9 @@ class Guarded:
 def run_each(items, work, workers, budget_of):
     """work(item) for each item, each in a forked process of its own, `workers` at a time, in the order given:
     yields (index, ("result", value)), or (index, ("lost", why)) where the process died, overran its case budget
-    (budget_of(item).case s: it is killed) or raised; a KeyboardInterrupt there is raised here.  Each process maps at most budget_of(item).memory bytes and
-    ignores Ctrl-C (the terminal sends it to the whole group): this one stops them all (KeyboardInterrupt)."""
+    (budget_of(item).case s: it is killed) or raised; a KeyboardInterrupt there is raised here.  Each process maps
+    at most budget_of(item).memory bytes and ignores Ctrl-C (the terminal sends it to the whole group): this one
+    stops them all (KeyboardInterrupt)."""
     context = get_context("fork")
     waiting, running = list(enumerate(items)), {}  # connection -> (index, process, record, deadline, budget)
     try:
@@ -310,8 +311,10 @@ def supervised(main):
     process = context.Process(target=_main_child, args=(main, RECORD))
     process.start()
     # The child gets Ctrl-C too (the terminal sends it to the group), and says it was interrupted; a SIGTERM sent to
-    # this process alone (a CI job's time-out) is passed on.
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN), signal.signal(signal.SIGTERM, lambda *_: process.terminate())
+    # this process alone (a CI job's time-out) is passed on, and ends this one as it would have.
+    terminated = []
+    previous = (signal.signal(signal.SIGINT, signal.SIG_IGN),
+                signal.signal(signal.SIGTERM, lambda *_: (terminated.append(True), process.terminate())))
     try:
         process.join()
     finally:
@@ -320,6 +323,8 @@ def supervised(main):
     code = RECORD.code
     if code is not None:
         return code
+    if terminated:
+        return 128 + signal.SIGTERM
     print(f"dyncheck: error: {_death(process, RECORD)}: a case's own code ended dyncheck", file=sys.stderr)
     return 2 if RECORD.loading else 1
 
