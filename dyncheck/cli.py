@@ -196,7 +196,8 @@ def run_cases(cases, localise=True, workers=None):
             with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
                 for position, (kind, value) in each:
                     case = cases[longest_first[position]]
-                    finished[longest_first[position]] = value if kind == "result" else unfinished(case, value)
+                    if kind != "interrupted":  # an interrupted case is named as such, not given a row
+                        finished[longest_first[position]] = value if kind == "result" else unfinished(case, value)
                     bar.update()
     except KeyboardInterrupt:
         pass

@@ -224,7 +224,8 @@ class Guarded:
 def run_each(items, work, workers, budget_of):
     """work(item) for each item, each in a forked process of its own, `workers` at a time, in the order given:
     yields (index, ("result", value)), or (index, ("lost", why)) where the process died, overran its case budget
-    (budget_of(item).case s: it is killed) or raised; a KeyboardInterrupt there is raised here.  Each process maps
+    (budget_of(item).case s: it is killed) or raised, or (index, ("interrupted", None)) where it was interrupted
+    (a KeyboardInterrupt raised by code there: the item did not finish, the others run on).  Each process maps
     at most budget_of(item).memory bytes and ignores Ctrl-C (the terminal sends it to the whole group): this one
     stops them all (KeyboardInterrupt)."""
     context = get_context("fork")
@@ -259,8 +260,6 @@ def run_each(items, work, workers, budget_of):
                     process.join()
                     receive.close()
                     del running[receive]
-                    if outcome[0] == "interrupted":
-                        raise KeyboardInterrupt
                     yield index, outcome
     finally:
         for receive, (_, process, _, _, _) in running.items():
