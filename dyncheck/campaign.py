@@ -227,19 +227,19 @@ def connect(workers, scheduler):
 def command(case, plan, grid, workers, scheduler):
     """Run the plan's missing chunks and the case's maps, then write the page; the exit code (0: every row passes
     or is a registered finding; 1: some row fails, or a source failed at some set)."""
-    from tqdm import tqdm
     from dyncheck import campaign_page
+    from dyncheck.progress import Progress
     todo = plan.todo()
     client = connect(workers, scheduler)
     try:
         workers = len(client.scheduler_info()["workers"]) or workers
-        with tqdm(total=len(plan.chunks), initial=len(plan.chunks) - len(todo), desc=f"campaign {case.name}",
-                  unit="chunk", disable=None) as bar:
-            wall = run(plan, client, bar.update)
+        with Progress(f"campaign {case.name}", total=len(plan.chunks), initial=len(plan.chunks) - len(todo),
+                      unit="chunk") as bar:
+            wall = run(plan, client, bar.step)
         drawn = {}
         if grid and maps(case):
-            with tqdm(total=grid * grid * len(maps(case)), desc=f"maps of {case.name}", unit="cell", disable=None) as bar:
-                drawn = run_maps(case, client, grid, plan.out, bar.update)
+            with Progress(f"maps of {case.name}", total=grid * grid * len(maps(case)), unit="cell") as bar:
+                drawn = run_maps(case, client, grid, plan.out, bar.step)
     finally:
         client.close()
         if client.cluster is not None:

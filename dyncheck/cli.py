@@ -20,13 +20,13 @@ from importlib.metadata import version
 from pathlib import Path
 
 import pandas as pd
-from tqdm import tqdm
 
 from dyncheck import cache, ci, isolation
 from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
 from dyncheck.checks import run_case, unfinished, validate_placeholders
 from dyncheck.simulate import fastest_frequency
 from dyncheck.messages import suggest
+from dyncheck.progress import Progress
 from dyncheck.results import format_rows, heading, load_results, save_results, to_json
 
 
@@ -181,28 +181,28 @@ def run_cases(cases, localise=True, workers=None):
     a process that dies or overruns its budget gives its case one failing row saying so (dyncheck.isolation)."""
     workers = min(len(cases), workers or os.cpu_count() or 1)
     finished = {}  # index -> result
-    bar = tqdm(total=len(cases), desc="checks", unit="case", disable=None, leave=False)
     try:
-        if "fork" not in multiprocessing.get_all_start_methods():  # no process to isolate a case in
-            for index, case in enumerate(cases):
-                finished[index] = run_case(case, localise)
-                bar.update()
-        else:
-            longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
-            memory = isolation.machine_memory() // workers
-            budget = lambda case: replace(case.budget, memory=case.budget.memory or memory)
-            each = isolation.run_each([cases[i] for i in longest_first], lambda case: run_case(case, localise),
-                                      workers, budget)
-            with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
-                for position, (kind, value) in each:
-                    case = cases[longest_first[position]]
-                    if kind != "interrupted":  # an interrupted case is named as such, not given a row
-                        finished[longest_first[position]] = value if kind == "result" else unfinished(case, value)
-                    bar.update()
+        with Progress("checks", total=len(cases), unit="case") as bar:
+            def done(index, result):
+                finished[index] = result
+                bar.step()
+                bar.note(f"{result.name} done, {result.status}")
+            if "fork" not in multiprocessing.get_all_start_methods():  # no process to isolate a case in
+                for index, case in enumerate(cases):
+                    done(index, run_case(case, localise))
+            else:
+                longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
+                memory = isolation.machine_memory() // workers
+                budget = lambda case: replace(case.budget, memory=case.budget.memory or memory)
+                each = isolation.run_each([cases[i] for i in longest_first], lambda case: run_case(case, localise),
+                                          workers, budget)
+                with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
+                    for position, (kind, value) in each:
+                        index = longest_first[position]
+                        if kind != "interrupted":  # an interrupted case is named as such, not given a row
+                            done(index, value if kind == "result" else unfinished(cases[index], value))
     except KeyboardInterrupt:
         pass
-    finally:
-        bar.close()
     unfinished_names = [case.name for index, case in enumerate(cases) if index not in finished]
     return [finished[index] for index in sorted(finished)], (unfinished_names[0] if unfinished_names else None)
 
@@ -220,19 +220,25 @@ def make_report(results, cases, out, no_studies, animations=True):
     # a case whose checks did not finish (no runs: dyncheck.checks.unfinished) has no studies either
     results = [result if no_studies or not result.runs else result.with_studies(study_case(case))
                for result, case in zip(results, cases)]
-    written = write_reports(results, out, animations)
+    written = write_pages(results, out, animations)
     print(f"studies and pages: wrote {len(written)} files to {out}/ in {time.perf_counter() - start:.1f} s")
     print_results(results, table=False)
     return results
 
 
+def write_pages(results, out, animations):
+    """dyncheck.report.write_reports, as a stage with its progress (a minute or more, with the animations)."""
+    from dyncheck.report import write_reports
+    with Progress(f"pages to {out}/"):
+        return write_reports(results, out, animations)
+
+
 def report_saved(args, start):
     """`report --from DIR`: the pages of the results saved in DIR, with no run."""
-    from dyncheck.report import write_reports
     if args.cases or args.set or args.no_studies:
         raise ValueError("--from renders saved results as they are: give no CASE, --set or --no-studies with it")
     results = load_results(args.saved)
-    written = write_reports(results, args.out, not args.no_animations)
+    written = write_pages(results, args.out, not args.no_animations)
     print(f"pages: wrote {len(written)} files to {args.out}/ from {args.saved}/")
     print_results(results, table=False)
     close(results, args.junit, start)
@@ -252,15 +258,17 @@ def close(results, junit, start):
 
 
 def study_case(case):
-    """The case's work-precision sweep, stability studies and Campbell diagram, with a progress bar (they take
+    """The case's work-precision sweep, stability studies and Campbell diagram, with their progress (they take
     minutes)."""
     from dyncheck import stability, vibration, work_precision
-    with tqdm(desc=f"studies of {case.name}", unit="run", disable=None, leave=False) as bar:
-        def progress(text):
-            bar.set_postfix_str(text[-60:], refresh=False)
-            bar.update()
-        return {"work_precision": work_precision.sweep(case, progress),
-                "stability": stability.studies(case, progress), "vibration": vibration.sweep(case, progress)}
+    with Progress(f"studies of {case.name}") as bar:
+        bar.note("work-precision sweep")
+        sweep = work_precision.sweep(case, bar.step)
+        bar.note("stability studies")
+        studies = stability.studies(case, bar.step)
+        bar.note("Campbell diagram")
+        campbell = vibration.sweep(case, bar.step)
+    return {"work_precision": sweep, "stability": studies, "vibration": campbell}
 
 
 def campaign_command(args):

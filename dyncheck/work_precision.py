@@ -199,12 +199,7 @@ def reference_solution(case):
 # -- the sweep -------------------------------------------------------------------------------------
 
 def _progress(progress, text):
-    if progress is None:
-        return
-    if hasattr(progress, "update"):  # a tqdm bar
-        progress.set_postfix_str(text, refresh=False)
-        progress.update(1)
-    else:
+    if progress is not None:
         progress(text)
 
 

@@ -194,10 +194,10 @@ def test_in_short_counts_the_levels_each_method_wins():
     assert work_precision.in_short(sweeps, cost="cpu").endswith("reach is an adaptive one: LSODA at 3 of them")
 
 
-def test_readme_quotes_the_sentence_of_the_committed_sweeps():
-    """README's "Speed against accuracy, in short" is the index's sentence, from the committed sweeps' rows."""
+def test_the_overview_quotes_the_sentence_of_the_committed_sweeps():
+    """docs/overview.md's "Speed against accuracy, in short" is the index's sentence, from the committed sweeps' rows."""
     data = Path(__file__).parents[1] / "reports" / "data"
     sweeps = {path.name.removesuffix("_work_precision.csv"): work_precision.read_csv(path)
               for path in sorted(data.glob("*_work_precision.csv"))}
-    readme = " ".join((Path(__file__).parents[1] / "README.md").read_text().split())
-    assert f"Speed against accuracy, in short: {work_precision.in_short(sweeps)}." in readme
+    overview = " ".join((Path(__file__).parents[1] / "docs" / "overview.md").read_text().split())
+    assert f"Speed against accuracy, in short: {work_precision.in_short(sweeps)}." in overview
