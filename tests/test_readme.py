@@ -40,7 +40,15 @@ def test_the_quick_start_names_the_python_that_pyproject_requires():
     required = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["requires-python"]
     version = re.fullmatch(r">=\s*3\.(\d+)", required).group(1)
     assert f"Python 3.{version} or newer" in README
-    assert "python3 -m venv .venv && . .venv/bin/activate" in README and "reports/index.md" in README
+    assert "reports/index.md" in README
+
+
+def test_the_readme_has_exactly_two_set_up_commands_and_ci_runs_its_test_command():
+    commands = re.findall(r"^    (\S.*)$", README, re.M)  # the indented blocks a newcomer pastes
+    assert commands == ["pip install -e . && dyncheck report && dyncheck report --cases examples --out reports/examples",
+                        "pip install -e '.[test]' && pytest"]
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert "pip install -e '.[test]'" in ci and "\npytest\n" in ci
 
 
 def test_the_count_of_timing_files_that_report_rewrites_is_the_reports_own():
