@@ -20,10 +20,17 @@ from PIL import Image
 
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.results import Frames, heading
-from dyncheck.style import MIN_FONT, embed, pyplot
+from dyncheck.simulate import fastest_frequency
+from dyncheck.style import MIN_FONT, check_text, embed, pyplot, wrapped
 
-MAX_FRAMES = 100
-MIN_INTERVAL = 0.05  # s between frames: 20 per second at most, so that the GIF plays about in real time
+# When frames are taken: often enough for the fastest motion shown, no oftener than a slow motion needs.
+FRAMES_PER_PERIOD = 8  # a period (or a turn) of the fastest motion shown takes at least 8 frames
+SLOW_FRAMES = 100  # a slow motion: at most 100 frames ...
+MIN_INTERVAL = 0.05  # ... at least 50 ms apart, which play about in real time
+# A GIF stores each frame's change from the one before (about 2 to 5 kB at 64 colours): at most 500 frames
+# keeps a GIF under about 2 MB.  A run that needs more is shown over its first 500 frames (the caption says so).
+MAX_FRAMES = 500
+MIN_DELAY = 20  # ms a frame is shown at least: browsers show a GIF's 0 or 10 ms frames for 100 ms
 WIDTH = 400  # pixels of one 3-D panel; a frame is a panel wide per panel
 HEIGHT = 360
 DPI = 100
@@ -32,13 +39,26 @@ GL_BACKENDS = ("egl", "osmesa")  # MUJOCO_GL values under which MuJoCo's rendere
 VIEW = dict(elev=22.0, azim=-55.0)  # matplotlib's 3-D camera, degrees
 
 
-def frame_rows(run):
-    """The rows of `run` (a DataFrame indexed by t) that are the animation's frames: evenly spaced, at most
-    MAX_FRAMES, at least MIN_INTERVAL apart."""
+def frame_rows(run, omega):
+    """The rows of `run` (a DataFrame indexed by t) that are the animation's frames: evenly spaced, at least
+    FRAMES_PER_PERIOD in a period 2 pi / omega of the fastest motion shown (`omega` in rad/s; 0 for none),
+    else as a slow motion (at most SLOW_FRAMES, at least MIN_INTERVAL apart); the first MAX_FRAMES of them."""
     t = run.index.to_numpy()
     step = (t[-1] - t[0]) / max(len(t) - 1, 1)
-    every = max(math.ceil((len(t) - 1) / (MAX_FRAMES - 1)), math.ceil(MIN_INTERVAL / step - 1e-9) if step else 1, 1)
-    return np.arange(0, len(t), every)
+    if not step:
+        return np.arange(len(t))[:MAX_FRAMES]
+    slow = max(math.ceil((len(t) - 1) / (SLOW_FRAMES - 1)), math.ceil(MIN_INTERVAL / step - 1e-9))
+    fast = math.floor(2 * math.pi / (FRAMES_PER_PERIOD * omega) / step + 1e-9) if omega else slow
+    return np.arange(0, len(t), max(min(slow, fast), 1))[:MAX_FRAMES]
+
+
+def fastest_shown(case, runs):
+    """The fastest motion the animation shows, rad/s: the case's fastest frequency (simulate.fastest_frequency)
+    or the fastest turn of an angle along the runs ({label: run}), whichever is faster; 0 for neither."""
+    angles = [c for c, unit in zip(case.coords, case.spec.get("coord_units", [])) if unit == "rad"]
+    rates = [np.nanmax(np.abs(run[f"{c}_rate"].to_numpy())) for run in runs.values() for c in angles
+             if f"{c}_rate" in run and len(run)]
+    return max([fastest_frequency(case) or 0.0, *rates])
 
 
 def at_times(run, times):
@@ -64,9 +84,10 @@ def frames(case, runs, program):
     from engines.render import skeleton  # only here, where the checks run the engines
     model = case.model("mujoco")
     exact = runs["reference"].twin
-    times = exact.index.to_numpy()[frame_rows(exact)]
+    shown = animated_runs(case, runs, program)
+    times = exact.index.to_numpy()[frame_rows(exact, fastest_shown(case, shown))]
     out = {}
-    for label, run in animated_runs(case, runs, program).items():
+    for label, run in shown.items():
         q = run[list(case.coords)].to_numpy()[at_times(run, times)]
         out[label] = Frames(times, *skeleton(model, times, q))
     return out
@@ -160,13 +181,17 @@ class Animator:
         self.gl = gl
         count = len(self.panels) + bool(graph)
         self.fig = pyplot().figure(figsize=(WIDTH * count / DPI, HEIGHT / DPI), dpi=DPI, layout="none")  # axes placed by add_axes
-        self.title = heading(case.spec)
+        self.title = wrapped(self.fig, heading(case.spec), MIN_FONT + 1)
         self.heading = self.fig.suptitle("", fontsize=MIN_FONT + 1)
         self.updates = []  # functions of the frame's index that move the artists
         self.moving = [self.heading]  # the artists they move; the rest is drawn once (`background`)
         self.background = None
+        # Below the heading (its lines and the time's) and a panel's title, above the ticks and x label.
+        line = 1.25 * (MIN_FONT + 1) / 72 * DPI / HEIGHT
+        top = 0.98 - (self.title.count("\n") + 2) * line - 2.2 * line
+        bottom = 0.14
         for k, panel in enumerate(self.panels):
-            rect = (k / count + 0.07 / count, 0.1, 0.86 / count, 0.72)
+            rect = (k / count + 0.07 / count, bottom, 0.86 / count, top - bottom)
             if gl is not None:
                 ax = self.fig.add_axes(rect)
                 ax.set_axis_off()
@@ -178,7 +203,7 @@ class Animator:
                 self.updates.append(self.matplotlib_panel(ax, panel))
             ax.set_title(panel.title, fontsize=MIN_FONT)
         if graph:
-            ax = self.fig.add_axes(((count - 1) / count + 0.14 / count, 0.16, 0.78 / count, 0.62))
+            ax = self.fig.add_axes(((count - 1) / count + 0.14 / count, 0.16, 0.78 / count, top - 0.16))
             grow, line = graph_panel(ax, graph, namespace(case, result.runs["reference"].twin))
             self.moving.append(line)
             self.updates.append(lambda i: grow(self.times[i]))
@@ -190,7 +215,7 @@ class Animator:
     def show(self, i):
         for update in self.updates:
             update(i)
-        self.heading.set_text(f"{self.title}\nt = {self.times[i]:.2f} s")
+        self.heading.set_text(f"{self.title}\nt = {self.times[i]:.3f} s")
 
     def matplotlib_panel(self, ax, panel):
         """The panel's artists drawn at frame 0, and the function that moves them to frame i."""
@@ -226,10 +251,12 @@ class Animator:
             ax.set_zlabel("z [m]", fontsize=MIN_FONT)
             ax.view_init(**VIEW)
             ax.set_box_aspect((1, 1, 1))
+            ax.locator_params(nbins=4)
             set_data = lambda line, xyz: line.set_data_3d(*pick(xyz))
         else:
             ax.set_aspect("equal")
             ax.grid(alpha=0.3)
+            ax.locator_params(nbins=5)  # tick labels that do not run into each other
             set_data = lambda line, xyz: line.set_data(*pick(xyz))
 
         def move(i):
@@ -293,9 +320,12 @@ def graph_panel(ax, graph, names):
 
 def write_gif(result, case, path, gl=None):
     """The case's animation as a GIF at `path`: every frame drawn, one palette for all, looping, each
-    frame shown for the time between frames (about real time).  `gl`: MuJoCo's renderer, or None.
-    Returns the number of frames and the time each is shown (ms)."""
+    frame shown for the time between frames, at least MIN_DELAY (`delay`).  `gl`: MuJoCo's renderer, or
+    None.  Returns the number of frames and the time each is shown (ms).  A text that would run off the
+    frame's edge is refused (ValueError), as dyncheck.style.save refuses it in a figure."""
     animator = Animator(result, case, gl)
+    animator.show(len(animator.times) - 1)  # the heading's widest time
+    check_text(animator.fig, path)
     images = [animator.frame(i) for i in range(len(animator.times))]
     pyplot().close(animator.fig)
     # One palette from the first, middle and last frames side by side: every colour drawn, every path grown.
@@ -305,10 +335,24 @@ def write_gif(result, case, path, gl=None):
         montage.paste(image, (k * image.width, 0))
     palette = montage.quantize(COLOURS, method=Image.Quantize.MEDIANCUT)
     frames_p = [image.quantize(palette=palette, dither=Image.Dither.NONE) for image in images]
-    times = animator.times
-    interval = 10 * round(100 * (times[1] - times[0])) if len(times) > 1 else 100  # GIF counts hundredths
-    frames_p[0].save(path, save_all=True, append_images=frames_p[1:], duration=interval, loop=0, optimize=False)
-    return len(times), interval
+    interval = delay(animator.times)
+    # optimize: each frame stores only the pixels that changed (the rest transparent), a fifth of the bytes
+    frames_p[0].save(path, save_all=True, append_images=frames_p[1:], duration=interval, loop=0, optimize=True)
+    return len(images), interval
+
+
+def delay(times):
+    """How long each frame is shown, ms: the time between frames in the GIF's hundredths of a second, at
+    least MIN_DELAY (a motion sampled faster plays slowed down)."""
+    return max(MIN_DELAY, 10 * round(100 * (times[1] - times[0]))) if len(times) > 1 else 100
+
+
+def pace(times, shown):
+    """The GIF's speed in words, from the time between frames and the time each is shown (ms)."""
+    if len(times) < 2:
+        return "a still"
+    slower = shown / (1000 * (times[1] - times[0]))
+    return "about real time" if abs(slower - 1) < 0.1 else f"{slower:.2g} times slower than real time"
 
 
 def caption(result, case, count, interval):
@@ -316,8 +360,15 @@ def caption(result, case, count, interval):
     spec = case.spec.get("animation", {})
     exact = result.runs["reference"].twin
     shown = result.drawings["animation"]
+    times = shown["exact"].times
+    gap = times[1] - times[0] if len(times) > 1 else 0.0
+    span = (f"over {exact.index[-1]:g} s" if times[-1] + gap > exact.index[-1] - 1e-9
+            else f"over the first {times[-1]:.3g} s of the {exact.index[-1]:g} s run (at most {MAX_FRAMES} frames)")
+    omega = fastest_shown(case, animated_runs(case, result.runs, result.program))
+    rate = (f", at least {FRAMES_PER_PERIOD} a period of the fastest motion shown ({omega:.3g} rad/s)"
+            if gap and omega and FRAMES_PER_PERIOD * gap <= 2 * math.pi / omega + 1e-9 else "")
     parts = [f"{heading(case.spec)}: the motion from {'the initial state' if case.one_derivation else 'the book’s initial conditions'},"
-             f" {count} frames over {exact.index[-1]:g} s, {interval} ms each (about real time), drawn from the"
+             f" {count} frames {span}{rate}, each shown {interval} ms ({pace(times, interval)}), drawn from the"
              " engine's forward kinematics of each run: grey lines from each body's origin to what hangs on it, a"
              " dot per mass (its area grows with the mass)"
              + (", the green ring the rim of the uniform disk with the body's largest moment of inertia" if

@@ -181,6 +181,27 @@ def named(words, source):
     return words.get(source, ENGINE_NAMES.get(source, source))
 
 
+# A rate or an acceleration primed, as the pages' prose writes them (psi'', l'').
+PRIMES = (("_acc", "''"), ("_rate", "'"), ("_dot", "'"))
+
+
+def quantity_label(name):
+    """A quantity as a figure names it, in the page's words: its symbol typeset (typeset.symbol, drawn by
+    matplotlib's mathtext), a rate or an acceleration primed, a vector's component after it (theta1_acc ->
+    theta_1'', omega3_dot_x -> omega_3' x, a_D_x -> a_D x); a word stays words (energy, drive power,
+    precession'')."""
+    base, paren, note = name.partition(" (")  # "psi (dependent)"
+    base, component = re.fullmatch(r"(.+?)(?:_([xyz]))?", base).groups()
+    prime = next((mark for suffix, mark in PRIMES if base.endswith(suffix)), "")
+    base = next((base[:-len(suffix)] for suffix, _ in PRIMES if base.endswith(suffix)), base)
+    head = re.match(r"[A-Za-z]*", base)[0]
+    if head in typeset.GREEK or len(head) == 1 or re.fullmatch(r"[A-Z][xyz]{1,2}", base):
+        shown = f"${typeset.symbol(base)}{prime}$"
+    else:
+        shown = base.replace("_", " ") + prime
+    return shown + (f" {component}" if component else "") + (f" ({note}" if paren else "")
+
+
 def figure_scene(result, case, path, *, words):
     """The scene at t = 0 and the path of each point mass along the tight run; returns the caption."""
     tight = trajectories(result)["tight reference"]
@@ -339,16 +360,16 @@ def figure_pointwise(result, case, path, *, words):
             ax.semilogy(np.full(len(dev), i) + np.linspace(-0.3, 0.3, len(dev)), np.maximum(dev, low), ls="none",
                         marker=style["marker"], ms=3, mfc=style.get("mfc"), color=style["color"],
                         label=named(words, source))
-        ax.axhline(tolerance, color="k", lw=0.8, ls="--")
+        ax.axhline(tolerance, color="k", lw=0.8, ls="--", label=f"tolerance {tolerance:g}")
         ax.set_xticks([])
         ax.set_xlim(-0.6, len(POINT_SOURCES) - 0.4)
         ax.set_ylim(low, high)
-        ax.set_title(quantity, fontsize=8)
+        ax.set_title(quantity_label(quantity), fontsize=8)
     for ax in axes.flat[len(quantities):]:
         ax.set_axis_off()
     fig.supylabel("relative deviation from the reference [1]" if rows > 1 else "relative deviation [1]", fontsize=9)
     fig.suptitle(titled(case, f"pointwise, {len(result.sample['states'])} random states"))
-    legend_below(fig, ncol=3)
+    legend_below(fig, ncol=4)
     save(fig, path)
     worst = {source: max(((d[source].max(), q) for q, d in deviations.items() if source in d), default=None)
              for source in POINT_SOURCES}
@@ -592,20 +613,20 @@ def write_case_page(result, case, tmp, animations=True):
     run_of = initial_words(case)
 
     def coordinates(path):
-        worst = figure_series(result, case, case.coords, lambda c: f"{c} [{unit(c)}]", "coordinates over time",
+        worst = figure_series(result, case, case.coords, lambda c: f"{quantity_label(c)} [{unit(c)}]", "coordinates over time",
                               path, words=words)
         return (f"Each coordinate along the run of {run_of}, every source overlaid (line style, marker and"
                 f" colour per source). Largest departure from the {tight}: {departures(worst, unit, words)}.")
 
     def errors(path):
-        worst = figure_series(result, case, state_columns(case), lambda c: f"|{c} error| [{unit(c)}]",
+        worst = figure_series(result, case, state_columns(case), lambda c: f"|{quantity_label(c)} error| [{unit(c)}]",
                               f"error against the {tight}", path, words=words, log_error=True)
         return (f"How far each source's run of {run_of} is from the {tight} ({result.runs['reference'].twin.attrs['method']},"
                 " a tighter tolerance), each coordinate and rate on a log scale that follows the data; exact"
                 f" agreement lies on the bottom edge. Largest: {departures(worst, unit, words)}.")
 
     def reactions(path):
-        worst = figure_series(result, case, list(case.reaction_names), lambda c: f"{c} [{force(c)}]",
+        worst = figure_series(result, case, list(case.reaction_names), lambda c: f"{quantity_label(c)} [{force(c)}]",
                               "reactions over time", path, words=words)
         return (f"Each reaction along the run of {run_of}, every source overlaid. Largest departure from the"
                 f" {tight}: {departures(worst, force, words)}.")

@@ -124,6 +124,21 @@ def title(name, what):
     return f"{name}: {what}" if len(name) + len(what) < 80 else textwrap.fill(f"{name}:", 80) + "\n" + textwrap.fill(what, 80)
 
 
+def wrapped(fig, text, fontsize):
+    """`text` on as few lines as keep each within the width of `fig` at `fontsize`, as drawn: a title that
+    would otherwise run off the figure's edges (fig.suptitle centres it, so its ends go first)."""
+    renderer = fig.canvas.get_renderer()
+    probe = fig.text(0, 0, text, fontsize=fontsize)
+    try:
+        for width in range(len(text), 0, -1):
+            probe.set_text(textwrap.fill(text, width))
+            if probe.get_window_extent(renderer).width <= 0.96 * fig.bbox.width:
+                return probe.get_text()
+        return probe.get_text()
+    finally:
+        probe.remove()
+
+
 def panels(rows=1, cols=1, height=3.6, **options):
     """A figure of rows x cols axes at the page's text width, `height` inches tall (pyplot().subplots's
     options); the axes always as a 2-D array."""
@@ -198,5 +213,5 @@ def method_style(label):
     return {} if method is None else dict(color=METHOD_COLOUR[method], marker=METHOD_MARKER[method])
 
 
-__all__ = ["pyplot", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check_size", "check_text", "embed", "title", "panels", "legend_below",
+__all__ = ["pyplot", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check_size", "check_text", "embed", "title", "wrapped", "panels", "legend_below",
            "unique_handles", "thin", "log_range", "SOURCE_STYLE", "along", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]

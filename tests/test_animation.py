@@ -7,15 +7,17 @@ import subprocess
 import sys
 
 import numpy as np
+import pandas as pd
 import pytest
 from PIL import Image
 
 import dyncheck
-from dyncheck import animation
+from dyncheck import animation, style
 from dyncheck.case import Case
 from dyncheck.checks import run_case
 from dyncheck.results import save_results
 from dyncheck.report import write_reports
+from dyncheck.style import check_text
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +37,8 @@ def test_frames_are_the_engines_kinematics(piston):
     run = piston.runs["reference"].twin
     model = case.model("mujoco")
     rows = animation.at_times(run, frames.times)
-    assert 10 < len(frames.times) <= animation.MAX_FRAMES and np.all(np.diff(frames.times) >= animation.MIN_INTERVAL - 1e-9)
+    # no fastest frequency, no angle among its (prescribed) coordinates: a slow motion's frames
+    assert 10 < len(frames.times) <= animation.SLOW_FRAMES and np.all(np.diff(frames.times) >= animation.MIN_INTERVAL - 1e-9)
     for i in (0, len(rows) // 2, len(rows) - 1):
         t, q = run.index[rows[i]], run[list(case.coords)].to_numpy()[rows[i]]
         centres, origins, _ = model.points(t, q)
@@ -58,6 +61,58 @@ def test_the_gif_is_the_same_bytes_again(piston, tmp_path):
         assert gif.info["duration"] == interval
 
 
+def test_frames_follow_the_fastest_motion_shown():
+    """At least FRAMES_PER_PERIOD frames a period of the fastest motion, the longest multiple of the output step
+    that gives them; a slow motion at most SLOW_FRAMES, MIN_INTERVAL apart; never more than MAX_FRAMES."""
+    run = pd.DataFrame({"x": 0.0}, index=np.arange(3001) * 1e-3)  # 3 s at 1 ms, as the spring pendulum's
+    gap = lambda rows: run.index[rows[1]] - run.index[rows[0]]
+    rows = animation.frame_rows(run, 103.9)  # its spring's fastest frequency
+    assert gap(rows) <= 2 * np.pi / (animation.FRAMES_PER_PERIOD * 103.9) < gap(rows) + 1e-3
+    assert len(rows) == 429 and run.index[rows[-1]] > 3.0 - gap(rows)  # the whole run
+    slow = animation.frame_rows(run, 0.0)
+    assert len(slow) <= animation.SLOW_FRAMES and gap(slow) >= animation.MIN_INTERVAL
+    assert np.array_equal(animation.frame_rows(run, 1.0), slow)  # a slow motion needs no more
+    assert len(animation.frame_rows(run, 400.0)) == animation.MAX_FRAMES  # the first 0.5 s only
+    # Browsers show a GIF's 0 or 10 ms frames for 100 ms: a faster motion plays slowed down.
+    times = run.index[rows].to_numpy()
+    assert animation.delay(times) == animation.MIN_DELAY
+    assert animation.pace(times, animation.delay(times)) == "2.9 times slower than real time"
+    assert animation.pace(run.index[slow].to_numpy(), animation.delay(run.index[slow].to_numpy())) == "about real time"
+
+
+def test_the_fastest_motion_shown_is_the_faster_of_the_frequency_and_a_turn():
+    case = dyncheck.load_case("spring_pendulum")  # fastest frequency 104 rad/s; psi an angle, l a length
+    still = pd.DataFrame({"psi_rate": [0.0, 1.0], "l_rate": [0.0, 500.0]})
+    assert animation.fastest_shown(case, {"exact": still}) == pytest.approx(103.92, abs=0.01)
+    turning = pd.DataFrame({"psi_rate": [0.0, -150.0], "l_rate": [0.0, 0.0]})
+    assert animation.fastest_shown(case, {"exact": still, "program": turning}) == 150.0
+
+
+def test_a_long_heading_is_wrapped_inside_the_frame(piston):
+    """Every text of a frame inside it (write_gif refuses one that runs off, as style.save does a figure's): a
+    heading wider than the panel goes on more lines."""
+    spec = {**piston.spec, "title": "a piston on a turning arm, its extension and the arm's angle both prescribed, "
+                                    "drawn in the inertial frame"}
+    animator = animation.Animator(piston, Case(piston.folder, piston.overrides, spec), None)
+    animator.show(len(animator.times) - 1)
+    check_text(animator.fig, "frame")
+    assert animator.title.count("\n") >= 1
+    style.pyplot().close(animator.fig)
+
+
+@pytest.mark.full
+def test_every_case_animation_follows_its_fastest_motion(results, example_results):
+    """Each case's frames, as its checks saved them, take a period of its fastest motion in FRAMES_PER_PERIOD or
+    more (the output step allowing), or are a slow motion's."""
+    for result in [*results, *example_results]:
+        case, frames = case_of(result), result.drawings["animation"]["exact"]
+        omega = animation.fastest_shown(case, animation.animated_runs(case, result.runs, result.program))
+        gap, step = np.diff(frames.times[:2])[0], np.diff(result.runs["reference"].twin.index[:2])[0]
+        if omega:
+            assert gap <= max(2 * np.pi / (animation.FRAMES_PER_PERIOD * omega), step) + 1e-9, case.name
+        assert len(frames.times) <= animation.MAX_FRAMES
+
+
 @pytest.mark.full
 def test_no_animations_makes_none(piston, tmp_path):
     write_reports([piston], tmp_path / "without", animations=False)
@@ -73,7 +128,7 @@ RENDER_BOTH = """
 import sys
 from pathlib import Path
 import numpy as np
-from dyncheck import animation
+from dyncheck import animation, style
 from dyncheck.case import Case
 from dyncheck.results import load_result
 result = load_result(Path(sys.argv[1]))

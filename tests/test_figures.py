@@ -58,3 +58,36 @@ def test_a_figure_drawn_twice_is_the_same_bytes(tmp_path):
         style.save(fig, tmp_path / f"{name}.png")
     for suffix in (".png", ".pdf"):
         assert (tmp_path / f"a{suffix}").read_bytes() == (tmp_path / f"b{suffix}").read_bytes()
+
+
+def test_quantities_are_named_in_the_pages_words():
+    """As the prose writes them (psi'', l''), typeset: a symbol in mathtext, primes for a rate or an
+    acceleration, a vector's component after it; words stay words."""
+    from dyncheck.report import quantity_label
+    assert quantity_label("theta1_acc") == r"$\theta_{1}''$"
+    assert quantity_label("omega3_dot_x") == r"$\omega_{3}'$ x"
+    assert quantity_label("a_D_x") == "$a_{D}$ x"
+    assert quantity_label("Rx") == "$R_{x}$"
+    assert quantity_label("psi_rate (dependent)") == r"$\psi'$ (dependent)"
+    assert quantity_label("precession_acc") == "precession''"
+    assert quantity_label("drive_power") == "drive power"
+
+
+def test_the_pointwise_panels_name_no_code(monkeypatch):
+    """Each panel's title is the quantity in the page's words (it was the code's name, omega3_dot_x), and the
+    dashed tolerance is in the legend."""
+    import dyncheck
+    from dyncheck import report
+    from dyncheck.case import Case
+    from dyncheck.checks import run_case
+    result = run_case(dyncheck.load_case("piston"), localise=False)  # seconds: its motions prescribed
+    drawn = {}
+    monkeypatch.setattr(report, "save", lambda fig, path: drawn.update(fig=fig))
+    report.figure_pointwise(result, Case(result.folder, result.overrides, result.spec), "x.png", words={})
+    titles = [ax.get_title() for ax in drawn["fig"].axes if ax.get_title()]
+    assert len(titles) == len(result.sample["values"]["reference"])
+    assert not [t for t in titles if "_" in re.sub(r"\$[^$]*\$", "", t)], titles
+    assert "$a_{\\mathrm{eq110}}$ x" in titles
+    assert f"tolerance {result.spec['tolerance']['pointwise']['value']:g}" in [
+        text.get_text() for text in drawn["fig"].legends[0].get_texts()]
+    style.pyplot().close(drawn["fig"])

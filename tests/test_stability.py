@@ -6,12 +6,14 @@ Fast by default (a few seconds each): each test runs one study on a reduced set 
 
 import math
 import time
+from types import SimpleNamespace
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import stability
+from dyncheck import stability, style
 from dyncheck.stability import common, long_runs
 from dyncheck.simulate import Unstable
 
@@ -244,3 +246,27 @@ def test_the_euler_singularity_study_without_passages_draws_its_one_panel(tmp_pa
     assert any(f.startswith("No passage through the upright: at the passages' spin 43.98 rad/s the upright is "
                             "unstable") for f in result.findings)
     assert stability.figure(case, result, tmp_path / "singularity.png") and (tmp_path / "singularity.png").is_file()
+
+
+def test_the_euler_singularity_figure_keeps_its_axes_to_what_an_error_can_be(monkeypatch, tmp_path):
+    """Its lower axis, an axis direction's error, ends a decade above pi rad (it ran to 1e9), and what the
+    figure draws is in its legend: machine epsilon's line (its label was printed over the markers) and the
+    grey nutation of the right axis."""
+    case = dyncheck.load_case("spinning_top")
+    top = stability.case_module(case)
+    t = np.linspace(0.0, 0.5, 50)
+    rows = pd.DataFrame([{"source": source, "nutation": n, "error": e * n ** -2}
+                         for source, e in (("reference (Euler angles)", 1e-18), ("mujoco (quaternion)", 1e-30))
+                         for n in (1e-1, 1e-4, 1e-8)])
+    passes = [{"status": "ok", "closest": 1e-6, "t": t, "nutation": 1e-6 + t, "error_mj": np.full(50, 1e-14),
+               "dop853": {"status": "ok", "error": np.full(50, 1e-11)}, "rk4": {"fail": {"t": 0.118}}}]
+    drawn = {}
+    monkeypatch.setattr(top, "save", lambda fig, path: drawn.update(fig=fig))
+    top.figure_euler_singularity(SimpleNamespace(series={"rows": rows, "passes": passes}), tmp_path / "x.png", "1.10")
+    errors, passage = drawn["fig"].axes[1], drawn["fig"].axes[2]
+    assert np.pi < errors.get_ylim()[1] <= 10
+    legend = [text.get_text() for text in drawn["fig"].legends[0].get_texts()]
+    assert "machine epsilon, 2.2e-16" in legend and "MuJoCo (quaternion)" in legend
+    assert any(label.startswith("nutation of the closest passage") for label in legend)
+    assert not [text.get_text() for ax in drawn["fig"].axes for text in ax.texts]  # no text over the data
+    style.pyplot().close(drawn["fig"])

@@ -454,9 +454,10 @@ def figure_euler_singularity(result, path, name):
     floor = 1e-18
     for source, group in rows.groupby("source", sort=False):
         err = group["error"].astype(float).fillna(np.inf)
-        ax.plot(group["nutation"], np.clip(err, floor, 1e3), label=source, **styles.get(source, {}))
-    ax.axhline(EPS, color="0.5", ls=":", lw=1)
-    ax.text(rows["nutation"].max(), EPS / 1.5, "machine epsilon", ha="left", va="top", fontsize=8, color="0.4")
+        engine, _, how = source.partition(" ")
+        ax.plot(group["nutation"], np.clip(err, floor, 1e3), label=" ".join(filter(None, (NAMES.get(engine, engine), how))),
+                **styles.get(source, {}))
+    ax.axhline(EPS, color="0.5", ls=":", lw=1, label=f"machine epsilon, {EPS:.1e}")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.invert_xaxis()
@@ -471,7 +472,7 @@ def figure_euler_singularity(result, path, name):
             for key, ls, label in (("dop853", "-", "DOP853"), ("rk4", "--", "fixed RK4")):
                 x = p.get(key, {})
                 if x.get("status") == "ok":
-                    ax.plot(p["t"], np.clip(x["error"], floor, 10), color=color, ls=ls, lw=1.1,
+                    ax.plot(p["t"], np.clip(x["error"], floor, np.pi), color=color, ls=ls, lw=1.1,
                             label=f"Euler angles, {label}, closest {p['closest']:.0e} rad")
                 elif x.get("fail", {}).get("t") is not None:
                     ax.plot([x["fail"]["t"]], [1.0], marker="X", ms=9, color=color, ls="none",
@@ -481,7 +482,8 @@ def figure_euler_singularity(result, path, name):
                 label="MuJoCo RK4 (quaternion) vs its half-step twin")
         ax2 = ax.twinx()
         closest = min(passes, key=lambda p: p["closest"])
-        ax2.plot(closest["t"], closest["nutation"], color="0.55", lw=0.8)
+        ax2.plot(closest["t"], closest["nutation"], color="0.55", lw=0.8,
+                 label=f"nutation of the closest passage ({closest['closest']:.0e} rad), right axis")
         ax2.set_yscale("log")
         ax2.set_ylabel("nutation [rad], closest\npassage (grey)", color="0.4")
         ax.set_yscale("log")
@@ -489,7 +491,7 @@ def figure_euler_singularity(result, path, name):
         ax.set_ylabel("axis direction error\nagainst MuJoCo [rad]")
         ax.set_title(f"a top whose axis swings past the vertical, {len(passes)} aims")
         ax.grid(True, which="both")
-        ax.set_ylim(floor / 10, 1e9)
+        ax.set_ylim(floor / 10, 10)  # an axis's direction is off by pi rad at most
     fig.suptitle(title(name, "the Euler-angle equations near zero nutation"))
     legend_below(fig, ncol=1)
     save(fig, path)

@@ -308,7 +308,8 @@ def figure_lyapunov(result, path, name):
     rows = s["rows"]
     for k, (_, r) in enumerate(rows.iterrows()):
         if r.get("status") == "chaotic":
-            a2.axhline(r["lambda"], color=colors[k % 4], ls=":", lw=1)
+            a2.axhline(r["lambda"], color=colors[k % 4], ls=":", lw=1,
+                       label="dotted: the exponent measured for a chaotic start (its colour)")
     a1.set_ylabel("ln(|d(t)| / |d(0)|) [1]")
     a1.set_title("stretch of a small separation (Benettin), accumulated")
     a2.set_xlabel("t [s]")
