@@ -276,9 +276,8 @@ class Case:
         if isinstance(where, str) and where.endswith(".py") and (self.folder / derived.SCENE).is_file() \
                 and schema.own_file(self.folder, where, "derivation",
                                     self.file if "derivation" in given else self.folder / where).is_file():
-            module = isolation.Guarded(load_file(self.folder / where, f"{self.file}: derivation = {where!r}"
-                                                 if "derivation" in given else str(self.folder / where)),
-                                       f"{self.folder.name}/{where}", isolation.IMPORT_BUDGET)
+            module = self._own_code(self.folder / where, where, f"{self.file}: derivation = {where!r}"
+                                    if "derivation" in given else str(self.folder / where))
             if derived.is_plain(module):
                 from engines.mjcf import describe  # the harness reads a scene only through engines/
                 scene = describe(self.folder / derived.SCENE)
@@ -412,10 +411,12 @@ class Case:
         path = schema.derivation_file(where, self.folder, self.file)  # refused before anything runs
         if not where.endswith(".py"):
             return guarded(self._where_derived, lambda: importlib.import_module(where))
-        # code of the case's own folder: its calls bounded and recorded (isolation), within IMPORT_BUDGET until
-        # _derived has measured what one costs
-        return isolation.Guarded(load_file(path, self._where_derived), f"{self.folder.name}/{where}",
-                                 isolation.IMPORT_BUDGET)
+        return self._own_code(path, where, self._where_derived)
+
+    def _own_code(self, path, where, what):
+        """The module at `path`, code of the case's own folder: its calls bounded and recorded (isolation), within
+        IMPORT_BUDGET until _derived has measured what one costs; `what` names it in a load's error."""
+        return isolation.Guarded(load_file(path, what), f"{self.folder.name}/{where}", isolation.IMPORT_BUDGET)
 
     @property
     def foreign(self):

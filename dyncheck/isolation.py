@@ -75,7 +75,7 @@ class Record:
             self._name = name
         d = self._doubles
         d[1], d[2], d[3] = np.nan, time.monotonic(), 0
-        if len(args) >= 3 and np.ndim(args[1]) == 1 and np.ndim(args[2]) == 1:  # (t, q, v, ...)
+        if _at_a_state(args):
             t, q, v = args[:3]
             n = min(len(q), MAX_SHOWN)
             d[1], d[3] = float(t), n
@@ -194,8 +194,13 @@ def guarded_call(label, name, budget, function, *args):
         raise DerivationError(f"{where()}: it ran out of memory (the case's cap: case.toml [budget] memory)") from None
 
 
+def _at_a_state(args):
+    """Whether a call's arguments begin with a state, (t, q, v, ...), as the model interface's do."""
+    return len(args) >= 3 and np.ndim(args[1]) == 1 and np.ndim(args[2]) == 1
+
+
 def _state(args):
-    if len(args) >= 3 and np.ndim(args[1]) == 1 and np.ndim(args[2]) == 1:
+    if _at_a_state(args):
         return float(args[0]), np.asarray(args[1], dtype=float), np.asarray(args[2], dtype=float)
     return np.nan, (), ()
 
