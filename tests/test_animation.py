@@ -104,7 +104,7 @@ def test_a_long_heading_is_wrapped_inside_the_frame(piston):
 def test_every_case_animation_follows_its_fastest_motion(results, example_results):
     """Each case's frames, as its checks saved them, take a period of its fastest motion in FRAMES_PER_PERIOD or
     more (the output step allowing), or are a slow motion's."""
-    for result in [*results, *example_results]:
+    for result in [*results.values(), *example_results.values()]:
         case, frames = case_of(result), result.drawings["animation"]["exact"]
         omega = animation.fastest_shown(case, animation.animated_runs(case, result.runs, result.program))
         gap, step = np.diff(frames.times[:2])[0], np.diff(result.runs["reference"].twin.index[:2])[0]
