@@ -7,7 +7,9 @@ forked process of its own (`run_each`), within a memory cap and a time budget, a
 under `supervised`, so that foreign code can never end dyncheck with an exit code of its choosing.
 docs/isolation.md says what a user sees."""
 
+import ctypes
 import faulthandler
+import hmac
 import mmap
 import os
 import pickle
@@ -25,9 +27,11 @@ import numpy as np
 MAX_SHOWN = 16  # coordinates a record keeps of a state (a message shows no more)
 LABEL_BYTES = 2048
 # The record's layout, in one page shared with the forked process that reads it: a header of doubles
-# (active, t, started, coordinates n, the state's q and v), the function's name and the label (what runs).
-HEADER = 4 + 2 * MAX_SHOWN
+# (active, t, started, coordinates n, the call's budget, the state's q and v), the function's name and the label
+# (what runs), then the end: whether it was reached, the exit code, whether loading, and the supervisor's token.
+HEADER = 5 + 2 * MAX_SHOWN
 NAME_AT, LABEL_AT, DONE_AT = 8 * HEADER, 8 * HEADER + 64, 8 * HEADER + 64 + LABEL_BYTES
+TOKEN_AT, TOKEN_BYTES = DONE_AT + 16, 16
 # The defaults of a case's budget (Case.budget).  A call of a derivation costs microseconds to milliseconds (a
 # generated 7-dof inverse dynamics: 2-6 ms); 1000 of them is no honest call's time, and 5 s is a floor that
 # no machine's load reaches.  The checks of a case make at most about a million evaluations of it (the six book
@@ -38,6 +42,12 @@ CASE_FLOOR, CALLS_PER_CASE = 900.0, 10**6
 IMPORT_BUDGET = 60.0
 TICK = 0.05  # s between two looks of the watchdog: a call is stopped within this of its budget
 OVERRUN_SIGNAL = signal.SIGUSR2  # the watchdog's to the main thread (SIGALRM is the user's, and pytest's)
+# A call that outlives its budget by this much did not stop when its watchdog told it to (it ignores or swallows
+# the signal, or hangs in compiled code, or its process is stopped): the process watching it kills it.  The
+# watchdog stops an honest call within TICK (0.05 s) of its budget; 20 ticks leave room for a loaded machine.
+GRACE = 1.0
+POLL = 0.1  # s between two looks of a watching process at its children (the records, their exits)
+PR_SET_PDEATHSIG = 1  # prctl(2): the signal a process gets when the one that forked it dies
 
 
 class DerivationError(Exception):
@@ -62,11 +72,11 @@ class Record:
     every call (about 0.7 us), read by the parent when the child dies.  `done(code)` marks a normal end."""
 
     def __init__(self):
-        self._memory = mmap.mmap(-1, DONE_AT + 16)  # anonymous and shared: a forked child writes, its parent reads
+        self._memory = mmap.mmap(-1, TOKEN_AT + TOKEN_BYTES)  # anonymous and shared: a forked child writes, its parent reads
         self._doubles = np.frombuffer(self._memory, dtype=float, count=HEADER)
         self._name = self._label = None
 
-    def enter(self, label, name, args):
+    def enter(self, label, name, args, budget):
         if label != self._label:
             self._write(LABEL_AT, LABEL_BYTES, label)
             self._label = label
@@ -74,12 +84,12 @@ class Record:
             self._write(NAME_AT, 64, name)
             self._name = name
         d = self._doubles
-        d[1], d[2], d[3] = np.nan, time.monotonic(), 0
+        d[1], d[2], d[3], d[4] = np.nan, time.monotonic(), 0, budget
         if _at_a_state(args):
             t, q, v = args[:3]
             n = min(len(q), MAX_SHOWN)
             d[1], d[3] = float(t), n
-            d[4:4 + n], d[4 + MAX_SHOWN:4 + MAX_SHOWN + n] = q[:n], v[:n]
+            d[5:5 + n], d[5 + MAX_SHOWN:5 + MAX_SHOWN + n] = q[:n], v[:n]
         d[0] = 1.0
 
     def leave(self):
@@ -93,8 +103,17 @@ class Record:
         (size,) = struct.unpack("<H", self._memory[at:at + 2])
         return self._memory[at + 2:at + 2 + size].decode(errors="replace")
 
-    def done(self, code):
+    def done(self, code, token):
+        """Marks a normal end with its exit code, signed with the token that the supervising process gave (`seal`):
+        a record that foreign code marks done without it is no end."""
+        self._memory[TOKEN_AT:TOKEN_AT + TOKEN_BYTES] = token
         self._memory[DONE_AT:DONE_AT + 9] = struct.pack("<?q", True, code)
+
+    def seal(self):
+        """A new token for `done`, kept by the caller (the supervisor, which hands it to its child alone)."""
+        self._memory[DONE_AT:DONE_AT + 9] = struct.pack("<?q", False, 0)
+        self._memory[TOKEN_AT:TOKEN_AT + TOKEN_BYTES] = bytes(TOKEN_BYTES)
+        return os.urandom(TOKEN_BYTES)
 
     @property
     def loading(self):
@@ -105,11 +124,19 @@ class Record:
     def loading(self, value):
         self._memory[DONE_AT + 9] = int(value)
 
-    @property
-    def code(self):
-        """The exit code that `done` recorded, or None where the process ended otherwise."""
+    def code(self, token):
+        """The exit code that `done` recorded with `token`, or None where the process ended otherwise."""
         finished, code = struct.unpack("<?q", self._memory[DONE_AT:DONE_AT + 9])
-        return code if finished else None
+        signed = hmac.compare_digest(bytes(self._memory[TOKEN_AT:TOKEN_AT + TOKEN_BYTES]), token)
+        return code if finished and signed else None
+
+    def overran(self):
+        """The running call in words, where it has outlived its budget by GRACE (its watchdog did not stop it);
+        else None."""
+        d = self._doubles
+        if d[0] == 1.0 and time.monotonic() > d[2] + d[4] + GRACE:
+            return self.describe()
+        return None
 
     def describe(self):
         """The call that was running, in words ("equations.py: accelerations at t = 0.1 s, q = [...], v = [...],
@@ -117,8 +144,8 @@ class Record:
         d = self._doubles
         if d[0] != 1.0:
             return None
-        return in_words(self._read(LABEL_AT), self._read(NAME_AT), d[1], d[4:4 + int(d[3])],
-                        d[4 + MAX_SHOWN:4 + MAX_SHOWN + int(d[3])], time.monotonic() - d[2])
+        return in_words(self._read(LABEL_AT), self._read(NAME_AT), d[1], d[5:5 + int(d[3])],
+                        d[5 + MAX_SHOWN:5 + MAX_SHOWN + int(d[3])], time.monotonic() - d[2])
 
 
 def in_words(label, name, t, q, v, elapsed):
@@ -173,8 +200,8 @@ def _watchdog():
 def guarded_call(label, name, budget, function, *args):
     """function(*args), foreign code: recorded, within `budget` s, its exit or overrun a DerivationError."""
     watchdog = _watchdog()
-    RECORD.enter(label, name, args)
-    start = time.monotonic()
+    RECORD.enter(label, name, args, budget)
+    start, pid = time.monotonic(), os.getpid()
     if watchdog is not None:
         watchdog.deadline = start + budget
     where = lambda: in_words(label, name, *(_state(args) + (time.monotonic() - start,)))
@@ -182,6 +209,8 @@ def guarded_call(label, name, budget, function, *args):
         try:
             return function(*args)
         finally:
+            if os.getpid() != pid:  # a copy of this process that the code forked: it must not run dyncheck on
+                os._exit(0)
             if watchdog is not None:
                 watchdog.deadline = None
             RECORD.leave()
@@ -242,12 +271,12 @@ def run_each(items, work, workers, budget_of):
                 budget = budget_of(item)
                 record = Record()
                 receive, send = context.Pipe(duplex=False)
-                process = context.Process(target=_child, args=(work, item, send, record, budget.memory), daemon=True)
+                process = context.Process(target=_child, args=(work, item, send, record, budget.memory, os.getpid()),
+                                          daemon=True)
                 process.start()
                 send.close()
                 running[receive] = (index, process, record, time.monotonic() + budget.case, budget)
-            ready = connection.wait(list(running) + [p.sentinel for _, p, _, _, _ in running.values()],
-                                    timeout=max(0.0, min(d for _, _, _, d, _ in running.values()) - time.monotonic()))
+            ready = connection.wait(list(running) + [p.sentinel for _, p, _, _, _ in running.values()], timeout=POLL)
             for receive, (index, process, record, deadline, budget) in list(running.items()):
                 outcome = None
                 if receive in ready or process.sentinel in ready:
@@ -255,12 +284,16 @@ def run_each(items, work, workers, budget_of):
                         outcome = receive.recv()
                     except (EOFError, OSError, pickle.UnpicklingError):
                         process.join()
-                        outcome = ("lost", _death(process, record))
+                        outcome = ("lost", _death(process.exitcode, record))
                 elif time.monotonic() > deadline:
                     running_call = record.describe()
                     process.kill()
                     outcome = ("lost", f"stopped after its budget of {budget.case:g} s for the whole case "
                                        f"(case.toml [budget] case)" + (f", during {running_call}" if running_call else ""))
+                elif (overrun := record.overran()) is not None:
+                    process.kill()
+                    outcome = ("lost", f"{overrun}: killed, past its budget of {budget.call:g} s for one call "
+                                       "(case.toml [budget] call), which it did not stop at when told")
                 if outcome is not None:
                     process.join()
                     receive.close()
@@ -278,16 +311,28 @@ def machine_memory():
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
-def _death(process, record):
-    code = process.exitcode
+def _death(code, record):
+    """A process's end (its exit code, negative for a signal, as multiprocessing gives it) and its last call."""
     how = (f"killed by signal {signal.Signals(-code).name}" if code < 0 else f"exit code {code}")
     call = record.describe()
     return f"its process ended ({how})" + (f" during {call}" if call else "")
 
 
-def _child(work, item, send, record, memory):
+def _die_with_parent(parent):
+    """This forked process is killed when `parent` dies (Linux's prctl; elsewhere the parent kills it), so that no
+    case runs on, orphaned, after foreign code killed the process that watches it."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # it died before the request: none will come
+        os._exit(1)
+
+
+def _child(work, item, send, record, memory, parent):
     global RECORD
     RECORD = record
+    _die_with_parent(parent)
     faulthandler.disable()  # a crash is the case's row, not a dump of this process's threads (pytest enables it)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
@@ -308,11 +353,14 @@ def _child(work, item, send, record, memory):
 
 
 def supervised(main):
-    """main() in a forked process, its exit code passed on only where main returned it: a process ended by foreign
-    code (os._exit, a signal) gives exit 2 where it was loading a case, else 1, with a line saying what ran."""
+    """main() in a forked process, its exit code passed on only where main returned it (the record signed with a
+    token that only this process and main's own frame hold): a process ended by foreign code (os._exit, a signal, a
+    forged record) gives exit 2 where it was loading a case, else 1, with a line saying what ran.  A call of that
+    process that outlives its budget is killed (its watchdog did not stop it); a stop (SIGSTOP) is resumed."""
     context = get_context("fork")
     RECORD.leave()
-    process = context.Process(target=_main_child, args=(main, RECORD))
+    token = RECORD.seal()
+    process = context.Process(target=_main_child, args=(main, RECORD, token, os.getpid()))
     process.start()
     # The child gets Ctrl-C too (the terminal sends it to the group), and says it was interrupted; a SIGTERM sent to
     # this process alone (a CI job's time-out) is passed on, and ends this one as it would have.
@@ -320,20 +368,45 @@ def supervised(main):
     previous = (signal.signal(signal.SIGINT, signal.SIG_IGN),
                 signal.signal(signal.SIGTERM, lambda *_: (terminated.append(True), process.terminate())))
     try:
-        process.join()
+        status, overrun = _watch(process.pid)
     finally:
         signal.signal(signal.SIGINT, previous[0])
         signal.signal(signal.SIGTERM, previous[1])
-    code = RECORD.code
-    if code is not None:
+    code, recorded = os.waitstatus_to_exitcode(status), RECORD.code(token)
+    if recorded is not None and recorded == code:
         return code
     if terminated:
         return 128 + signal.SIGTERM
-    print(f"dyncheck: error: {_death(process, RECORD)}: a case's own code ended dyncheck", file=sys.stderr)
+    ended = (f"{overrun}: killed, past its budget for one call, which it did not stop at when told" if overrun
+             else _death(code, RECORD))
+    print(f"dyncheck: error: {ended}: a case's own code ended dyncheck", file=sys.stderr)
     return 2 if RECORD.loading else 1
 
 
-def _main_child(main, record):
+def _watch(pid):
+    """Waits for the child `pid` to end, resuming it where something stopped it and killing it where its running
+    call overran (RECORD): its wait status, and the overrun call in words (or None)."""
+    overrun = None
+    while True:
+        try:
+            done, status = os.waitpid(pid, os.WNOHANG | os.WUNTRACED)
+        except InterruptedError:
+            continue
+        if done and os.WIFSTOPPED(status):
+            os.kill(pid, signal.SIGCONT)
+        elif done:
+            return status, overrun
+        elif overrun is None and (overrun := RECORD.overran()) is not None:
+            os.kill(pid, signal.SIGKILL)
+        time.sleep(POLL)
+
+
+def _main_child(main, record, token, parent):
+    _die_with_parent(parent)
+    # The cap of the cases' processes holds here too, for what runs outside them (a derivation's import, the
+    # studies): the machine's memory, which no run that it can hold needs more than.
+    memory = machine_memory()
+    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     try:
         code = main()
     except SystemExit as error:  # argparse's --help and usage errors
@@ -343,5 +416,5 @@ def _main_child(main, record):
         code = 130
     sys.stdout.flush()
     sys.stderr.flush()
-    record.done(code)
+    record.done(code, token)
     os._exit(code)

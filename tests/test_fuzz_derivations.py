@@ -61,7 +61,10 @@ MISCHIEF = [
     ("loop", "while True: pass", f"past its budget of {CALL_BUDGET:g} s for one call"),
     ("sleep", "time.sleep(1e6)", f"past its budget of {CALL_BUDGET:g} s for one call"),
     ("swallowed time-out", "while True:\n    try:\n        time.sleep(1e6)\n    except BaseException:\n        pass",
-     "stopped after its budget of 3 s for the whole case"),  # it outlives every CallTimeout: its process is killed
+     f"killed, past its budget of {CALL_BUDGET:g} s for one call"),  # it outlives every CallTimeout: killed
+    ("ignored time-out", "signal.signal(signal.SIGUSR2, signal.SIG_IGN)\nwhile True: pass",
+     f"killed, past its budget of {CALL_BUDGET:g} s for one call"),
+    ("stopped", "os.kill(os.getpid(), signal.SIGSTOP)", f"killed, past its budget of {CALL_BUDGET:g} s for one call"),
     ("40 GB", "x = np.ones(5 * 10**9)", "it ran out of memory"),
     ("raise", "raise KeyError('theta')", "KeyError: 'theta'"),
     ("NaN", "return np.array([np.nan, 0.0])", "is nan at random state"),
@@ -71,8 +74,7 @@ MISCHIEF = [
 
 @pytest.mark.parametrize("name, action, said", MISCHIEF, ids=[m[0] for m in MISCHIEF])
 def test_a_derivation_misbehaving_in_a_small_region_fails_saying_what_it_did(name, action, said, tmp_path):
-    toml = BUDGETED + ("case = 3\n" if name == "swallowed time-out" else "")
-    folder = make_case(tmp_path, misbehaving(action), toml)
+    folder = make_case(tmp_path, misbehaving(action), BUDGETED)
     case = dyncheck.load_case("cart_pendulum", folder)
     start = time.perf_counter()
     results, interrupted = run_cases([case], localise=False)
@@ -100,6 +102,54 @@ def test_a_derivation_that_exits_at_import_or_on_load_is_bad_input_for_the_comma
                                   timeout=120)
             assert done.returncode == 2, (where, command, done.stdout[-500:], done.stderr[-500:])
             assert "a case's own code ended dyncheck" in done.stderr and "Traceback" not in done.stderr
+
+
+def command(folder, timeout=120):
+    return subprocess.run(["dyncheck", "run", "--cases", str(folder)], capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def test_a_forged_end_is_no_end(tmp_path):
+    """Code that marks dyncheck's record done (with a token of its own making) and ends the process with 0 ends
+    dyncheck with exit 2: only the supervisor's token signs an end."""
+    forger = ("import os, sys\nsys.modules['dyncheck.isolation'].RECORD.done(0, bytes(16))\nos._exit(0)\n"
+              + FILES["equations.py"])
+    done = command(make_case(tmp_path, forger))
+    assert done.returncode == 2, done.stderr[-500:]
+    assert "a case's own code ended dyncheck" in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize("action, code, said", [
+    # a stopped parent is resumed by the supervisor: the run ends with the derivation's NaN, once
+    ("os.kill(os.getppid(), signal.SIGSTOP)\nreturn np.array([np.nan, 0.0])", 1, "dyncheck: FAIL"),
+    # a copy of the case's process that the code forks does not run dyncheck on: its summary is printed once
+    ("os.fork()\nreturn np.array([np.nan, 0.0])", 1, "dyncheck: FAIL"),
+    # the watching process killed: the command says so, and no case's process lives on
+    ("open(os.environ['DYNCHECK_TEST_PID'], 'w').write(str(os.getpid()))\nos.kill(os.getppid(), signal.SIGKILL)",
+     1, "killed by signal SIGKILL")], ids=["stops its parent", "forks", "kills its parent"])
+def test_a_derivation_acting_on_processes_ends_the_run_as_one_run(action, code, said, tmp_path, monkeypatch):
+    pid_file = tmp_path / "pid"
+    monkeypatch.setenv("DYNCHECK_TEST_PID", str(pid_file))
+    done = command(make_case(tmp_path / "case", misbehaving(action), BUDGETED))
+    assert done.returncode == code, done.stderr[-500:]
+    assert (done.stdout + done.stderr).count(said) == 1, (done.stdout[-500:], done.stderr[-500:])
+    assert "Traceback" not in done.stderr
+    if pid_file.exists():
+        assert not alive(int(pid_file.read_text()), within=5)
+
+
+def alive(pid, within):
+    """Whether process `pid` still runs after `within` s (a zombie, dead but not yet reaped, does not)."""
+    stat = Path(f"/proc/{pid}/stat")
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        try:
+            if stat.read_text().rsplit(")", 1)[1].split()[0] in "ZX":
+                return False
+        except (FileNotFoundError, ProcessLookupError):
+            return False
+        time.sleep(0.1)
+    return True
 
 
 def test_ctrl_c_during_a_run_exits_130_without_a_traceback(tmp_path):
