@@ -107,6 +107,12 @@ def command(argv):
     args = parser.parse_args(argv)
     if args.command == "report" and args.out is None:
         args.out = Path("reports" + "".join(f"-{pair.strip().replace('/', '_')}" for pair in args.set))
+    if args.command == "campaign" and args.out is None:
+        args.out = Path("reports") / "campaigns" / args.case
+    for option in ("out", "junit", "json", "results", "saved", "cases_dir", "scene"):
+        # from the current folder now: a case's code that changes it (os.chdir) cannot move where the command writes
+        if getattr(args, option, None) is not None:
+            setattr(args, option, getattr(args, option).absolute())
     isolation.RECORD.loading = True  # until the cases are loaded, a case's code that ends the process is bad input
     try:
         if args.command == "list":
@@ -279,11 +285,10 @@ def campaign_command(args):
                                   ("--grid", args.grid, 0)))
     workers = whole_number("--workers", args.workers, 1) if args.workers is not None else os.cpu_count() or 1
     case = load_case(args.case, args.cases_dir, **parse_overrides(args.set))
-    out = args.out or Path("reports") / "campaigns" / case.name
-    check_writable("--out", out.resolve(), [out.resolve()])
+    check_writable("--out", args.out.resolve(), [args.out.resolve()])
     if not case.spec["sample"].get("params"):
         raise ValueError(f"{case.file}: no [sample.params]: the case draws no random parameter sets")
-    plan = campaign.plan(case, sets, states, chunk, out)
+    plan = campaign.plan(case, sets, states, chunk, args.out)
     try:
         return campaign.command(case, plan, grid, workers, args.scheduler)
     except KeyboardInterrupt:

@@ -5,6 +5,7 @@ from dataclasses import replace
 import multiprocessing
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -155,6 +156,19 @@ def test_ctrl_c_while_a_derivation_is_imported_exits_130_in_one_line(tutorial, c
                           capture_output=True, text=True, timeout=120,
                           env={**os.environ, "PYTHONPATH": str(Path(cli.__file__).resolve().parent.parent)})
     assert (done.returncode, done.stderr) == (130, "dyncheck: interrupted\n"), done.stderr
+
+
+@pytest.mark.parametrize("delay", [0.2, 1.0])
+def test_ctrl_c_while_the_command_starts_exits_130_in_one_line(delay):
+    """Ctrl-C while the command imports its modules (numpy, SciPy, pandas, the engines: over a second; 0.2 s lands
+    in them on any machine), as at a terminal.  The console command is `dyncheck.__main__:entry`."""
+    started = subprocess.Popen([sys.executable, "-m", "dyncheck", "run", "piston"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, "PYTHONPATH": str(Path(cli.__file__).resolve().parent.parent)})
+    time.sleep(delay)
+    started.send_signal(signal.SIGINT)
+    _, err = started.communicate(timeout=120)
+    assert (started.returncode, err) == (130, "dyncheck: interrupted\n"), err
 
 
 def test_ctrl_c_during_report_leaves_it_unchanged_and_exits_130(monkeypatch, tmp_path, capsys):

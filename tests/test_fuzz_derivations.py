@@ -119,6 +119,20 @@ def test_a_forged_end_is_no_end(tmp_path):
     assert "a case's own code ended dyncheck" in done.stderr and "Traceback" not in done.stderr
 
 
+def test_a_derivation_that_changes_the_current_folder_does_not_move_the_files_written(tmp_path):
+    """Relative paths of the command line are the caller's: taken from the current folder before a case's code runs
+    (here an import that moves to another folder, and a call that moves again in the case's process)."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    mover = f"import os\nos.chdir({str(elsewhere)!r})\n" + misbehaving(f"os.chdir({str(elsewhere)!r})", where="True")
+    make_case(tmp_path / "cases", mover)
+    done = subprocess.run(["dyncheck", "run", "--cases", "cases", "--json", "out.json", "--junit", "out.xml"],
+                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-500:]
+    assert (tmp_path / "out.json").is_file() and (tmp_path / "out.xml").is_file()
+    assert list(elsewhere.iterdir()) == []
+
+
 @pytest.mark.parametrize("action, code, said", [
     # a stopped parent is resumed by the supervisor: the run ends with the derivation's NaN, once
     ("os.kill(os.getppid(), signal.SIGSTOP)\nreturn np.array([np.nan, 0.0])", 1, "dyncheck: FAIL"),
