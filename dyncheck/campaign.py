@@ -68,7 +68,7 @@ def plan(case, sets, states, chunk, out):
     drawn, missing = checks.parameter_sets(case, sets)
     clash = set(case.params) & (set(COLUMNS) | {c for c in case.params if c.startswith("state_")})
     if clash:
-        raise ValueError(f"{case.file}: parameter {sorted(clash)[0]!r} has the name of a campaign column; "
+        raise ValueError(f"{case.origin}: parameter {sorted(clash)[0]!r} has the name of a campaign column; "
                          f"the campaign's own columns are {', '.join(COLUMNS)}, state_*")
     fixed = (code_version(), case_version(case), sorted(case.overrides.items()), states)
     chunks = []

@@ -178,8 +178,10 @@ class Case:
         # version of the equations even if their file is edited meanwhile.
         self.folder = Path(folder).absolute()  # saved with the results: they must not depend on the working folder
         self.file = self.folder / "case.toml"
+        # what messages name as the source of the case's numbers: its case.toml, or the folder of a case of two files
+        self.origin = self.file if self.file.is_file() else self.folder
         self.spec = self._read(overrides or {}) if spec is None else spec
-        schema.validate(self.spec, self.file, where=spec is None)
+        schema.validate(self.spec, self.origin, self.folder if spec is None else None)
         self.name = self.spec["name"]
         self.section = self.spec.get("section", "")
         self.title = self.spec["title"]
@@ -190,22 +192,22 @@ class Case:
         self.overrides = {}
         for key, value in (overrides or {}).items():
             if key not in self.defaults:
-                raise ValueError(f"{self.file}: case '{self.name}' has no parameter '{key}'"
+                raise ValueError(f"{self.origin}: case '{self.name}' has no parameter '{key}'"
                                  f"{suggest(key, self.defaults)}; its parameters are {', '.join(self.defaults)}")
             # float() reads more than numbers: "2_0" as 20, Arabic-Indic and fullwidth digits
             if isinstance(value, str) and not PLAIN_NUMBER.fullmatch(value):
-                raise ValueError(f"{self.file}: override {key} = {value!r} is not a number (a decimal in ASCII "
+                raise ValueError(f"{self.origin}: override {key} = {value!r} is not a number (a decimal in ASCII "
                                  "digits, such as 2000, 0.25 or 2e3)")
             try:
                 number = float(value)
             except (TypeError, ValueError):
-                raise ValueError(f"{self.file}: override {key} = {value!r} is not a number") from None
+                raise ValueError(f"{self.origin}: override {key} = {value!r} is not a number") from None
             if not math.isfinite(number):
-                raise ValueError(f"{self.file}: override {key} = {number!r} is not finite")
+                raise ValueError(f"{self.origin}: override {key} = {number!r} is not finite")
             self.overrides[key] = number
         self.params = MappingProxyType({**self.defaults, **self.overrides})  # read-only: models get it too
-        schema.check_params(self.spec, self.params, self.overrides, self.file)
-        schema.check_values(self.spec, self.file, self.value)
+        schema.check_params(self.spec, self.params, self.overrides, self.origin)
+        schema.check_values(self.spec, self.origin, self.value)
         for field, text in prose_fields(self.spec):  # a formula in the prose that does not evaluate: at load
             self.prose(text, field)
         q0, v0, _ = self.initial
@@ -213,7 +215,7 @@ class Case:
         for joint, force in self.scene["applied"].items():  # a law of the state that does not evaluate: at load
             dofs = 3 if joint == euler else 1  # a ball joint's three moments, a hinge's or slide's one force
             if len(force.components) != dofs:
-                raise ValueError(f"{self.file}: scene.applied.{joint} = {list(force.components)} has "
+                raise ValueError(f"{self.origin}: scene.applied.{joint} = {list(force.components)} has "
                                  f"{len(force.components)} components; joint '{joint}' has {dofs} degree"
                                  f"{'s' * (dofs > 1)} of freedom")
             try:
@@ -222,7 +224,7 @@ class Case:
                 if not np.all(np.isfinite(values)):
                     raise ValueError(f"it is {values.tolist()} at the initial state")
             except ValueError as error:
-                raise ValueError(f"{self.file}: scene.applied.{joint} = {list(force.components)}: {error}") from None
+                raise ValueError(f"{self.origin}: scene.applied.{joint} = {list(force.components)}: {error}") from None
         self.findings = self.spec.get("findings", [])
         self._models = {}
         if derivation is not None:
@@ -276,7 +278,7 @@ class Case:
         if isinstance(where, str) and where.endswith(".py") and (self.folder / derived.SCENE).is_file() \
                 and schema.own_file(self.folder, where, "derivation",
                                     self.file if "derivation" in given else self.folder / where).is_file():
-            module = self._own_code(self.folder / where, where, f"{self.file}: derivation = {where!r}"
+            module = self._own_code(self.folder / where, where, f"{self.origin}: derivation = {where!r}"
                                     if "derivation" in given else str(self.folder / where))
             if derived.is_plain(module):
                 from engines.mjcf import describe  # the harness reads a scene only through engines/
@@ -297,11 +299,11 @@ class Case:
         except FileNotFoundError:
             raise ValueError(f"{self.file}: no such file") from None
         except OSError as error:
-            raise ValueError(f"{self.file}: cannot read it: {error.strerror}") from None
+            raise ValueError(f"{self.origin}: cannot read it: {error.strerror}") from None
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-            raise ValueError(f"{self.file}: not valid TOML: {error}") from None
+            raise ValueError(f"{self.origin}: not valid TOML: {error}") from None
         except RecursionError:  # tomllib recurses once per level of nested arrays and tables
-            raise ValueError(f"{self.file}: not valid TOML: nested too deeply") from None
+            raise ValueError(f"{self.origin}: not valid TOML: nested too deeply") from None
 
     # -- numbers that may be expressions of the parameters --------------------
     def value(self, x, field=None):
@@ -313,7 +315,7 @@ class Case:
                 raise ValueError(f"{number} is not finite")
             return number
         except (OverflowError, TypeError, ValueError) as error:  # also float() of a list, of a huge integer
-            raise ValueError(f"{self.file}: cannot evaluate {x!r}: {error}"
+            raise ValueError(f"{self.origin}: cannot evaluate {x!r}: {error}"
                              + (f" (at {field})" if field else "")) from None
 
     def prose(self, text, field=None):
@@ -325,12 +327,12 @@ class Case:
             value = self.value(expression.strip(), field)
             form = FORMAT_SPEC.fullmatch(spec.strip())
             if not form or len(form["width"]) > 3 or len(form["precision"] or "") > 3:
-                raise ValueError(f"{self.file}: {field}: cannot write {match[0]!r}: {spec.strip()!r} is not a format "
+                raise ValueError(f"{self.origin}: {field}: cannot write {match[0]!r}: {spec.strip()!r} is not a format "
                                  "spec of a number with a width and a precision of at most 3 digits each")
             try:
                 return format(value, spec.strip() or ".3g")
             except ValueError as error:  # a format spec that is not one
-                raise ValueError(f"{self.file}: {field}: cannot write {match[0]!r}: {error}") from None
+                raise ValueError(f"{self.origin}: {field}: cannot write {match[0]!r}: {error}") from None
         return PROSE_NUMBER.sub(number, text)
 
     @cached_property
@@ -378,7 +380,7 @@ class Case:
             try:
                 applied[joint] = AppliedForce(force, self.coords, self.params)
             except ValueError as error:  # an expression that does not parse, or names what it may not
-                raise ValueError(f"{self.file}: scene.applied.{joint} = {force!r}: {error}") from None
+                raise ValueError(f"{self.origin}: scene.applied.{joint} = {force!r}: {error}") from None
         return {"coords": self.coords, "layout": layout, "driven": driven, "applied": applied,
                 "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", []),
                 "urdf_root_joint": s.get("urdf_root_joint"), "dependent": s.get("dependent", [])}
@@ -442,7 +444,7 @@ class Case:
         and no case.toml, the equations file."""
         if not self.file.is_file():
             return str(self.folder / self.spec["derivation"])
-        return f"{self.file}: derivation = {self.spec['derivation']!r}"
+        return f"{self.origin}: derivation = {self.spec['derivation']!r}"
 
     @property
     def one_derivation(self):

@@ -201,7 +201,7 @@ def validate_placeholders(case):
         field = f"override {case.overrides_text()}" if case.overrides else f"tolerance.pointwise.value = {tolerance:g}"
         needed = effect[quantity] / PLACEHOLDER_SHARE  # a tolerance above its ceiling is refused as well
         raise ValueError(
-            f"{case.file}: {field}: MuJoCo's placeholders ({PLACEHOLDER_MASS:g} kg, {PLACEHOLDER_INERTIA:g} kg m^2, "
+            f"{case.origin}: {field}: MuJoCo's placeholders ({PLACEHOLDER_MASS:g} kg, {PLACEHOLDER_INERTIA:g} kg m^2, "
             f"where the scene means none: {', '.join(held)}) change its {quantity} by {effect[quantity]:.2g} of its "
             f"size at the random states, above {PLACEHOLDER_SHARE:g} of the pointwise tolerance {tolerance:g}: every "
             f"comparison with MuJoCo would blame them on a derivation. Heavier or larger bodies"
@@ -298,7 +298,7 @@ def parameter_sets(case, count=None):
         for _ in range(DRAWS):
             drawn = {name: float(rng.uniform(lo, hi)) for name, (lo, hi) in ranges.items()}
             try:
-                schema.check_params(case.spec, {**case.params, **drawn}, case.overrides, case.file)
+                schema.check_params(case.spec, {**case.params, **drawn}, case.overrides, case.origin)
             except ValueError:
                 continue
             if scene_breaks(case, drawn) is None:
@@ -900,7 +900,7 @@ def program_output_checks(case, listing):
     for column, expression in outputs.items():
         if column not in listing:
             rows.append(no_number("program", column, ("program", "mujoco at the program's states"),
-                                  f"{case.file}: program.outputs.{column}: the program writes no column '{column}'"
+                                  f"{case.origin}: program.outputs.{column}: the program writes no column '{column}'"
                                   f"{suggest(column, listing.columns)}", Status.FAIL))
             continue
         engine = np.broadcast_to(evaluate_expression(expression, names), len(states))

@@ -287,7 +287,7 @@ def campaign_command(args):
     case = load_case(args.case, args.cases_dir, **parse_overrides(args.set))
     check_writable("--out", args.out.resolve(), [args.out.resolve()])
     if not case.spec["sample"].get("params"):
-        raise ValueError(f"{case.file}: no [sample.params]: the case draws no random parameter sets")
+        raise ValueError(f"{case.origin}: no [sample.params]: the case draws no random parameter sets")
     plan = campaign.plan(case, sets, states, chunk, args.out)
     try:
         return campaign.command(case, plan, grid, workers, args.scheduler)

@@ -131,11 +131,11 @@ class Record:
         return code if finished and signed else None
 
     def overran(self):
-        """The running call in words, where it has outlived its budget by GRACE (its watchdog did not stop it);
-        else None."""
+        """Where the running call has outlived its budget by GRACE (its watchdog did not stop it), why the process
+        running it is killed, in words; else None."""
         d = self._doubles
         if d[0] == 1.0 and time.monotonic() > d[2] + d[4] + GRACE:
-            return self.describe()
+            return f"{self.describe()}: killed, {past(self._read(NAME_AT), d[4])}, which it did not stop at when told"
         return None
 
     def describe(self):
@@ -197,6 +197,13 @@ def _watchdog():
     return _WATCHDOG
 
 
+def past(name, budget):
+    """An overrun call's budget in words, and what sets it: an import's is fixed, a call's is the case's."""
+    if name == "import":
+        return f"past the {budget:g} s an import may take"
+    return f"past its budget of {budget:g} s for one call (case.toml's [budget] call sets it)"
+
+
 def guarded_call(label, name, budget, function, *args):
     """function(*args), foreign code: recorded, within `budget` s, its exit or overrun a DerivationError."""
     watchdog = _watchdog()
@@ -217,10 +224,9 @@ def guarded_call(label, name, budget, function, *args):
     except SystemExit as error:
         raise DerivationError(f"{where()}: it ended the process (sys.exit({error.code!r}))") from None
     except CallTimeout:
-        raise DerivationError(f"{where()}: stopped, past its budget of {budget:g} s for one call "
-                              "(case.toml [budget] call)") from None
+        raise DerivationError(f"{where()}: stopped, {past(name, budget)}") from None
     except MemoryError:
-        raise DerivationError(f"{where()}: it ran out of memory (the case's cap: case.toml [budget] memory)") from None
+        raise DerivationError(f"{where()}: it ran out of memory (the case's cap, which case.toml's [budget] memory sets)") from None
 
 
 def _at_a_state(args):
@@ -289,11 +295,11 @@ def run_each(items, work, workers, budget_of):
                     running_call = record.describe()
                     process.kill()
                     outcome = ("lost", f"stopped after its budget of {budget.case:g} s for the whole case "
-                                       f"(case.toml [budget] case)" + (f", during {running_call}" if running_call else ""))
+                                       "(case.toml's [budget] case sets it)"
+                                       + (f", during {running_call}" if running_call else ""))
                 elif (overrun := record.overran()) is not None:
                     process.kill()
-                    outcome = ("lost", f"{overrun}: killed, past its budget of {budget.call:g} s for one call "
-                                       "(case.toml [budget] call), which it did not stop at when told")
+                    outcome = ("lost", overrun)
                 if outcome is not None:
                     process.join()
                     receive.close()
@@ -347,7 +353,7 @@ def _child(work, item, send, record, memory, parent):
     try:
         send.send(outcome)
     except MemoryError:
-        send.send(("lost", "its results did not fit in the case's memory cap (case.toml [budget] memory)"))
+        send.send(("lost", "its results did not fit in the case's memory cap (case.toml's [budget] memory sets it)"))
     send.close()
     os._exit(0)
 
@@ -377,8 +383,7 @@ def supervised(main):
         return code
     if terminated:
         return 128 + signal.SIGTERM
-    ended = (f"{overrun}: killed, past its budget for one call, which it did not stop at when told" if overrun
-             else _death(code, RECORD))
+    ended = overrun or _death(code, RECORD)
     print(f"dyncheck: error: {ended}: a case's own code ended dyncheck", file=sys.stderr)
     return 2 if RECORD.loading else 1
 

@@ -923,7 +923,7 @@ def study_sections(result, case, tmp):
                 lines += [f"*How, where it applies:* {study.why}", ""]
                 continue
             if not (tmp / chart).is_file():  # a case's own figure function that drew nothing
-                raise ValueError(f"{case.file}: stability study {study.study}: its figure function wrote no {chart}")
+                raise ValueError(f"{case.origin}: stability study {study.study}: its figure function wrote no {chart}")
             files.append(chart)
             lines += [*embed(chart, study.study, caption),
                       f"*How:* {study.why}", "",

@@ -189,19 +189,21 @@ def without_zeros(value):
 RESERVED_NAMES = ("index", "errata")  # the report's own pages: <name>.md of a case would replace them
 
 
-def validate(spec, file, where=True):
+def validate(spec, file, folder=None):
     """The parsed case file `spec` against the schema; ValueError names `file`, the field and the value.
-    `where`: also that the case's folder is named after it and its derivation is there (not for a
+    `folder`: the case's folder, to check too that it is named after the case and holds its derivation (None for a
     case rebuilt from saved results, whose folder may have moved)."""
     _walk(spec, SCHEMA, "", file)
     _cross_references(spec, file)
-    if where:
-        if spec["name"] != Path(file).parent.name:  # the command line finds a case by its folder, pages by its name
-            raise _error(file, "name", spec["name"], f"is not the name of the case's folder, '{Path(file).parent.name}'")
-        derivation_file(spec["derivation"], Path(file).parent, file)
+    if folder is not None:
+        if spec["name"] != Path(folder).name:  # the command line finds a case by its folder, pages by its name
+            raise _error(file, "name", spec["name"], f"is not the name of the case's folder, '{Path(folder).name}'")
+        derivation_file(spec["derivation"], folder, file)
         module = spec.get("stability", {}).get("module")
         if isinstance(module, str):  # its own studies, loaded by dyncheck.stability once the models are built
-            own_file(Path(file).parent, module, "stability.module", file)
+            path = own_file(folder, module, "stability.module", file)
+            if not module.endswith(".py") or not path.is_file():  # refused by every command, `list` as `run`
+                raise _error(file, "stability.module", module, f"is not a Python file of the case's folder ({path})")
 
 
 def check_params(spec, params, overrides, file):

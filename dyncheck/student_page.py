@@ -88,10 +88,10 @@ def expression_text(case, name, field):
               "program": lambda: getattr(getattr(derivation, "Program", None), "PRINTED", {}),
               "frames": lambda: getattr(derivation, "FRAMES", {})}
     if kind not in tables:
-        raise ValueError(f"{case.file}: {field} = {name!r}: not book:KEY, program:KEY or frames:KEY")
+        raise ValueError(f"{case.origin}: {field} = {name!r}: not book:KEY, program:KEY or frames:KEY")
     table = tables[kind]()
     if key not in table:
-        raise ValueError(f"{case.file}: {field} = {name!r}: {case.spec['derivation']} has no {kind} expression "
+        raise ValueError(f"{case.origin}: {field} = {name!r}: {case.spec['derivation']} has no {kind} expression "
                          f"{key!r}" + (f"; it has {', '.join(table)}" if table else ""))
     return table[key]
 
@@ -227,7 +227,7 @@ def step_lines(number, step, case, result, tmp):
                    else "the case page could not draw it at these parameters")
             lines += [f"(The figure '{figure}' is not in this report: {why}; the case page says why.)", ""]
         else:  # at the book's numbers the case page draws every figure a course may name: this one it never draws
-            raise ValueError(f"{case.file}: course.steps: figure {figure!r}: the case page drew no "
+            raise ValueError(f"{case.origin}: course.steps: figure {figure!r}: the case page drew no "
                              f"figures/{case.name}_{figure}.png")
     return lines
 

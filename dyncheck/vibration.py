@@ -83,25 +83,25 @@ def validate(case):
     guesses.update({f"floquet.{key}": table["floquet"][key] for key in ("q", "v") if "floquet" in table})
     for key, guess in guesses.items():
         if len(guess) != n:
-            raise ValueError(f"{case.file}: vibration.{key} has {len(guess)} entries; the case has {n} "
+            raise ValueError(f"{case.origin}: vibration.{key} has {len(guess)} entries; the case has {n} "
                              f"coordinates ({', '.join(case.coords)})")
     names = state_names(case.coords)
     for name in table["solve"]:
         if name not in names:
-            raise ValueError(f"{case.file}: vibration.solve names '{name}', which is neither a coordinate nor a "
+            raise ValueError(f"{case.origin}: vibration.solve names '{name}', which is neither a coordinate nor a "
                              f"rate; they are {', '.join(names)}")
     if not table["solve"]:
-        raise ValueError(f"{case.file}: vibration.solve is empty: name the coordinates (or rates) Newton-Raphson "
+        raise ValueError(f"{case.origin}: vibration.solve is empty: name the coordinates (or rates) Newton-Raphson "
                          "solves for")
     for parameter in table.get("overrides", {}):
         if parameter not in case.params:
-            raise ValueError(f"{case.file}: vibration.overrides: no parameter '{parameter}'")
+            raise ValueError(f"{case.origin}: vibration.overrides: no parameter '{parameter}'")
     swept = [("campbell", table["campbell"])] if "campbell" in table else []
     swept += [(f"boundary[{i}]", b) for i, b in enumerate(table.get("boundary", []))]
     for field, item in swept:
         name = item["parameter"]
         if name not in case.params and (name not in names or name in table["solve"]):
-            raise ValueError(f"{case.file}: vibration.{field}.parameter = '{name}' is neither a parameter nor a state "
+            raise ValueError(f"{case.origin}: vibration.{field}.parameter = '{name}' is neither a parameter nor a state "
                              f"variable held by Newton-Raphson (one of {', '.join(n for n in names if n not in table['solve'])})")
     linearised(case)  # the linearised scene must be physical too
     # A boundary's formula need not be a number at every parameter set: where it is not (the top's with its centre
@@ -116,9 +116,9 @@ def of_parameters(case, field, expression):
     try:
         unknown = expressions.names(expression) - set(case.params) - {"pi"}
     except ValueError as error:
-        raise ValueError(f"{case.file}: vibration.{field} = {expression!r} is not an expression: {error}") from None
+        raise ValueError(f"{case.origin}: vibration.{field} = {expression!r} is not an expression: {error}") from None
     if unknown:
-        raise ValueError(f"{case.file}: vibration.{field} = {expression!r} names {', '.join(sorted(unknown))}, "
+        raise ValueError(f"{case.origin}: vibration.{field} = {expression!r} names {', '.join(sorted(unknown))}, "
                          "not a parameter")
 
 
@@ -912,7 +912,7 @@ def period_of(case, table):
     equations do not depend on t, and 2 pi / beta' has no value)."""
     period = case.value(table["period"], "vibration.floquet.period")
     if period <= 0:
-        raise ValueError(f"{case.file}: vibration.floquet.period = {table['period']!r} is {period:g}, not > 0")
+        raise ValueError(f"{case.origin}: vibration.floquet.period = {table['period']!r} is {period:g}, not > 0")
     return period
 
 

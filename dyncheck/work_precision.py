@@ -73,7 +73,7 @@ def settings(case):
         return None
 
     def fail(field, why):
-        raise ValueError(f"{case.file}: work_precision.{field} {why}")
+        raise ValueError(f"{case.origin}: work_precision.{field} {why}")
 
     def positive(field, x):
         if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0 < x < math.inf:
@@ -509,7 +509,7 @@ def convergence(case):
                           "parameters, and the study's steps h = omega_h / omega follow from it")
     for method, (_, _, omega) in steps.items():
         if not omega > 0:
-            raise ValueError(f"{case.file}: work_precision.convergence: omega = {omega!r} for {method} must be a "
+            raise ValueError(f"{case.origin}: work_precision.convergence: omega = {omega!r} for {method} must be a "
                              "positive number (the fastest frequency it integrates, with these parameters)")
     times, frequency = motion_frequency(case, max(t_end for _, t_end, _ in steps.values()))
     rows = []
@@ -546,7 +546,7 @@ def convergence(case):
             scale[rates] = scale[rates].max()
         d1, d2 = ((runs[i] - runs[i + 1]).abs().max().div(scale).max() for i in range(2))
         if not d2 > ROUNDING_FLOOR:
-            raise ValueError(f"{case.file}: work_precision.convergence.omega_h.{method} gives h = {h:g} s: the runs at "
+            raise ValueError(f"{case.origin}: work_precision.convergence.omega_h.{method} gives h = {h:g} s: the runs at "
                              f"h/2 and h/4 differ by {d2:.1e}, within rounding ({ROUNDING_FLOOR:.1e}); choose a larger step")
         observed = math.log2(d1 / d2)
         expected = EXPECTED_ORDER[method]

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks import pointwise
+from dyncheck.checks import pointwise, validate_placeholders
 from dyncheck.cli import exit_code, run_cases
 
 GUIDE = Path(__file__).resolve().parent.parent / "docs" / "own-case.md"
@@ -234,3 +234,11 @@ def test_the_regions_test_can_fail(tmp_path):
     folder = make_case(tmp_path / "state", region_variant(f"{theta[gap]!r} <= q[1] < {theta[gap + 1]!r}", WRONG[0]))
     rows, _ = pointwise(dyncheck.load_case("cart_pendulum", folder))
     assert not all(r.status.ok for r in rows)  # the same region with one state in it
+
+
+@pytest.mark.parametrize("override", [{"k": "-1"}, {"k": "2_0"}, {"l": "1e-7"}], ids=["bound", "not a number", "light"])
+def test_a_message_about_a_case_of_two_files_names_its_folder_not_a_case_toml(override, tmp_path):
+    folder = make_case(tmp_path, FILES["equations.py"])
+    with pytest.raises(ValueError) as refused:
+        validate_placeholders(dyncheck.load_case("cart_pendulum", folder, **override))
+    assert str(refused.value).startswith(f"{folder / 'cart_pendulum'}: override "), str(refused.value)

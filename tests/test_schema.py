@@ -22,7 +22,7 @@ DOCS = Path(__file__).resolve().parent.parent / "docs" / "case-file.md"
 def test_every_case_file_validates():
     for name in dyncheck.case_names():
         file = case_module.CASES_DIR / name / "case.toml"
-        schema.validate(tomllib.loads(file.read_text()), file)
+        schema.validate(tomllib.loads(file.read_text()), file, file.parent)
         dyncheck.load_case(name)
 
 
@@ -278,7 +278,7 @@ def test_a_derivation_may_be_a_file_in_the_case_folder(cases):
          'derivation = "equations.py"')
     (cases / "spring_pendulum" / "equations.py").write_text("")
     schema.validate(tomllib.loads((cases / "spring_pendulum" / "case.toml").read_text()),
-                    cases / "spring_pendulum" / "case.toml")
+                    cases / "spring_pendulum" / "case.toml", cases / "spring_pendulum")
 
 
 def test_the_schema_names_no_case():

@@ -42,9 +42,9 @@ def case_module(case):
         return None
     path = schema.own_file(case.folder, module, "stability.module", case.file)
     if not path.is_file():  # also when saved results are rendered after their case folder moved
-        raise ValueError(f"{case.file}: stability.module = {module!r}: no such Python file {path} (the case's "
+        raise ValueError(f"{case.origin}: stability.module = {module!r}: no such Python file {path} (the case's "
                          "studies and the figures of their saved results need it)")
-    return load_file(path, f"{case.file}: stability.module = {module!r}")
+    return load_file(path, f"{case.origin}: stability.module = {module!r}")
 
 
 def available(case):
@@ -68,26 +68,26 @@ def validate(case):
     from dyncheck.simulate import LEAST_RTOL, METHODS
     table = case.spec.get("stability", {})
     if not isinstance(table, dict):
-        raise ValueError(f"{case.file}: stability is not a table")
+        raise ValueError(f"{case.origin}: stability is not a table")
     if not isinstance(table.get("module", ""), str):
-        raise ValueError(f"{case.file}: stability.module = {table['module']!r} is not a file name")
+        raise ValueError(f"{case.origin}: stability.module = {table['module']!r} is not a file name")
     studies = available(case)
     for key, value in table.items():
         if key in NOT_STUDIES:
             continue
         if key not in studies:
-            raise ValueError(f"{case.file}: stability.{key} is not a known study; studies are {', '.join(studies)}")
+            raise ValueError(f"{case.origin}: stability.{key} is not a known study; studies are {', '.join(studies)}")
         if not isinstance(value, dict) or not isinstance(value.get("why"), str):
-            raise ValueError(f"{case.file}: stability.{key} needs a `why` string")
+            raise ValueError(f"{case.origin}: stability.{key} needs a `why` string")
         missing = [k for k in studies[key].keys if k not in value]
         if missing:
-            raise ValueError(f"{case.file}: stability.{key} lacks {', '.join(missing)}")
+            raise ValueError(f"{case.origin}: stability.{key} lacks {', '.join(missing)}")
         for method in value.get("methods", []) + ([value["method"]] if "method" in value else []):
             if method not in METHODS:
-                raise ValueError(f"{case.file}: stability.{key}.methods: unknown method '{method}'")
+                raise ValueError(f"{case.origin}: stability.{key}.methods: unknown method '{method}'")
         for name, override in value.get("overrides", {}).items():
             if name not in case.params:
-                raise ValueError(f"{case.file}: stability.{key}.overrides: no parameter '{name}'")
+                raise ValueError(f"{case.origin}: stability.{key}.overrides: no parameter '{name}'")
         try:  # the study's case must be physical too
             case.with_params(**value.get("overrides", {}))
         except ValueError as error:
@@ -95,12 +95,12 @@ def validate(case):
         settings = settings_of(case, key)  # a ValueError names the file and the field
         for name in ("rtol", "check_rtol"):  # scipy raises a smaller rtol to LEAST_RTOL: not the run the study says
             if name in settings and not settings[name] >= LEAST_RTOL:
-                raise ValueError(f"{case.file}: stability.{key}.{name} = {settings[name]!r} is below {LEAST_RTOL:.3g}, "
+                raise ValueError(f"{case.origin}: stability.{key}.{name} = {settings[name]!r} is below {LEAST_RTOL:.3g}, "
                                  "the least rtol scipy's integrators honour (dyncheck.simulate.LEAST_RTOL)")
         if key == "lyapunov":
-            _agreement_settings(case.file, settings)
+            _agreement_settings(case.origin, settings)
         if key == "energy_drift" and not hasattr(case.model("reference"), "energy"):
-            raise ValueError(f"{case.file}: stability.energy_drift measures the drift of the derivation's energy, "
+            raise ValueError(f"{case.origin}: stability.energy_drift measures the drift of the derivation's energy, "
                              f"and {case.spec['derivation']} defines no energy(t, q, v, p); add it or remove the study")
 
 
