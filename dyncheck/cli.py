@@ -260,15 +260,15 @@ def close(results, junit, start):
 def study_case(case):
     """The case's work-precision sweep, stability studies and Campbell diagram, with their progress (they take
     minutes)."""
-    from dyncheck import stability, vibration, work_precision
+    from dyncheck import campbell, stability, work_precision
     with Progress(f"studies of {case.name}") as bar:
         bar.note("work-precision sweep")
         sweep = work_precision.sweep(case, bar.step)
         bar.note("stability studies")
         studies = stability.studies(case, bar.step)
         bar.note("Campbell diagram")
-        campbell = vibration.sweep(case, bar.step)
-    return {"work_precision": sweep, "stability": studies, "vibration": campbell}
+        diagram = campbell.sweep(case, bar.step)
+    return {"work_precision": sweep, "stability": studies, "vibration": diagram}
 
 
 def campaign_command(args):
