@@ -62,7 +62,7 @@ def test_spring_softened_by_the_spin_and_k_crit():
 def stiff_spring():
     """The step study at k = 1e5 N/m (and one k below k_crit) for semi-implicit Euler, RK4 and MuJoCo's Euler."""
     case = dyncheck.load_case("spring_pendulum")
-    s = settings(case, "stable_step", k=[100.0, 1e5], methods=["semi-implicit Euler", "RK4", "mujoco:Euler"])
+    s = settings(case, "stable_step", k_scale=1.0, k=[100.0, 1e5], methods=["semi-implicit Euler", "RK4", "mujoco:Euler"])
     start = time.perf_counter()
     result = stability.case_module(case).stable_step(case, s)
     return result, s, time.perf_counter() - start
@@ -102,6 +102,20 @@ def test_below_k_crit_the_exact_solution_runs_away_too(stiff_spring):
     crit = result.series["crit"]
     assert crit["lo"] < crit["hi"] and abs(crit["hi"] / crit["theory"] - 1) < 0.02
     assert any("k_crit = 159.9 N/m" in f for f in result.findings)
+
+
+@pytest.mark.parametrize("overrides", [{}, {"m": 0.5}, {"alpha_rate": 6.0}])
+def test_the_stiffnesses_of_the_step_study_follow_k_crit(overrides):
+    """The case file gives them in multiples of k_crit = m Omega^2 (its k_scale): under --set m=0.5 fixed ones of
+    150, 170, 200 N/m "around k_crit" were all below its 400 N/m."""
+    case = dyncheck.load_case("spring_pendulum", **overrides)
+    p = case.params
+    k_crit = p["m"] * (p["alpha_rate"] + p["beta_rate"]) ** 2
+    s = stability.case_module(case).in_newtons_per_metre(stability.settings_of(case, "stable_step"))
+    below, above = [k for k in s["k"] if k < k_crit], [k for k in s["k"] if k > k_crit]
+    assert min(s["k"]) < 0.1 * k_crit and max(s["k"]) > 100 * k_crit and len(below) >= 3 and len(above) >= 3
+    assert max(below) / k_crit == pytest.approx(0.94) and min(above) / k_crit == pytest.approx(1.06)
+    assert s["k_fit"] > k_crit and s["k_stiff"] > s["k_fit"]
 
 
 def test_a_blown_up_run_is_recorded_with_time_and_step():

@@ -189,6 +189,7 @@ def stable_step(case, settings, progress=None):
     h_blowup for the sharp ones.  Below k_crit the exact solution itself runs away: each method is run
     once at a small step and its escape time compared with the exact one's."""
     start = time.perf_counter()
+    settings = in_newtons_per_metre(settings)
     p = case.params
     m, omega_base = p["m"], p["alpha_rate"] + p["beta_rate"]
     k_crit = m * omega_base**2
@@ -250,6 +251,14 @@ def stable_step(case, settings, progress=None):
     data = data.assign(horizon=T, growth_limit=G)
     return study_result(case, "stable_step", "Largest stable step against the spring stiffness", settings,
                    data, table, findings, series, start)
+
+
+def in_newtons_per_metre(settings):
+    """The settings with the stiffnesses k, k_stiff and k_fit in N/m: the table gives them in multiples of its
+    `k_scale` (1 without it), an expression of the parameters, so that they follow k_crit = m Omega^2 under --set."""
+    scale = settings.get("k_scale", 1.0)
+    return {**settings, "k": [scale * k for k in settings["k"]],
+            **{key: scale * settings[key] for key in ("k_stiff", "k_fit") if key in settings}}
 
 
 def _critical_stiffness(case, settings, source, escape, horizon):
