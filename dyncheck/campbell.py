@@ -122,8 +122,8 @@ def scale_of(scene, item, field):
     scale = item.get("scale", 1.0)
     try:
         value = scene.value(scale, f"{field}.scale")
-    except ValueError as error:
-        return None, f"has no value here ({str(error).rpartition(': ')[2]})"
+    except ValueError:  # not finite: a square root of a negative number, a division by zero
+        return None, "has no value here"
     return (value, None) if value > 0 else (None, f"is {value:g} here, not positive")
 
 
