@@ -1,8 +1,8 @@
 """The Campbell diagram and the stability boundaries of `[vibration]`, a study of `dyncheck report`: the
 frequencies of the equilibrium against a parameter, where two of them come closest (a veering or a crossing), and
 each `[[vibration.boundary]]` found from the eigenvalues, compared with its formula and confirmed by runs either
-side.  The sweep and the brackets are multiples of their table's `scale`, an expression of the parameters (the
-spring pendulum's sqrt(k/m)), so that they follow `--set`; where they have nothing to show at the parameters the
+side.  The sweep and the brackets are multiples of their table's `scale`, an expression of the parameters (a
+spring's sqrt(k/m)), so that they follow `--set`; where they have nothing to show at the parameters the
 study says so in a sentence.  `sweep(case)` returns a `Sweep`; dyncheck.vibration_page draws it."""
 
 import math
