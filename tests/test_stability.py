@@ -114,7 +114,8 @@ def test_the_stiffnesses_of_the_step_study_follow_k_crit(overrides):
     s = stability.case_module(case).in_newtons_per_metre(stability.settings_of(case, "stable_step"))
     below, above = [k for k in s["k"] if k < k_crit], [k for k in s["k"] if k > k_crit]
     assert min(s["k"]) < 0.1 * k_crit and max(s["k"]) > 100 * k_crit and len(below) >= 3 and len(above) >= 3
-    assert max(below) / k_crit == pytest.approx(0.94) and min(above) / k_crit == pytest.approx(1.06)
+    assert max(below) / k_crit == pytest.approx(0.94, rel=5e-3) and min(above) / k_crit == pytest.approx(1.06, rel=5e-3)
+    assert all(float(f"{k:.3g}") == k for k in s["k"])  # 3000 N/m in the tables, not 2997.89
     assert s["k_fit"] > k_crit and s["k_stiff"] > s["k_fit"]
 
 

@@ -255,10 +255,13 @@ def stable_step(case, settings, progress=None):
 
 def in_newtons_per_metre(settings):
     """The settings with the stiffnesses k, k_stiff and k_fit in N/m: the table gives them in multiples of its
-    `k_scale` (1 without it), an expression of the parameters, so that they follow k_crit = m Omega^2 under --set."""
+    `k_scale` (1 without it), an expression of the parameters, so that they follow k_crit = m Omega^2 under --set;
+    each rounded to 3 significant digits (a sample point 0.5 % off its multiple, and 3000 N/m in the tables, not
+    2997.89)."""
     scale = settings.get("k_scale", 1.0)
-    return {**settings, "k": [scale * k for k in settings["k"]],
-            **{key: scale * settings[key] for key in ("k_stiff", "k_fit") if key in settings}}
+    newtons = lambda k: float(f"{scale * k:.3g}")
+    return {**settings, "k": [newtons(k) for k in settings["k"]],
+            **{key: newtons(settings[key]) for key in ("k_stiff", "k_fit") if key in settings}}
 
 
 def _critical_stiffness(case, settings, source, escape, horizon):
