@@ -5,7 +5,10 @@ Fast by default (a few seconds each): each test runs one study on a reduced set 
 """
 
 import math
+import re
+import tempfile
 import time
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -174,6 +177,23 @@ def test_energy_drift_records_a_blow_up_as_data_and_shows_no_nan():
     assert any("explicit Euler: unstable at t = " in f for f in result.findings)
     # MuJoCo's Euler is the textbook semi-implicit Euler
     assert any("mujoco:Euler = semi-implicit Euler" in f for f in result.findings)
+
+
+@pytest.mark.parametrize("overrides, horizon, over_the_top", [({}, 60.0, True), ({"m2": 0.5, "l2": 0.3}, 60.0, False)])
+def test_the_energy_drifts_words_follow_its_numbers(overrides, horizon, over_the_top):
+    """The swing's energy is one computed number in the findings and the caption (the case file's text said 0.10 J
+    where the caption said 0.11 J at m2 = 0.5 kg); "can go over the top" only where the energy gained exceeds what
+    the masses over the top hold (at m2 = 0.5 kg, l2 = 0.3 m explicit Euler gains 13 swing energies of the 34 it
+    takes, and was said to exceed them)."""
+    case = dyncheck.load_case("double_pendulum", **overrides)
+    result = long_runs.energy_drift(case, settings(case, "energy_drift", methods=["explicit Euler"], horizon=horizon))
+    swing = long_runs.swing_words(result.series["swing"])
+    caption = long_runs.figure_energy_drift(result, Path(tempfile.mkdtemp()) / "drift.png", "double pendulum")
+    assert swing in result.findings[0] and swing in caption and not re.search(r"\d J\b", result.why)
+    row = result.data.set_index("method").loc["explicit Euler"]
+    top = next(f for f in result.findings if f.startswith("explicit Euler:"))
+    assert row["drift_T"] > 1.0 and ("so it can go over the top" in top) == over_the_top
+    assert ("so it cannot yet go over the top" in top) != over_the_top
 
 
 # -- 3. spinning top -------------------------------------------------------------------------------

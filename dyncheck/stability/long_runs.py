@@ -281,8 +281,11 @@ def energy_drift(case, settings, progress=None):
         text = (f"{r['method']}: {r['character']} (growth exponent {r['growth_exponent']:.2f}); "
                 f"{r['drift_1s']:.2g} after 1 s, {r['drift_T10']:.2g} after {T / 10:g} s, {r['drift_T']:.2g} by {T:g} s")
         if r["drift_T"] > 1.0 and top:
-            text += (f": it gains more than the {top:.3g} swing energies that the state q = "
-                     f"({', '.join(f'{x:.4g}' for x in whirl)}) holds above rest, and runs away")
+            state = f"the state q = ({', '.join(f'{x:.4g}' for x in whirl)})"
+            text += (f": more than the {top:.3g} swing energies that {state} holds above rest, so it can go over "
+                     "the top" if r["drift_T"] > top else
+                     f": less than the {top:.3g} swing energies that {state} holds above rest, so it cannot yet "
+                     "go over the top")
         findings.append(text + ".")
     for _, r in (data[data["status"] == "unstable"].iterrows() if "status" in data else []):
         findings.append(f"{r['method']}: unstable at t = {fmt(r['t_fail'])} s (step {r['step_fail']}): {r['why']}.")
