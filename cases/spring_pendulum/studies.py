@@ -313,6 +313,9 @@ def _listing_growth(case, settings, source):
             "acc_ratio": rms(acc(out)[last, 1]) / rms(acc(exact)[last, 1])}
 
 
+FIGURE_RESOLUTION = 0.01  # of a curve's span: what a printed figure shows (the findings' "1 % a figure resolves")
+
+
 def _stable_step_findings(case, settings, data, crit, listing, k_crit, span):
     T, G = settings["horizon"], settings["growth"]
     m = case.params["m"]
@@ -416,7 +419,10 @@ def _stable_step_findings(case, settings, data, crit, listing, k_crit, span):
                    f"a free spring oscillation grows by exp(omega^2 dt t / 2) = {listing['whole_run']:.2f} over the "
                    f"run. Its l(t) strays from the exact one by up to {listing['l_error']:.3g} m (the exact l spans "
                    f"{listing['l_range']:.3g} m), and over the last sixth its l'' has {listing['acc_ratio']:.2f} times "
-                   "the exact RMS: the listing's figure of l(t) is drawn with a growing integration error.")
+                   "the exact RMS: the listing's figure of l(t) is "
+                   + (f"off the exact motion by more than the {FIGURE_RESOLUTION:.0%} of its span that a figure "
+                      "resolves." if listing["l_error"] > FIGURE_RESOLUTION * listing["l_range"] else
+                      f"within the {FIGURE_RESOLUTION:.0%} of its span that a figure resolves."))
     return out
 
 
