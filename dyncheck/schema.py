@@ -116,9 +116,9 @@ SCHEMA = ("table", {
     "vibration?": ("table", {"why": "str", "overrides?": ("map", "expr"), "q": ("list", "expr"),
                              "v": ("list", "expr"), "solve": ("list", "str"), "amplitude": "number > 0",
                              "periods": "int > 0",
-                             "campbell?": ("table", {"parameter": "str", "scale?": "expr", "values": ("list", "expr"),
+                             "campbell?": ("table", {"parameter": "str", "scale?": "str", "values": ("list", "expr"),
                                                      "why": "str"}),
-                             "boundary?": ("list", ("table", {"parameter": "str", "scale?": "expr",
+                             "boundary?": ("list", ("table", {"parameter": "str", "scale?": "str",
                                                               "bracket": ("pair", "expr"),
                                                               "expected": "str", "why": "str"})),
                              "floquet?": ("table", {"why": "str", "period": "str", "q": ("list", "expr"),
@@ -915,8 +915,9 @@ MEANINGS = {
     "vibration.campbell.parameter": "The parameter swept.",
     "vibration.campbell.scale": "What `values` are multiples of (default 1): an expression of the parameters, such as "
                                 "`sqrt(k/m)`, so that the sweep follows `--set`.  Evaluated in the linearised scene (with "
-                                "`vibration.overrides`) where the study runs; where it has no value there, or one not > 0, "
-                                "the page says that there is nothing to sweep.",
+                                "`vibration.overrides`) where the study runs, not on load: where it has no value there "
+                                "(a square root of a negative number), or one not > 0, the page says that there is "
+                                "nothing to sweep.",
     "vibration.campbell.values": "Its values, in multiples of `scale`, in order: each equilibrium starts Newton-Raphson "
                                  "from the one before.  The page's own equilibrium's value joins them where it lies "
                                  "between two.",

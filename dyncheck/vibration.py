@@ -102,11 +102,15 @@ def validate(case):
             raise ValueError(f"{case.file}: vibration.{field}.parameter = '{name}' is neither a parameter nor a state "
                              f"variable held by Newton-Raphson (one of {', '.join(n for n in names if n not in table['solve'])})")
     linearised(case)  # the linearised scene must be physical too
-    # A boundary's formula need not be a number at every parameter set: where it is not (the top's with its centre
-    # of mass below the tip, h < 0, where it takes a negative square root), it says there is no boundary.
+    # A boundary's formula, and a sweep's or a bracket's scale, need not be a number at every parameter set: where it
+    # is not (the top's least spin with its centre of mass below the tip, h < 0, a negative square root), the study
+    # says that there is no boundary, or nothing to sweep.
     for i, boundary in enumerate(table.get("boundary", [])):
-        if isinstance(boundary["expected"], str):
-            of_parameters(case, f"boundary[{i}].expected", boundary["expected"])
+        for key in ("expected", "scale"):
+            if key in boundary:
+                of_parameters(case, f"boundary[{i}].{key}", boundary[key])
+    if "scale" in table.get("campbell", {}):
+        of_parameters(case, "campbell.scale", table["campbell"]["scale"])
 
 
 def of_parameters(case, field, expression):

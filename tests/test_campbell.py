@@ -108,3 +108,15 @@ def test_the_tops_sweep_starts_above_its_least_spin_at_other_parameters():
     assert below.boundary is None and len(below.data)
     assert any(f.startswith("No stability boundary in spin_rate") and "has no value at these parameters" in f
                for f in below.findings)
+
+
+def test_a_scale_is_checked_for_its_names_on_load_and_evaluated_where_the_study_runs():
+    """Like a boundary's formula, a scale may have no value at some parameters (the study then says so); one that
+    names what is no parameter is refused, naming the field."""
+    case = dyncheck.load_case("spring_pendulum")
+    case.spec["vibration"]["campbell"]["scale"] = "sqrt(g - 2*k)"  # no value at the book's numbers
+    vibration.validate(case)
+    case.spec["vibration"]["boundary"][1]["scale"] = "m*Omega**2"
+    with pytest.raises(ValueError, match=r"vibration\.boundary\[1\]\.scale = 'm\*Omega\*\*2' names Omega, not a "
+                                         "parameter"):
+        vibration.validate(case)
