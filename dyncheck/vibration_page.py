@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from dyncheck.campbell import Sweep  # and with it its classes registered for loading saved results (report --from)
 from dyncheck.messages import ENGINE_NAMES
 from dyncheck.results import OWN_WORDS, heading
 from dyncheck.vibration import MATRIX_NAMES, SAFETY, match
@@ -212,7 +213,7 @@ def figure_modes(vib, case, path):
     save(fig, path)
 
 
-def sweep_lines(sweep, case, chart):
+def sweep_lines(sweep: Sweep, case, chart):
     """The Campbell diagram and the stability boundary in words; no figure where the sweep found nothing to draw."""
     lines = [f"### Campbell diagram: frequencies against {sweep.parameter}", "",
              " ".join(case.prose(sweep.why, "vibration.campbell.why").split()), ""]
@@ -225,7 +226,7 @@ def sweep_lines(sweep, case, chart):
     return lines + [""]
 
 
-def campbell_caption(sweep):
+def campbell_caption(sweep: Sweep):
     at = lambda x: f"{sweep.parameter} = {x:.5g} {sweep.unit}"
     return (f"The Campbell diagram: the equilibrium's state at each {sweep.parameter} (top: how it moves with it), each "
             "oscillating mode's frequency (middle) and the largest real part of the eigenvalues (bottom), from the "
@@ -238,7 +239,7 @@ def campbell_caption(sweep):
                       f"{a.gap:.2g} rad/s apart ({'a veering' if a.veers else 'a crossing'})." for a in sweep.approaches))
 
 
-def figure_campbell(sweep, case, path):
+def figure_campbell(sweep: Sweep, case, path):
     """Frequencies and the largest real part against the swept parameter, every source; the boundary, the
     analysed equilibrium and the closest approaches marked."""
     data = sweep.data

@@ -7,6 +7,9 @@ pendulum's sweep once ran 0-100 rad/s past sqrt(k/m) = 50 rad/s (an l axis to 1e
 Fast by default (one bisection, a few seconds); `pytest -m full` runs whole sweeps and draws them."""
 
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -120,3 +123,11 @@ def test_a_scale_is_checked_for_its_names_on_load_and_evaluated_where_the_study_
     with pytest.raises(ValueError, match=r"vibration\.boundary\[1\]\.scale = 'm\*Omega\*\*2' names Omega, not a "
                                          "parameter"):
         vibration.validate(case)
+
+
+def test_the_pages_load_a_saved_sweep_without_running_anything():
+    """`dyncheck report --from` imports the pages alone: the Sweep's classes must be registered by them (a saved
+    Campbell diagram was 'not registered with dyncheck.store' once it had a module of its own)."""
+    code = ("import dyncheck.report, dyncheck.store as store; "
+            "assert {'Sweep', 'Approach'} <= set(store._registry), sorted(store._registry)")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).resolve().parent.parent)
