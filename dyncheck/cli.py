@@ -243,6 +243,7 @@ def report_saved(args, start):
     """`report --from DIR`: the pages of the results saved in DIR, with no run."""
     if args.cases or args.set or args.no_studies:
         raise ValueError("--from renders saved results as they are: give no CASE, --set or --no-studies with it")
+    import dyncheck.report  # the pages' modules register the classes the saved results hold (a Sweep)
     results = load_results(args.saved)
     written = write_pages(results, args.out, not args.no_animations)
     print(f"pages: wrote {len(written)} files to {args.out}/ from {args.saved}/")
@@ -266,15 +267,15 @@ def close(results, junit, start):
 def study_case(case):
     """The case's work-precision sweep, stability studies and Campbell diagram, with their progress (they take
     minutes)."""
-    from dyncheck import stability, vibration, work_precision
+    from dyncheck import campbell, stability, work_precision
     with Progress(f"studies of {case.name}") as bar:
         bar.note("work-precision sweep")
         sweep = work_precision.sweep(case, bar.step)
         bar.note("stability studies")
         studies = stability.studies(case, bar.step)
         bar.note("Campbell diagram")
-        campbell = vibration.sweep(case, bar.step)
-    return {"work_precision": sweep, "stability": studies, "vibration": campbell}
+        diagram = campbell.sweep(case, bar.step)
+    return {"work_precision": sweep, "stability": studies, "vibration": diagram}
 
 
 def campaign_command(args):

@@ -116,8 +116,10 @@ SCHEMA = ("table", {
     "vibration?": ("table", {"why": "str", "overrides?": ("map", "expr"), "q": ("list", "expr"),
                              "v": ("list", "expr"), "solve": ("list", "str"), "amplitude": "number > 0",
                              "periods": "int > 0",
-                             "campbell?": ("table", {"parameter": "str", "values": ("list", "expr"), "why": "str"}),
-                             "boundary?": ("list", ("table", {"parameter": "str", "bracket": ("pair", "expr"),
+                             "campbell?": ("table", {"parameter": "str", "scale?": "str", "values": ("list", "expr"),
+                                                     "why": "str"}),
+                             "boundary?": ("list", ("table", {"parameter": "str", "scale?": "str",
+                                                              "bracket": ("pair", "expr"),
                                                               "expected": "str", "why": "str"})),
                              "floquet?": ("table", {"why": "str", "period": "str", "q": ("list", "expr"),
                                                     "v": ("list", "expr"), "periods": "int > 0",
@@ -913,13 +915,23 @@ MEANINGS = {
     "vibration.periods": "How long each mode's run lasts, in periods of that mode.",
     "vibration.campbell": "The Campbell diagram of `dyncheck report`: the frequencies against a parameter (a spin rate).",
     "vibration.campbell.parameter": "The parameter swept.",
-    "vibration.campbell.values": "Its values, in order: each equilibrium starts Newton-Raphson from the one before.",
+    "vibration.campbell.scale": "What `values` are multiples of (default 1): an expression of the parameters, such as "
+                                "`sqrt(k/m)`, so that the sweep follows `--set`.  Evaluated in the linearised scene (with "
+                                "`vibration.overrides`) where the study runs, not on load: where it has no value there "
+                                "(a square root of a negative number), or one not > 0, the page says that there is "
+                                "nothing to sweep.",
+    "vibration.campbell.values": "Its values, in multiples of `scale`, in order: each equilibrium starts Newton-Raphson "
+                                 "from the one before.  The page's own equilibrium's value joins them where it lies "
+                                 "between two.",
     "vibration.campbell.why": "What the diagram shows.",
     "vibration.boundary": "Stability boundaries, each found from the eigenvalues (bisection on the parameter between the "
                           "bracket's stable and unstable ends, or where the equilibrium ceases) and confirmed by runs "
                           "either side.",
     "vibration.boundary[i].parameter": "The parameter whose value crosses the boundary.",
-    "vibration.boundary[i].bracket": "Two values of it, one on each side.",
+    "vibration.boundary[i].scale": "What `bracket` is in multiples of (default 1), as `vibration.campbell.scale`.",
+    "vibration.boundary[i].bracket": "Two values of it, in multiples of `scale`, one on each side.  Where the "
+                                     "equilibrium is stable at both ends, or unstable at both, the page says so, and "
+                                     "what the formula `expected` gives.",
     "vibration.boundary[i].expected": "The boundary as a formula says it is (compared with the eigenvalues'): an "
                                       "expression of the parameters, evaluated where the study runs (it may have no "
                                       "value at other parameters, as a square root of a difference).",
@@ -959,8 +971,9 @@ KEY_UNITS = {
     "vibration.q": "coord_units",
     "vibration.v": "coord_units per s",
     "vibration.amplitude": "coord_units",
-    **dict.fromkeys(["vibration.campbell.values", "vibration.boundary[i].bracket", "vibration.boundary[i].expected"],
+    **dict.fromkeys(["vibration.campbell.scale", "vibration.boundary[i].scale", "vibration.boundary[i].expected"],
                     "the parameter's"),
+    **dict.fromkeys(["vibration.campbell.values", "vibration.boundary[i].bracket"], "multiples of `scale`"),
     "vibration.floquet.period": "s",
     "vibration.floquet.q": "coord_units",
     "vibration.floquet.v": "coord_units per s",

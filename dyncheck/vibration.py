@@ -21,16 +21,14 @@ Where the base's motion makes the equations periodic in t, `[vibration.floquet]`
 periodic motion instead (`floquet`): the orbit by shooting, each source's monodromy matrix along it, its
 eigenvalues (the Floquet multipliers) and the largest one checked by stroboscopic runs.
 
-`analyse(case)` returns a `Vibration` (rows included, the Floquet analysis in its `floquet`); `sweep(case)` the Campbell diagram's data and the
-stability boundary (a study: `dyncheck report` runs it).
+`analyse(case)` returns a `Vibration` (rows included, the Floquet analysis in its `floquet`); the Campbell diagram and
+the stability boundaries, a study of `dyncheck report`, are dyncheck.campbell's.
 """
 
 import math
-import time
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pandas as pd
 import scipy.linalg
 from scipy.integrate import DOP853
 
@@ -104,11 +102,15 @@ def validate(case):
             raise ValueError(f"{case.origin}: vibration.{field}.parameter = '{name}' is neither a parameter nor a state "
                              f"variable held by Newton-Raphson (one of {', '.join(n for n in names if n not in table['solve'])})")
     linearised(case)  # the linearised scene must be physical too
-    # A boundary's formula need not be a number at every parameter set: where it is not (the top's with its centre
-    # of mass below the tip, h < 0, where it takes a negative square root), it says there is no boundary.
+    # A boundary's formula, and a sweep's or a bracket's scale, need not be a number at every parameter set: where it
+    # is not (the top's least spin with its centre of mass below the tip, h < 0, a negative square root), the study
+    # says that there is no boundary, or nothing to sweep.
     for i, boundary in enumerate(table.get("boundary", [])):
-        if isinstance(boundary["expected"], str):
-            of_parameters(case, f"boundary[{i}].expected", boundary["expected"])
+        for key in ("expected", "scale"):
+            if key in boundary:
+                of_parameters(case, f"boundary[{i}].{key}", boundary[key])
+    if "scale" in table.get("campbell", {}):
+        of_parameters(case, "campbell.scale", table["campbell"]["scale"])
 
 
 def of_parameters(case, field, expression):
@@ -1332,182 +1334,3 @@ def stroboscopic_rows(case, monodromy, motions, shift, period):
                         f"run {multiplier_text(measured)}, linear {multiplier_text(mu)}; amplitude {motion.amplitude:g}, "
                         f"its nonlinear shift {shift / abs(mu):.1e}", ceiling=ceilings.MOTION))
     return rows
-
-
-# -- the Campbell diagram and the stability boundary (a study: dyncheck report) ----------------------
-
-@store.register
-@dataclass(frozen=True)
-class Sweep:
-    """The frequencies against a parameter, and where the equilibrium stops being stable."""
-    parameter: str
-    unit: str
-    why: str
-    data: pd.DataFrame  # source, value, mode (1, 2, ... by frequency), frequency [rad/s], largest_real [1/s]
-    branch: pd.DataFrame  # value, and the equilibrium's solved state variables there: how it moves with the parameter
-    branch_units: dict  # {state variable: unit}
-    boundary: float | None  # the swept parameter's boundary, where [vibration.boundary] has one in it
-    findings: tuple  # sentences with the numbers
-    wall: float
-
-
-def sweep(case, progress=None):
-    """The `[vibration.campbell]` sweep and the `[vibration.boundary]` search; None without them."""
-    table = settings(case)
-    if table is None or "campbell" not in table:
-        return None
-    start = time.perf_counter()
-    scene = linearised(case)
-    campbell = table["campbell"]
-    parameter = campbell["parameter"]
-    if progress:
-        progress(f"{case.name}: Campbell diagram over {parameter}")
-    records, branch, missing, guess = [], [], [], (table["q"], table["v"])
-    names = state_names(case.coords)
-    for value in [scene.value(x, "vibration.campbell.values") for x in campbell["values"]]:
-        point, eq, reference = equilibrium_at(scene, table, parameter, value, guess)
-        if eq is None:
-            missing.append(value)
-            continue
-        guess = (eq.q, eq.v)
-        # an angle as the page shows it, in (-pi, pi]: Newton-Raphson may land a whole turn away
-        shown = lambda name, x: float(np.angle(np.exp(1j * x))) if unit(case, name) == "rad" else float(x)
-        branch.append({"value": value, **{name: shown(name, eq.state[names.index(name)]) for name in table["solve"]}})
-        each = {"reference": reference, **{source: modal(engine_linear(point.model(source), source, eq))
-                                           for source in ENGINES}}
-        for source, modes in each.items():
-            real = np.where(np.abs(modes.eigenvalues.real) > SAFETY * modes.bounds, modes.eigenvalues.real, 0.0)
-            for k, i in enumerate(modes.oscillating()):
-                records.append({"source": source, "value": value, "mode": k + 1,
-                                "frequency": modes.eigenvalues[i].imag, "largest_real": float(np.max(real))})
-    findings = []
-    if missing:
-        findings.append(f"No equilibrium near the last one at {parameter} = "
-                        + ", ".join(f"{x:.4g}" for x in missing) + ": not drawn.")
-    boundaries = {}
-    for settings_ in table.get("boundary", []):
-        boundary, sentences = boundary_search(case, scene, table, settings_, progress)
-        if boundary is not None:
-            boundaries[settings_["parameter"]] = boundary
-        findings += sentences
-    return Sweep(parameter, unit(case, parameter), campbell["why"], pd.DataFrame(records), pd.DataFrame(branch),
-                 {name: unit(case, name) for name in table["solve"]}, boundaries.get(parameter), tuple(findings),
-                 time.perf_counter() - start)
-
-
-def vary(scene, name, value, q, v):
-    """(scene, q, v) with `name` set to `value`: a parameter of the scene, or a state variable Newton-Raphson holds
-    (the top's spin rate)."""
-    if name in scene.params:
-        return scene.with_params(**{name: value}), q, v
-    x = np.concatenate([q, v])
-    x[state_names(scene.coords).index(name)] = value
-    n = len(q)
-    return scene, x[:n], x[n:]
-
-
-def equilibrium_at(scene, table, name, value, guess):
-    """(scene, equilibrium, the derivation's modes there) with `name` at `value`, starting Newton-Raphson from
-    `guess` (q, v); (scene, None, None) where there is no equilibrium."""
-    scene, q, v = vary(scene, name, value, *guess)
-    try:
-        eq = equilibrium(scene.model("reference"), 0.0, q, v, table["solve"], scene.coords,
-                         scene.model("pinocchio").mass_matrix)
-    except NoEquilibrium:
-        return scene, None, None
-    return scene, eq, modal(derivation_linear(scene.model("reference"), "reference", eq))
-
-
-def stable(modes):
-    """Whether an equilibrium's modes (None: there is none) say it is stable."""
-    return modes is not None and modes.verdict != "unstable"
-
-
-BOUNDARY_RESOLUTION = 1e-6  # the bisection's relative width: far below any formula's difference worth naming
-GROWN = 10.0  # a run whose displacement grows beyond this many times its start's has left the equilibrium
-EITHER_SIDE = 0.02  # the runs either side of the boundary, this far from it (relative)
-
-
-def boundary_search(case, scene, table, settings_, progress):
-    """Bisection on the parameter between the bracket's stable and unstable ends (unstable: no equilibrium
-    near the last stable one, or an eigenvalue with a positive real part), each equilibrium from the last
-    stable one; then the derivation's runs from the stable side's equilibrium, displaced along its slowest
-    mode, with the parameter either side of the boundary.  Returns (boundary, sentences)."""
-    parameter = settings_["parameter"]
-    if progress:
-        progress(f"{case.name}: stability boundary in {parameter}")
-    ends = [scene.value(x, "vibration.boundary.bracket") for x in settings_["bracket"]]
-    guess = (table["q"], table["v"])
-    states = [equilibrium_at(scene, table, parameter, x, guess)[1:] for x in ends]
-    holds = [stable(modes) for _, modes in states]
-    if holds[0] == holds[1]:
-        return None, [f"The bracket {parameter} in [{ends[0]:g}, {ends[1]:g}] does not hold the boundary: the "
-                      f"equilibrium is {'stable' if holds[0] else 'unstable or absent'} at both ends."]
-    good, bad = (0, 1) if holds[0] else (1, 0)
-    x_good, x_bad, eq_good = ends[good], ends[bad], states[good][0]
-    while abs(x_bad - x_good) > BOUNDARY_RESOLUTION * abs(x_good):
-        mid = 0.5 * (x_good + x_bad)
-        _, eq, modes = equilibrium_at(scene, table, parameter, mid, (eq_good.q, eq_good.v))
-        if stable(modes):
-            x_good, eq_good = mid, eq
-        else:
-            x_bad = mid
-    boundary = 0.5 * (x_good + x_bad)
-    try:
-        expected = scene.value(settings_["expected"], "vibration.boundary.expected")
-        compared = f"gives {expected:.7g}: {(boundary / expected - 1):+.1e} relative"
-    except ValueError:  # a formula of the parameters (validate) with no value at these: it says there is no boundary
-        compared = "has no value at these parameters: it gives no boundary here"
-    sentences = [f"Boundary from the eigenvalues: {parameter} = {boundary:.7g} {unit(case, parameter)} (bisection to "
-                 f"{BOUNDARY_RESOLUTION:.0e}); the formula `{settings_['expected']}` {compared}.  "
-                 + " ".join(scene.prose(settings_["why"], "vibration.boundary.why").split())]
-    sentences += [either_side(case, scene, table, parameter, boundary, side, x_good > x_bad) for side in (+1, -1)]
-    return boundary, sentences
-
-
-def unit(case, name):
-    """The unit of a parameter or a state variable."""
-    if name in case.units:
-        return case.units[name]
-    coord = name.removesuffix("_rate")
-    base = dict(zip(case.coords, case.spec["coord_units"]))[coord]
-    return f"{base}/s" if name.endswith("_rate") else base
-
-
-def either_side(case, scene, table, parameter, boundary, side, stable_above):
-    """A sentence on the derivation's run with the parameter at boundary (1 + side EITHER_SIDE): started at the
-    stable side's equilibrium displaced by the amplitude along its slowest mode, over `periods` of that mode;
-    its largest displacement over the start's says whether the motion stays near the equilibrium."""
-    stable_value = boundary * (1 + EITHER_SIDE if stable_above else 1 - EITHER_SIDE)
-    value = boundary * (1 + side * EITHER_SIDE)
-    _, eq, modes = equilibrium_at(scene, table, parameter, stable_value, (table["q"], table["v"]))
-    if eq is None:
-        return f"No run at {parameter} = {value:.5g}: no equilibrium on the stable side to start from."
-    slowest = modes.oscillating()[0]
-    n = len(eq.q)
-    period = 2 * math.pi / modes.eigenvalues[slowest].imag
-    amplitude = table["amplitude"]
-    start = eq.state + amplitude * along(modes.right[:, slowest], n)
-    run_scene, q0, v0 = vary(scene, parameter, value, start[:n], start[n:])
-    start = np.concatenate([q0, v0])
-    model = run_scene.model("reference")
-    t_end = table["periods"] * period
-    output_step = t_end / (table["periods"] * RUNS_PER_PERIOD)
-    try:
-        with np.errstate(all="ignore"):
-            run = simulate(model, (start[:n], start[n:]), t_end, "DOP853", rtol=case.integration["rtol"],
-                           output_step=output_step, work=False, max_step=period / 20, omega=2 * math.pi / period,
-                           quantities=())
-        # the coordinates at rest in the equilibrium: a cyclic one's angle drifts at a changed rate, and stays one
-        resting = eq.v == 0
-        q = (run[list(case.coords)].to_numpy() - (eq.q + np.outer(run.index.to_numpy(), eq.v)))[:, resting]
-        grown = float(np.max(np.abs(q)) / amplitude)
-        ended = f"its displacement reaches {grown:.3g} times the start's"
-    except (Unstable, ArithmeticError) as error:
-        grown, ended = math.inf, f"it blew up ({error})"
-    stays = grown < GROWN  # a stable mode's linear motion stays at its start's size
-    expect_stable = (value > boundary) == stable_above
-    agree = "as the eigenvalues say" if stays == expect_stable else "AGAINST the eigenvalues"
-    return (f"Run at {parameter} = {value:.5g} ({side * EITHER_SIDE:+.0%} of the boundary), from the equilibrium at "
-            f"{stable_value:.5g} displaced by {amplitude:g} along its slowest mode, over {t_end:.3g} s: {ended} "
-            f"(beyond {GROWN:g} counts as leaving): {'stays near' if stays else 'leaves'} the equilibrium, {agree}.")

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from dyncheck.campbell import Sweep  # and with it its classes registered for loading saved results (report --from)
 from dyncheck.messages import ENGINE_NAMES
 from dyncheck.results import OWN_WORDS, heading
 from dyncheck.vibration import MATRIX_NAMES, SAFETY, match
@@ -212,23 +213,35 @@ def figure_modes(vib, case, path):
     save(fig, path)
 
 
-def sweep_lines(sweep, case, chart):
-    """The Campbell diagram and the stability boundary in words."""
+def sweep_lines(sweep: Sweep, case, chart):
+    """The Campbell diagram and the stability boundary in words; no figure where the sweep found nothing to draw."""
     lines = [f"### Campbell diagram: frequencies against {sweep.parameter}", "",
-             " ".join(case.prose(sweep.why, "vibration.campbell.why").split()), "",
-             *embed(chart, "Campbell diagram",
-                    f"The Campbell diagram: the equilibrium's state at each {sweep.parameter} (top: how it moves with it), "
-                    "each oscillating mode's frequency (middle) and the largest real part of the eigenvalues (bottom), from "
-                    "the derivation (line) and both engines (markers); a positive real part is an unstable equilibrium"
-                    + (f", here beyond {sweep.parameter} = {sweep.boundary:.5g} {sweep.unit} (dashed)."
-                       if sweep.boundary is not None else "."))]
+             " ".join(case.prose(sweep.why, "vibration.campbell.why").split()), ""]
+    if len(sweep.data):
+        lines += embed(chart, "Campbell diagram", campbell_caption(sweep))
+    else:
+        lines += ["No diagram at these parameters: the sweep has no equilibrium to draw (below).", ""]
     for sentence in sweep.findings:
         lines += [f"- {sentence}"]
     return lines + [""]
 
 
-def figure_campbell(sweep, case, path):
-    """Frequencies and the largest real part against the swept parameter, every source."""
+def campbell_caption(sweep: Sweep):
+    at = lambda x: f"{sweep.parameter} = {x:.5g} {sweep.unit}"
+    return (f"The Campbell diagram: the equilibrium's state at each {sweep.parameter} (top: how it moves with it), each "
+            "oscillating mode's frequency (middle) and the largest real part of the eigenvalues (bottom), from the "
+            "derivation (line) and both engines (markers); a positive real part is an unstable equilibrium."
+            + (f"  Dashed: the stability boundary from the eigenvalues, {at(sweep.boundary)}: the equilibrium is stable "
+               f"{'above' if sweep.stable_above else 'below'} it, unstable or gone "
+               f"{'below' if sweep.stable_above else 'above'}." if sweep.boundary is not None else "")
+            + (f"  Dotted: the equilibrium analysed above, {at(sweep.analysed)}." if sweep.analysed is not None else "")
+            + "".join(f"  Circles: where modes {a.modes[0]} and {a.modes[1]} come closest, {at(a.value)}, "
+                      f"{a.gap:.2g} rad/s apart ({'a veering' if a.veers else 'a crossing'})." for a in sweep.approaches))
+
+
+def figure_campbell(sweep: Sweep, case, path):
+    """Frequencies and the largest real part against the swept parameter, every source; the boundary, the
+    analysed equilibrium and the closest approaches marked."""
     data = sweep.data
     fig, axes = panels(3, 1, 6.6, sharex=True, height_ratios=[1.6, 3, 1.4])
     branch, top, bottom = axes[:, 0]
@@ -247,16 +260,23 @@ def figure_campbell(sweep, case, path):
         real = group.groupby("value")["largest_real"].first()
         bottom.plot(real.index, real.to_numpy(), color=style["color"], ls="-" if source == "reference" else "none",
                     marker=markers[source], ms=4, mfc="none")
-    if sweep.boundary is not None:
-        for ax in (branch, top, bottom):
-            ax.axvline(sweep.boundary, color="black", ls="--", lw=0.8)
-        top.text(sweep.boundary, top.get_ylim()[1], f" boundary {sweep.boundary:.5g}", va="top", fontsize=8)
+    for a in sweep.approaches:
+        top.plot([a.value, a.value], a.frequencies, color="black", ls="none", marker="o", ms=7, mfc="none",
+                 label="closest approach of two modes")
+    marks = [(sweep.boundary, "--", f"stability boundary, {sweep.parameter} = {sweep.boundary:.5g} {sweep.unit}"
+              if sweep.boundary is not None else None),
+             (sweep.analysed, ":", f"the equilibrium analysed above, {sweep.parameter} = {sweep.analysed:.4g} {sweep.unit}"
+              if sweep.analysed is not None else None)]
+    for value, style, label in marks:
+        if value is not None:
+            for ax in (branch, top, bottom):
+                ax.axvline(value, color="black", ls=style, lw=0.8, label=label if ax is top else None)
     bottom.axhline(0.0, color="black", lw=0.6)
     top.set_ylabel("frequency [rad/s]")
     bottom.set_ylabel("largest Re λ [1/s]")
     bottom.set_xlabel(f"{sweep.parameter} [{sweep.unit}]")
     fig.suptitle(title(heading(case.spec), "Campbell diagram"))
-    legend_below(fig, ncol=4)
+    legend_below(fig, ncol=2)
     save(fig, path)
 
 

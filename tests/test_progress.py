@@ -8,7 +8,7 @@ from dataclasses import replace
 import pandas as pd
 import pytest
 
-from dyncheck import cli, progress, report, stability, vibration, work_precision
+from dyncheck import campbell, cli, progress, report, stability, work_precision
 from test_ci_contract import toy
 
 
@@ -26,7 +26,7 @@ def quick_report(monkeypatch):
         return study
     monkeypatch.setattr(work_precision, "sweep", steps(pd.DataFrame(columns=work_precision.COLUMNS)))
     monkeypatch.setattr(stability, "studies", steps([]))
-    monkeypatch.setattr(vibration, "sweep", steps(None))
+    monkeypatch.setattr(campbell, "sweep", steps(None))
     monkeypatch.setattr(report, "write_reports", lambda results, out, animations=True: [])
     monkeypatch.delenv("GITHUB_ACTIONS", raising=False)
 

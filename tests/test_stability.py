@@ -5,7 +5,10 @@ Fast by default (a few seconds each): each test runs one study on a reduced set 
 """
 
 import math
+import re
+import tempfile
 import time
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -62,7 +65,7 @@ def test_spring_softened_by_the_spin_and_k_crit():
 def stiff_spring():
     """The step study at k = 1e5 N/m (and one k below k_crit) for semi-implicit Euler, RK4 and MuJoCo's Euler."""
     case = dyncheck.load_case("spring_pendulum")
-    s = settings(case, "stable_step", k=[100.0, 1e5], methods=["semi-implicit Euler", "RK4", "mujoco:Euler"])
+    s = settings(case, "stable_step", k_scale=1.0, k=[100.0, 1e5], methods=["semi-implicit Euler", "RK4", "mujoco:Euler"])
     start = time.perf_counter()
     result = stability.case_module(case).stable_step(case, s)
     return result, s, time.perf_counter() - start
@@ -102,6 +105,21 @@ def test_below_k_crit_the_exact_solution_runs_away_too(stiff_spring):
     crit = result.series["crit"]
     assert crit["lo"] < crit["hi"] and abs(crit["hi"] / crit["theory"] - 1) < 0.02
     assert any("k_crit = 159.9 N/m" in f for f in result.findings)
+
+
+@pytest.mark.parametrize("overrides", [{}, {"m": 0.5}, {"alpha_rate": 6.0}])
+def test_the_stiffnesses_of_the_step_study_follow_k_crit(overrides):
+    """The case file gives them in multiples of k_crit = m Omega^2 (its k_scale): under --set m=0.5 fixed ones of
+    150, 170, 200 N/m "around k_crit" were all below its 400 N/m."""
+    case = dyncheck.load_case("spring_pendulum", **overrides)
+    p = case.params
+    k_crit = p["m"] * (p["alpha_rate"] + p["beta_rate"]) ** 2
+    s = stability.case_module(case).in_newtons_per_metre(stability.settings_of(case, "stable_step"))
+    below, above = [k for k in s["k"] if k < k_crit], [k for k in s["k"] if k > k_crit]
+    assert min(s["k"]) < 0.1 * k_crit and max(s["k"]) > 100 * k_crit and len(below) >= 3 and len(above) >= 3
+    assert max(below) / k_crit == pytest.approx(0.94, rel=5e-3) and min(above) / k_crit == pytest.approx(1.06, rel=5e-3)
+    assert all(float(f"{k:.3g}") == k for k in s["k"])  # 3000 N/m in the tables, not 2997.89
+    assert s["k_fit"] > k_crit and s["k_stiff"] > s["k_fit"]
 
 
 def test_a_blown_up_run_is_recorded_with_time_and_step():
@@ -159,6 +177,23 @@ def test_energy_drift_records_a_blow_up_as_data_and_shows_no_nan():
     assert any("explicit Euler: unstable at t = " in f for f in result.findings)
     # MuJoCo's Euler is the textbook semi-implicit Euler
     assert any("mujoco:Euler = semi-implicit Euler" in f for f in result.findings)
+
+
+@pytest.mark.parametrize("overrides, horizon, over_the_top", [({}, 60.0, True), ({"m2": 0.5, "l2": 0.3}, 60.0, False)])
+def test_the_energy_drifts_words_follow_its_numbers(overrides, horizon, over_the_top):
+    """The swing's energy is one computed number in the findings and the caption (the case file's text said 0.10 J
+    where the caption said 0.11 J at m2 = 0.5 kg); "can go over the top" only where the energy gained exceeds what
+    the masses over the top hold (at m2 = 0.5 kg, l2 = 0.3 m explicit Euler gains 13 swing energies of the 34 it
+    takes, and was said to exceed them)."""
+    case = dyncheck.load_case("double_pendulum", **overrides)
+    result = long_runs.energy_drift(case, settings(case, "energy_drift", methods=["explicit Euler"], horizon=horizon))
+    swing = long_runs.swing_words(result.series["swing"])
+    caption = long_runs.figure_energy_drift(result, Path(tempfile.mkdtemp()) / "drift.png", "double pendulum")
+    assert swing in result.findings[0] and swing in caption and not re.search(r"\d J\b", result.why)
+    row = result.data.set_index("method").loc["explicit Euler"]
+    top = next(f for f in result.findings if f.startswith("explicit Euler:"))
+    assert row["drift_T"] > 1.0 and ("so it can go over the top" in top) == over_the_top
+    assert ("so it cannot yet go over the top" in top) != over_the_top
 
 
 # -- 3. spinning top -------------------------------------------------------------------------------

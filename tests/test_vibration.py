@@ -12,7 +12,7 @@ import pytest
 import scipy.linalg
 
 import dyncheck
-from dyncheck import ceilings, vibration, vibration_page
+from dyncheck import campbell, ceilings, vibration, vibration_page
 from dyncheck.results import Status
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
@@ -78,7 +78,7 @@ def test_the_tops_steady_precession_is_the_slow_root_of_the_x2_row(analysed):
 
 def test_the_spring_pendulums_runaway_boundary_comes_out_of_the_eigenvalues():
     case = dyncheck.load_case("spring_pendulum")
-    sweep = vibration.sweep(case)
+    sweep = campbell.sweep(case)
     scene = vibration.linearised(case)
     omega = scene.params["beta_rate"]
     assert sweep.boundary == pytest.approx(math.sqrt(scene.params["k"] / scene.params["m"]), rel=2e-6)

@@ -344,9 +344,9 @@ def sleeping_top(case, settings, progress=None):
     findings = [
         f"Upright (sleeping) top: spinning at s about its vertical axis, it is stable iff s^2 > 4 m g h Ixx / Izz^2 "
         f"(Maxwell and Klein; Ixx about the tip): s_c = 2 sqrt(Ixx m g h) / Izz = {criterion:.4g} rad/s "
-        f"({criterion / (2 * math.pi):.3g} rev/s) for the book's top. The book states no such criterion; its "
+        f"({criterion / (2 * math.pi):.3g} rev/s) for this top. The book states no such criterion; its "
         "parameter names are those of the formula (Ixx about the tip O, Izz about the axis).",
-        f"Numerically (MuJoCo, {method} at dt = {dt:g} s, no resisting moment: Mz = 0 overrides the book's "
+        f"Numerically (MuJoCo, {method} at dt = {dt:g} s, no resisting moment: Mz = 0 overrides the case's "
         f"{case.params.get('Mz', 0.0):g} N m, which slows every top until it falls): started {n0:g} rad from upright "
         f"with only the spin, the top counts as up if its nutation stays below {bound:g} rad for {T:g} s. "
         + (f"It falls at {lo:.6g} and stays up at {hi:.6g} rad/s (bisection to {settings['resolution']:.0e} of s_c): "

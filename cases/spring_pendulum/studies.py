@@ -189,6 +189,7 @@ def stable_step(case, settings, progress=None):
     h_blowup for the sharp ones.  Below k_crit the exact solution itself runs away: each method is run
     once at a small step and its escape time compared with the exact one's."""
     start = time.perf_counter()
+    settings = in_newtons_per_metre(settings)
     p = case.params
     m, omega_base = p["m"], p["alpha_rate"] + p["beta_rate"]
     k_crit = m * omega_base**2
@@ -252,6 +253,17 @@ def stable_step(case, settings, progress=None):
                    data, table, findings, series, start)
 
 
+def in_newtons_per_metre(settings):
+    """The settings with the stiffnesses k, k_stiff and k_fit in N/m: the table gives them in multiples of its
+    `k_scale` (1 without it), an expression of the parameters, so that they follow k_crit = m Omega^2 under --set;
+    each rounded to 3 significant digits (a sample point 0.5 % off its multiple, and 3000 N/m in the tables, not
+    2997.89)."""
+    scale = settings.get("k_scale", 1.0)
+    newtons = lambda k: float(f"{scale * k:.3g}")
+    return {**settings, "k": [newtons(k) for k in settings["k"]],
+            **{key: newtons(settings[key]) for key in ("k_stiff", "k_fit") if key in settings}}
+
+
 def _critical_stiffness(case, settings, source, escape, horizon):
     """Bisection on k for the exact solution from the book's initial conditions: runaway below, bounded above."""
     k_crit = case.params["m"] * (case.params["alpha_rate"] + case.params["beta_rate"]) ** 2
@@ -299,6 +311,9 @@ def _listing_growth(case, settings, source):
             "l_error": float(np.max(np.abs(out["l"].to_numpy() - exact["l"].to_numpy()))),
             "l_range": float(exact["l"].max() - exact["l"].min()),
             "acc_ratio": rms(acc(out)[last, 1]) / rms(acc(exact)[last, 1])}
+
+
+FIGURE_RESOLUTION = 0.01  # of a curve's span: what a printed figure shows (the findings' "1 % a figure resolves")
 
 
 def _stable_step_findings(case, settings, data, crit, listing, k_crit, span):
@@ -404,7 +419,10 @@ def _stable_step_findings(case, settings, data, crit, listing, k_crit, span):
                    f"a free spring oscillation grows by exp(omega^2 dt t / 2) = {listing['whole_run']:.2f} over the "
                    f"run. Its l(t) strays from the exact one by up to {listing['l_error']:.3g} m (the exact l spans "
                    f"{listing['l_range']:.3g} m), and over the last sixth its l'' has {listing['acc_ratio']:.2f} times "
-                   "the exact RMS: the listing's figure of l(t) is drawn with a growing integration error.")
+                   "the exact RMS: the listing's figure of l(t) is "
+                   + (f"off the exact motion by more than the {FIGURE_RESOLUTION:.0%} of its span that a figure "
+                      "resolves." if listing["l_error"] > FIGURE_RESOLUTION * listing["l_range"] else
+                      f"within the {FIGURE_RESOLUTION:.0%} of its span that a figure resolves."))
     return out
 
 

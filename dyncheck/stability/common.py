@@ -180,7 +180,9 @@ def not_applicable(case, study, settings, why):
 
 def study_result(case, study, title, settings, data, table, findings, series, start):
     table = table.astype(object).where(table.notna(), "-").astype(str)
-    return StudyResult(case=case.name, study=study, title=title, why=" ".join(settings.get("why", "").split()),
+    # the why's numbers as `{= expression}`, computed at the case's parameters (Case.prose)
+    why = case.prose(settings.get("why", ""), f"stability.{study}.why")
+    return StudyResult(case=case.name, study=study, title=title, why=" ".join(why.split()),
                        data=data, table=table, findings=tuple(findings), series=series,
                        settings={k: v for k, v in settings.items() if k != "why"}, wall=time.perf_counter() - start)
 

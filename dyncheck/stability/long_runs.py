@@ -122,6 +122,11 @@ def agreement_horizon(case):
                      "ftle": ftle, "horizon": horizon, "wall": time.perf_counter() - start, "sentence": sentence}
 
 
+# A separation below this fraction of the state's size (its rates scaled) grows by the linearised equations to
+# within about as much of itself: the nonlinear terms are of the order of the separation squared.
+LINEAR_SEPARATION = 1e-4
+
+
 def lyapunov(case, settings, progress=None):
     start = time.perf_counter()
     starts = settings["initial"]
@@ -151,7 +156,8 @@ def lyapunov(case, settings, progress=None):
                      "lambda": lam, "lambda_half": lam_half, "lambda_second_half": late, "log_stretch": logs[-1],
                      "lambda_min": float(running.min()), "lambda_max": float(running.max()),
                      "horizon_rounding": math.log(tol / EPS) / lam if chaotic else None,
-                     "horizon_integrators": math.log(tol / eps0) / lam if chaotic else None})
+                     "horizon_integrators": math.log(tol / eps0) / lam if chaotic else None,
+                     "interval_growth": float(math.exp(np.max(np.diff(logs))))})
     data = pd.DataFrame(rows)
     check_h, details = agreement_horizon(case)
     table = pd.DataFrame([{
@@ -173,6 +179,16 @@ def lyapunov(case, settings, progress=None):
                 f"rate_scale = {settings['rate_scale']:.4g} rad/s, "
                 f"renormalised every {settings['renormalise']:g} s) over {settings['horizon']:g} s. The agreement "
                 f"horizon T = ln(tol/eps0)/lambda is how long two sources that differ by eps0 stay within tol."]
+    ran = [r for r in rows if r["status"] != "unstable"]
+    if ran:
+        growth = max(r["interval_growth"] for r in ran)
+        reached = settings["d0"] * growth
+        findings.append(f"Between renormalisations the separation grows at most {growth:.3g} times, from "
+                        f"{settings['d0']:g} to {reached:.2g}: "
+                        + ("far below the state's own size, in the linear regime that the exponent assumes." if
+                           reached <= LINEAR_SEPARATION else
+                           f"beyond {LINEAR_SEPARATION:g} of the state's size, where the nonlinear terms bend the "
+                           "separation: the exponent is underestimated; renormalise more often."))
     for r in rows:
         if r["status"] == "unstable":
             findings.append(f"{r['initial']}: {r['why']}.")
@@ -254,7 +270,7 @@ def energy_drift(case, settings, progress=None):
     } for r in rows])
     dop = f", DOP853 at rtol {settings['rtol']:g}" if "DOP853" in settings["methods"] else ""
     findings = [f"From the book's initial conditions over {T:g} s at dt = {dt:g} s{dop}; "
-                f"the error is |E(t) - E(0)| relative to the swing's energy above rest, E(0) - E_rest = {swing:.4g} J. "
+                f"the error is |E(t) - E(0)| relative to the swing's energy above rest, {swing_words(swing)}. "
                 "The growth exponent is d ln(max |dE|) / d ln t from T/10 to T: 0 for a bounded error, 1 for a "
                 "linear drift."]
     ran = data[data["status"] == "ran"] if "status" in data else data
@@ -265,8 +281,11 @@ def energy_drift(case, settings, progress=None):
         text = (f"{r['method']}: {r['character']} (growth exponent {r['growth_exponent']:.2f}); "
                 f"{r['drift_1s']:.2g} after 1 s, {r['drift_T10']:.2g} after {T / 10:g} s, {r['drift_T']:.2g} by {T:g} s")
         if r["drift_T"] > 1.0 and top:
-            text += (f": it gains more than the {top:.3g} swing energies that the state q = "
-                     f"({', '.join(f'{x:.4g}' for x in whirl)}) holds above rest, and runs away")
+            state = f"the state q = ({', '.join(f'{x:.4g}' for x in whirl)})"
+            text += (f": more than the {top:.3g} swing energies that {state} holds above rest, so it can go over "
+                     "the top" if r["drift_T"] > top else
+                     f": less than the {top:.3g} swing energies that {state} holds above rest, so it cannot yet "
+                     "go over the top")
         findings.append(text + ".")
     for _, r in (data[data["status"] == "unstable"].iterrows() if "status" in data else []):
         findings.append(f"{r['method']}: unstable at t = {fmt(r['t_fail'])} s (step {r['step_fail']}): {r['why']}.")
@@ -288,6 +307,11 @@ def energy_drift(case, settings, progress=None):
     series = {"curves": curves, "rows": data, "swing": swing, "horizon": T, "dt": dt}
     return study_result(case, "energy_drift", "Long-run energy error of each method", settings, data, table,
                    findings, series, start)
+
+
+def swing_words(swing):
+    """The energy the drift is relative to, as the findings and the caption both write it."""
+    return f"E(0) - E_rest = {swing:.3g} J"
 
 
 LINES = ("-", "--", ":", "-.")  # one per curve of a study, with a marker: told apart in grey
@@ -360,6 +384,6 @@ def figure_energy_drift(result, path, name):
     ends = "; ".join(f"{r['method']} {r['character']}" + (f" ({r['drift_T']:.2g} at the end)" if pd.notna(r.get("drift_T"))
                                                           else "") for _, r in s["rows"].iterrows())
     return (f"Each method's energy error over {s['horizon']:g} s from the book's initial conditions at dt = {s['dt']:g} s,"
-            f" relative to the swing's energy above rest (E(0) - E_rest = {s['swing']:.3g} J), on log axes (colour"
+            f" relative to the swing's energy above rest ({swing_words(s['swing'])}), on log axes (colour"
             " and marker per method). MuJoCo's Euler and implicitfast lie on semi-implicit Euler, MuJoCo's RK4 on RK4"
             f" (wide pale lines under the thin ones). {ends}.")
