@@ -242,3 +242,12 @@ def test_a_message_about_a_case_of_two_files_names_its_folder_not_a_case_toml(ov
     with pytest.raises(ValueError) as refused:
         validate_placeholders(dyncheck.load_case("cart_pendulum", folder, **override))
     assert str(refused.value).startswith(f"{folder / 'cart_pendulum'}: override "), str(refused.value)
+
+
+def test_a_derivation_writing_into_its_arguments_changes_no_state_of_the_checks(tmp_path):
+    """The guide's correct equations, which zero q, v and t's arrays after computing their answer: they pass."""
+    source = FILES["equations.py"].replace("def accelerations(", "def _accelerations(")
+    source += ("\n\ndef accelerations(t, q, v, p):\n    answer = _accelerations(t, q, v, p)\n"
+               "    q[...] = 0.0\n    v[...] = 0.0\n    return answer\n")
+    results, _ = run_cases([dyncheck.load_case("cart_pendulum", make_case(tmp_path, source))], localise=False)
+    assert exit_code(results) == 0, [r.detail for r in results[0].rows if not r.status.ok][:3]
