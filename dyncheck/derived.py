@@ -238,7 +238,8 @@ def case_file(folder, module, scene, given, overrides=None):
     with `given` (a case.toml's tables, or {}) over it: what a case file says, it says.  Its time scales
     (horizon, steps, the studies' settings) come from the fastest frequency at the parameters with `overrides`
     (a stiffer spring: a faster motion, shorter steps); its parameters' values stay the module's."""
-    file = folder / EQUATIONS
+    where = given.get("derivation", EQUATIONS)  # a case.toml may name another .py file of the folder
+    file = folder / where
     coords, params = module_values(module, file)
     joints = coordinate_joints(coords, scene, file)
     dependent = [j.name for j in scene.joints if j.name not in joints.values()]  # closed by the loops
@@ -289,7 +290,7 @@ def case_file(folder, module, scene, given, overrides=None):
         "name": folder.name,
         "title": (module.__doc__ or folder.name).strip().splitlines()[0].rstrip("."),
         "summary": summary(module.__doc__),
-        "derivation": EQUATIONS,
+        "derivation": where,
         "coords": list(coords),
         "reactions": reactions,
         "coord_units": units,
@@ -311,7 +312,7 @@ def case_file(folder, module, scene, given, overrides=None):
                                  "and MuJoCo's placeholder inertias (1e-14 kg m^2): far below 1e-9."},
             "trajectory": {"safety": 10.0, "why": "Ten times each run's own error estimate."},
             "energy": {"safety": 10.0, "why": "Ten times each balance's own error estimate."}},
-        "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; {EQUATIONS} the derivation"
+        "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; {where} the derivation"
                                 + ("" if given else "; no case.toml")},
         "scene": {"coords": joints, "driven": {}, "reactions": reaction_sensors(reactions, scene, file),
                   "bindings": bound, **({"dependent": dependent} if dependent else {})},

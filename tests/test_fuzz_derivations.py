@@ -251,3 +251,12 @@ def test_a_derivation_writing_into_its_arguments_changes_no_state_of_the_checks(
                "    q[...] = 0.0\n    v[...] = 0.0\n    return answer\n")
     results, _ = run_cases([dyncheck.load_case("cart_pendulum", make_case(tmp_path, source))], localise=False)
     assert exit_code(results) == 0, [r.detail for r in results[0].rows if not r.status.ok][:3]
+
+
+def test_a_derivation_file_of_another_name_is_named_as_it_is(tmp_path):
+    folder = make_case(tmp_path, "")
+    (folder / "cart_pendulum" / "equations.py").unlink()
+    (folder / "cart_pendulum" / "lagrange.py").write_text(misbehaving("raise KeyError('m')", where="True"))
+    (folder / "cart_pendulum" / "case.toml").write_text('derivation = "lagrange.py"\n')
+    with pytest.raises(ValueError, match=r"cart_pendulum/lagrange\.py: at the initial state .*KeyError"):
+        dyncheck.load_case("cart_pendulum", folder)
