@@ -505,13 +505,14 @@ def worst_engine_error(rows):
 
 def random_tried(result, case):
     """What the random pointwise checks tried: states at the case's parameters, parameter sets and
-    states at each, their seeds, and whether reference and both engines agreed at all of them."""
+    states at each, their seeds, and whether reference and both engines agreed at all of them (None where they
+    were not compared: the case's checks did not finish)."""
     sample, params = case.spec["sample"], case.spec["sample"].get("params", {})
     engine_rows = [r for r in result.rows if r.check in ("pointwise", "random parameters")
                    and set(r.sources) <= set(ENGINES)]
     return {"states": sample["count"], "seed": sample["seed"], "parameter_sets": params.get("sets", 0),
             "states_per_set": params.get("states", 0), "parameter_seed": params.get("seed"),
-            "agreed": bool(engine_rows) and all(r.status == Status.PASS for r in engine_rows)}
+            "agreed": all(r.status == Status.PASS for r in engine_rows) if engine_rows else None}
 
 
 def random_sentence(tried):
@@ -1146,9 +1147,11 @@ def write_index(tmp, cases):
             "status": case["status"].upper(), "checks": statuses_in_words(counts),
             "worst engine error": "-" if case["worst_engine_error"] is None else f"{case['worst_engine_error']:.1e}",
             "findings": ", ".join(f"{f['id']} ({size(f['error'], '.2g')})" for f in case["findings"]) or "none"})
-    tried = [c["random"] for c in cases]
+    compared = [c for c in cases if c["random"]["agreed"] is not None]
+    tried = [c["random"] for c in compared]
     states = sum(t["states"] + t["parameter_sets"] * t["states_per_set"] for t in tried)
-    disagreed = [c["case"] for c in cases if not c["random"]["agreed"]]
+    disagreed = [c["case"] for c in compared if not c["random"]["agreed"]]
+    not_compared = [c["case"] for c in cases if c["random"]["agreed"] is None]
     book = not any(c["one_derivation"] for c in cases)  # the book's examples, or (also) researchers' own cases
     derivations = "`reference`" if book else "the derivations"
     lines = ["# dyncheck reports", "",
@@ -1163,9 +1166,11 @@ def write_index(tmp, cases):
              *vibration_page.index_lines(cases, book),
              f"The last run tried {plural(sum(t['parameter_sets'] for t in tried), 'random parameter set')} besides"
              f" {'the book' if book else 'each case'}'s and {plural(states, 'random state')} in all"
-             f" ({plural(len(cases), 'case')};"
+             f" ({plural(len(compared), 'case')};"
              f" seeds on each case page): {derivations}, MuJoCo and Pinocchio "
              + (f"disagreed in {', '.join(disagreed)}." if disagreed else
-                "agreed at every one of them within the pointwise tolerance."), ""]
+                "agreed at every one of them within the pointwise tolerance.")
+             + (f"  Not compared: {', '.join(not_compared)}, whose checks did not finish." if not_compared else ""),
+             ""]
     (tmp / "index.md").write_text("\n".join(lines))
     return "index.md"

@@ -306,3 +306,14 @@ def test_concurrent_writers_take_turns_and_both_cases_land(results, quick_figure
     index = (out / "index.md").read_text()
     assert "[piston](piston.md)" in index and "[rotating_particle](rotating_particle.md)" in index
     assert "dyncheck: waiting for dyncheck pid " in capfd.readouterr().err
+
+
+def test_the_index_counts_no_state_of_a_case_whose_checks_did_not_finish(results, quick_figures, tmp_path):
+    """An unfinished case compared nothing: the index says so, and neither counts its states nor calls it a
+    disagreement."""
+    from dyncheck.checks import unfinished
+    lost = unfinished(case_module.load_case("spinning_top"), "killed by signal SIGKILL")
+    report.write_reports([results["piston"], lost], tmp_path / "out", animations=False)
+    index = (tmp_path / "out" / "index.md").read_text()
+    assert "Not compared: spinning_top, whose checks did not finish." in index
+    assert "disagreed" not in index and "(1 case;" in index
