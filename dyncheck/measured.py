@@ -87,7 +87,7 @@ def check(case):
             except ValueError as error:
                 raise _error(case, field, match[0], f"cannot be evaluated from the measures ([measured]: "
                              f"{', '.join(table) or 'none'}) and the parameters: {error}") from None
-            if spec not in words.WORDS and not _number_format(spec):
+            if spec not in words.WORDS and not words.is_format(spec):
                 raise _error(case, field, match[0], f"{spec!r} is neither a number's format spec nor one of the "
                              f"words {', '.join(words.WORDS)} (dyncheck.words)")
 
@@ -115,12 +115,6 @@ def split(inside):
     """The expression and the format of `{~ expression :format}`."""
     expression, colon, spec = inside.rpartition(":")
     return (expression.strip(), spec.strip()) if colon else (inside.strip(), ".3g")
-
-
-def _number_format(spec):
-    from dyncheck.case import FORMAT_SPEC  # the prose numbers' own rule (widths and precisions of 3 digits)
-    form = FORMAT_SPEC.fullmatch(spec)
-    return bool(form) and len(form["width"]) <= 3 and len(form["precision"] or "") <= 3
 
 
 def _error(case, field, value, problem):
@@ -249,15 +243,20 @@ def phase_lag(t, x, s, y):
 def fill(result, text, measures=None):
     """`text` with each `{~ expression :format}` written from the result's measures; a paragraph (text between
     blank lines) that needs one the run could not take says so, and why, instead."""
+    if not MEASURED_NUMBER.search(text):
+        return text
     measures = values(result) if measures is None else measures
     names = {**expressions.of_parameters(parameters(result)), **measures}
 
     def paragraph(part):
         missing = {measures[n].why: n for match in MEASURED_NUMBER.finditer(part)
                    for n in expressions.names(split(match[1])[0]) if isinstance(measures.get(n), Unavailable)}
-        if missing:
-            return f"(Not measured in this run: {'; '.join(missing)}.)"
-        return MEASURED_NUMBER.sub(lambda match: written(match[1], names), part)
+        try:
+            if missing:
+                raise ValueError("; ".join(missing))
+            return MEASURED_NUMBER.sub(lambda match: written(match[1], names), part)
+        except ValueError as why:  # a measure the run could not take, or words no number of it has (a ratio of 0)
+            return f"(Not measured in this run: {why}.)"
     return "\n\n".join(paragraph(part) for part in text.split("\n\n"))
 
 
@@ -269,6 +268,6 @@ def written(inside, names):
 
 def finding(result, found):
     """A finding of the result with its title and measured text written from the result's measures."""
-    measures = values(result)
+    measures = values(result) if MEASURED_NUMBER.search(found.title + found.measured) else {}
     return replace(found, title=fill(result, found.title, measures),
                    measured=fill(result, found.measured, measures))

@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck import animation, expressions, stability, student_page, typeset, vibration_page, work_precision
+from dyncheck import (animation, expressions, measured, stability, student_page, typeset, vibration_page,
+                      work_precision)
 from dyncheck.case import CASES_DIR, Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.messages import ENGINE_NAMES, plural, statuses_in_words
@@ -726,12 +727,13 @@ def write_case_page(result, case, tmp, animations=True):
     ]
     if findings:
         lines += ["## Findings: where the book is wrong", ""]
-        for f in findings:
+        for f in (measured.finding(result, f) for f in findings):
             lines += [f"### {f.id}: {f.title}", "",
                       f"*Where:* {f.where}.  *Largest relative error:* {size(f.error)}"
                       f" (quantities {', '.join(f.quantities)}; comparisons: {', '.join(f.sources)};"
                       f" {f.established})."
                       + (f"  {f.effect}" if f.effect else ""), "",
+                      *([f"*Measured in this run:* {f.measured}", ""] if f.measured else []),
                       f"*Localised automatically* (edits of the printed expression searched until one agrees"
                       f" with the engines): {f.localised}.", "", f.explanation, ""]
     vibration_lines, vibration_files = vibration_page.section(result, case, tmp)
@@ -1051,6 +1053,7 @@ def write_errata(tmp, cases):
                       f"- *Quantities:* {', '.join(f['quantity'])}; largest relative error {size(f['error'])}",
                       f"- *How established:* {f['established']}",
                       *([f"- *Effect:* {f['effect']}"] if f["effect"] else []),
+                      *([f"- *Measured in this run:* {f['measured']}"] if f.get("measured") else []),
                       f"- *Localised edit:* {f['localised']}", "",
                       *errata_pairs([pair for pair in c.get("typeset", []) if pair["finding"] == f["id"]]),
                       f["explanation"], ""]

@@ -3,6 +3,20 @@ that a sentence cannot say "twice" of 1.03 or "agrees" of a deviation of 2.  The
 them by name (`{~ expression :ratio}`, dyncheck.measured); the student's page for its checks (`agreement`)."""
 
 import math
+import re
+
+# A number's format spec in prose (Python's: [[fill]align][sign][z][#][0][width][grouping][.precision][type]), its
+# width and precision of at most 3 digits each: a double holds 17 significant digits and a page's line is under
+# 200 characters, so 999 already writes nothing but padding and noise, while format() would build whatever is
+# asked (width 99999999999: a MemoryError; precision 999999999: a 1 GB string, 73 s).
+FORMAT_SPEC = re.compile(r"(?:.?[<>=^])?[-+ ]?z?#?0?(?P<width>[0-9]*)[,_]?(?:\.(?P<precision>[0-9]+))?[eEfFgGn%]?")
+
+
+def is_format(spec):
+    """Whether `spec` is a format spec a prose number may have (FORMAT_SPEC)."""
+    form = FORMAT_SPEC.fullmatch(spec)
+    return bool(form) and len(form["width"]) <= 3 and len(form["precision"] or "") <= 3
+
 
 # A ratio reads "about twice" (or "about half") within 5 % of 2 (of 1/2): what a reader takes "about" to allow, and
 # far from 1.5, where "twice" would overstate by a third.  Within 0.5 % of 1 two measured sizes are "the same": below
@@ -15,6 +29,11 @@ def percent(fraction):
     """A fraction as a page writes a percentage: "14 %", "0.7 %"."""
     share = 100 * abs(fraction)
     return f"{share:.0f} %" if share >= 1 else f"{share:.1g} %"
+
+
+def share(error):
+    """A relative error as a share of the quantity's largest value: "95 %", or "3.2e-03" below 1 %."""
+    return percent(error) if error >= 0.01 else f"{error:.1e}"
 
 
 def ratio(r):
@@ -59,12 +78,14 @@ def lag(degrees):
     return f"lags {degrees:.0f} degrees behind" if degrees > 0 else f"runs {-degrees:.0f} degrees ahead of"
 
 
-def agreement(error, within):
-    """How a check's relative error reads: "exactly", "to 3e-15" where the row is `within` its tolerance; a
-    deviation beyond it never agrees: "differs by 95 %" (the share of the quantity's largest value)."""
-    if within:
-        return "agrees exactly with" if error == 0 else f"agrees to {error:.0e} with"
-    return f"differs by {percent(error) if error >= 0.01 else f'{error:.1e}'} from"
+def agreement(checks):
+    """How checks read from their relative errors, each check (whom, error, whether the error is within its
+    tolerance): "agrees with MuJoCo to 3e-15 and Pinocchio exactly", "differs from the exact motion by 95 %".  A
+    deviation beyond its tolerance never agrees."""
+    agree = [f"{whom} exactly" if error == 0 else f"{whom} to {error:.0e}" for whom, error, within in checks if within]
+    differ = [f"{whom} by {share(error)}" for whom, error, within in checks if not within]
+    return " and ".join(([f"agrees with {' and '.join(agree)}"] if agree else [])
+                        + ([f"differs from {' and '.join(differ)}"] if differ else []))
 
 
 WORDS = {"ratio": ratio, "gains": gains, "lag": lag}  # the rules a case file's prose may name after its `:`
