@@ -931,10 +931,15 @@ def finding_effect(case, finding, runs):
 
 def account(case, finding, field):
     """A finding's text from the case file, its `{= formulas}` at these parameters; under overrides
-    marked as the case file's account of the book's numbers (the measured error is this run's)."""
+    marked as the case file's account of the book's numbers (the measured error is this run's, and so is what the
+    finding's `measured` text says)."""
     where = f"findings[{case.findings.index(finding)}].{field}"
     text = " ".join(case.prose(finding[field], where).split())
-    return f"*At the book's numbers (the case file's account, not this run's):* {text}" if case.overrides else text
+    return f"*{BOOK_ACCOUNT}:* {text}" if case.overrides else text
+
+
+# How a page under overrides marks a finding's explanation and effect: what the case file says of the book's numbers.
+BOOK_ACCOUNT = "At the book's numbers (the case file's account; a number it computes from the parameters is this run's)"
 
 
 def finding_source(case, finding):

@@ -494,8 +494,9 @@ def values_table(case, spaces):
 # -- pages --------------------------------------------------------------------------
 
 def size(error, spec=".3g"):
-    """A finding's largest error, or why there is none (its rows not applicable under overrides)."""
-    return "not measured with these parameters" if error is None else format(error, spec)
+    """A finding's largest error, or why there is none (its rows compare with what the book printed, not applicable
+    under overrides)."""
+    return "none: not applicable with these parameters" if error is None else format(error, spec)
 
 
 def worst_engine_error(rows):

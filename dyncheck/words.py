@@ -21,8 +21,9 @@ def is_format(spec):
 # A ratio reads "about twice" (or "about half") within 5 % of 2 (of 1/2): what a reader takes "about" to allow, and
 # far from 1.5, where "twice" would overstate by a third.  Within 0.5 % of 1 two measured sizes are "the same": below
 # what a printed figure shows (1 % of its axis, dyncheck.ceilings.LISTING).
-ABOUT = 0.05
-SAME = 0.005
+TWICE = (1.9, 2.1)
+HALF = (0.475, 0.525)
+SAME = (0.995, 1.005)
 
 
 def percent(fraction):
@@ -41,11 +42,11 @@ def ratio(r):
     "14 % larger than", "about twice", "3.1 times", "14 % smaller than", "about half", "30 % of"."""
     if not (math.isfinite(r) and r > 0):
         raise ValueError(f"a ratio of two sizes is a positive number, not {r}")
-    if abs(r - 1) <= SAME:
+    if SAME[0] <= r <= SAME[1]:
         return "the same as"
-    if abs(r - 2) <= ABOUT * 2:
+    if TWICE[0] <= r <= TWICE[1]:
         return "about twice"
-    if abs(r - 0.5) <= ABOUT * 0.5:
+    if HALF[0] <= r <= HALF[1]:
         return "about half"
     if r > 2:
         return f"{r:.2g} times"
