@@ -134,7 +134,13 @@ def values(result):
     return {name: measure(result, item) for name, item in result.spec.get("measured", {}).items()}
 
 
+# What a kind of measure makes of an expression's values along a run.
+REDUCTIONS = {"span": np.ptp, "rms": np.std, "start": lambda x: x[0], "end": lambda x: x[-1],
+              "change": lambda x: x[-1] - x[0]}
+
+
 def measure(result, item):
+    """One measure of `[measured]` (its table `item`) taken from the result: a float, or Unavailable."""
     kind = item["kind"]
     if kind == "frequency":
         return frequency(result, item["mode"], item.get("source", "reference"))
@@ -149,8 +155,7 @@ def measure(result, item):
     (t, x), *other = series
     if kind == "phase lag":
         return phase_lag(t, x, *other[0])
-    return float({"span": np.ptp, "rms": np.std, "start": lambda x: x[0], "end": lambda x: x[-1],
-                  "change": lambda x: x[-1] - x[0]}[kind](x))
+    return float(REDUCTIONS[kind](x))
 
 
 def of(result, expression, run):
@@ -159,7 +164,10 @@ def of(result, expression, run):
     if isinstance(frame, Unavailable):
         return frame
     names = expressions.along(parameters(result), result.spec["report"].get("stop"), frame)
-    x = np.broadcast_to(np.asarray(expressions.evaluate(expression, names), dtype=float), names["t"].shape)
+    try:  # a column this run lacks: a derivation without energy, the listing's run without work
+        x = np.broadcast_to(np.asarray(expressions.evaluate(expression, names), dtype=float), names["t"].shape)
+    except ValueError as error:
+        return Unavailable(f"{expression} along the {words_of(run)}: {error}")
     if not np.all(np.isfinite(x)):
         return Unavailable(f"{expression} is not finite along the {words_of(run)}")
     return names["t"], x
