@@ -929,6 +929,10 @@ def finding_effect(case, finding, runs):
             + "; ".join(parts) + ".") if parts else ""
 
 
+# How a page under overrides marks a finding's explanation and effect: what the case file says of the book's numbers.
+BOOK_ACCOUNT = "At the book's numbers (the case file's account; a number it computes from the parameters is this run's)"
+
+
 def account(case, finding, field):
     """A finding's text from the case file, its `{= formulas}` at these parameters; under overrides
     marked as the case file's account of the book's numbers (the measured error is this run's, and so is what the
@@ -938,8 +942,11 @@ def account(case, finding, field):
     return f"*{BOOK_ACCOUNT}:* {text}" if case.overrides else text
 
 
-# How a page under overrides marks a finding's explanation and effect: what the case file says of the book's numbers.
-BOOK_ACCOUNT = "At the book's numbers (the case file's account; a number it computes from the parameters is this run's)"
+def measured_account(case, finding):
+    """A finding's `measured` text, its `{= formulas}` at these parameters and its `{~ measures}` left for the pages
+    to write from the saved results (dyncheck.measured): never marked, every number in it this run's."""
+    field = f"findings[{case.findings.index(finding)}].measured"
+    return " ".join(case.prose(finding.get("measured", ""), field).split())
 
 
 def finding_source(case, finding):
@@ -1077,6 +1084,5 @@ def findings_of(case, rows, sample, runs, localise=True, right=None, program=Non
             established=f"reference, MuJoCo and Pinocchio agree with each other to {max(engines, default=0):.1e} "
                         f"at {len(sample['states'])} random states",
             effect=finding_effect(case, finding, runs), localised=localised, pairs=pairs,
-            measured=" ".join(case.prose(finding.get("measured", ""), f"findings[{case.findings.index(finding)}]"
-                                                                       ".measured").split())))
+            measured=measured_account(case, finding)))
     return out
