@@ -226,6 +226,7 @@ def varied(tmp_path_factory):
         for label, cases in (("book", book), ("other", other)):
             ran, interrupted = run_cases(cases)
             assert interrupted is None
+            (pages[label] / folder.name).mkdir(parents=True, exist_ok=True)
             write_reports(ran, pages[label] / folder.name, animations=False)
             for result in ran:
                 results.setdefault(result.name, {})[label] = result
