@@ -783,7 +783,8 @@ MEANINGS = {
     "animation.graph.title": "The graph's title.",
     "animation.graph.ylabel": "Its axis's label, with the unit.",
     "animation.graph.ylim": "Its axis's range.  Absent: the data's.",
-    "animation.caption": "What to see in the animation: the caption's last sentences.",
+    "animation.caption": "What to see in the animation: the caption's last sentences, with measured numbers where it "
+                         "says what the runs show (see Measured numbers in prose).",
     "scene": "How the scene files (scene.xml for MuJoCo, scene.urdf for Pinocchio) map to the case.",
     "scene.coords": "Each coordinate of a hinge or slide joint, by name: that joint's name in the scene files.",
     "scene.euler": "A ball joint whose orientation the book writes in Euler angles.",
@@ -909,8 +910,9 @@ MEANINGS = {
     "course.intro": "The page's opening paragraph: what the example is and what it finds (Markdown, `$` maths).",
     "course.steps": "The steps, in the book's order.",
     "course.steps[i].title": "The step's heading.",
-    "course.steps[i].text": "What the step does, in plain words, with inline `$...$` maths and `{= expression}` "
-                            "numbers (see Numbers in prose).",
+    "course.steps[i].text": "What the step does, in plain words, with inline `$...$` maths, `{= expression}` "
+                            "numbers (see Numbers in prose) and `{~ expression}` numbers measured in the results "
+                            "(see Measured numbers in prose).",
     "course.steps[i].show": "The results the step typesets, each with its check.",
     "course.steps[i].show[i].expression": "The expression the code evaluates: `book:KEY` (the derivation's "
                                           "Book.PRINTED), `program:KEY` (Program.PRINTED), `frames:KEY` (the "
@@ -927,7 +929,8 @@ MEANINGS = {
     "course.steps[i].figures": "Figures of the case page shown in this step, each with its caption.",
     "course.steps[i].figures[i].figure": "The figure's kind: `figures/<case>_<figure>.png` of the case page "
                                          "(scene, coordinates, program, modes, ...).",
-    "course.steps[i].figures[i].caption": "What it shows and what to see in it, in plain words.",
+    "course.steps[i].figures[i].caption": "What it shows and what to see in it, in plain words; what it shows of "
+                                          "the runs in measured numbers (see Measured numbers in prose).",
     "course.steps[i].vibration": "Show the vibration analysis's equilibrium, frequencies and stability here.",
     "vibration.why": "What is linearised, and why about this state.",
     "vibration.overrides": "Parameters changed for the linearised scene, e.g. the arm at rest so that the disk's spin "
