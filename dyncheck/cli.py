@@ -243,7 +243,6 @@ def report_saved(args, start):
     """`report --from DIR`: the pages of the results saved in DIR, with no run."""
     if args.cases or args.set or args.no_studies:
         raise ValueError("--from renders saved results as they are: give no CASE, --set or --no-studies with it")
-    import dyncheck.report  # the pages' modules register the classes the saved results hold (a Sweep)
     results = load_results(args.saved)
     written = write_pages(results, args.out, not args.no_animations)
     print(f"pages: wrote {len(written)} files to {args.out}/ from {args.saved}/")

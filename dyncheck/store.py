@@ -10,12 +10,13 @@ bit-exact.  The folder holds:
   string columns in the JSON), "dataclass" and "enum" (a class registered with `register`).
 - `arrays.npz`: the arrays, entries `a0.npy`, `a1.npy`, ... in the order TREE meets them.
 
-numpy scalars come back as Python numbers.  `load` needs the registered classes registered too,
-that is their modules imported.
+numpy scalars come back as Python numbers.  A dataclass or enum is saved with its module's name, which
+`load` imports (the project's modules only) if its class is not registered yet.
 """
 
 import dataclasses
 import enum
+import importlib
 import io
 import json
 import math
@@ -156,10 +157,28 @@ def _encode(value, path, arrays):
         raise TypeError(f"cannot save {path}: {cls.__module__}.{cls.__qualname__} is not registered "
                         "with dyncheck.store (decorate the class with @store.register)")
     if isinstance(value, enum.Enum):
-        return {TAG: "enum", "class": cls.__name__, "value": _encode(value.value, f"{path}.value", arrays)}
-    return {TAG: "dataclass", "class": cls.__name__,
+        return {TAG: "enum", "class": cls.__name__, "module": cls.__module__,
+                "value": _encode(value.value, f"{path}.value", arrays)}
+    return {TAG: "dataclass", "class": cls.__name__, "module": cls.__module__,
             "fields": {field.name: _encode(getattr(value, field.name), f"{path}.{field.name}", arrays)
                        for field in dataclasses.fields(value) if field.init}}
+
+
+def _registered(node, path):
+    """The class a saved object names, its module imported first if that has not happened yet: a saved
+    result loads in a process that imported only this module's caller.  Only the project's own modules are
+    imported: a results folder is data, and must not name code to run."""
+    name, module = node["class"], node.get("module", "")
+    if name not in _registry and module.partition(".")[0] == __name__.partition(".")[0]:
+        try:
+            importlib.import_module(module)
+        except ImportError:
+            pass  # the class has moved or gone since the save: said below
+    cls = _registry.get(name)
+    if cls is None:
+        raise ValueError(f"{path}: class {name!r} (of {module or 'an unnamed module'}) is not registered with "
+                         "dyncheck.store (import the module that defines it)")
+    return cls
 
 
 def _encode_index(index, path, arrays):
@@ -248,10 +267,7 @@ def _decode(node, path, archive):
         series.attrs = _decode(node["attrs"], f"{path}.attrs", archive)
         return series
     if tag in ("enum", "dataclass"):
-        cls = _registry.get(node["class"])
-        if cls is None:
-            raise ValueError(f"{path}: class {node['class']!r} is not registered with dyncheck.store "
-                             "(import the module that defines it)")
+        cls = _registered(node, path)
         try:
             if tag == "enum":
                 return cls(_decode(node["value"], f"{path}.value", archive))

@@ -131,3 +131,13 @@ def test_the_pages_load_a_saved_sweep_without_running_anything():
     code = ("import dyncheck.report, dyncheck.store as store; "
             "assert {'Sweep', 'Approach'} <= set(store._registry), sorted(store._registry)")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).resolve().parent.parent)
+
+
+def test_saved_results_load_in_python_alone(results, tmp_path):
+    """docs/results.md's `dyncheck.results.load_results(Path(DIR))`, in a process that imports nothing else: the
+    classes a saved result holds (its runs, its vibration analysis) are registered by load_result itself."""
+    from dyncheck.results import save_results
+    save_results([results["double_pendulum"]], tmp_path)
+    code = (f"from pathlib import Path; from dyncheck.results import load_results; "
+            f"assert load_results(Path({str(tmp_path)!r}))[0].vibration is not None")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).resolve().parent.parent)

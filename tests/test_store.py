@@ -296,8 +296,24 @@ def test_load_names_an_unknown_class(tmp_path):
     store.save({"leaf": Leaf(Colour.RED, np.zeros(1))}, tmp_path / "r")
     file = tmp_path / "r" / "value.json"
     file.write_text(file.read_text().replace('"Leaf"', '"Gone"'))
-    with pytest.raises(ValueError, match=r"""value\["leaf"\]: class 'Gone' is not registered"""):
+    with pytest.raises(ValueError, match=r"""value\["leaf"\]: class 'Gone' \(of [\w.]+\) is not registered"""):
         store.load(tmp_path / "r")
+
+
+def test_load_imports_the_project_module_a_class_names_and_no_other(tmp_path, monkeypatch):
+    """A saved class's module is imported on load if it is the project's (a result loads in a process that
+    imported nothing else: tests/test_campbell.py runs that); a results file naming another module runs
+    none of its code."""
+    store.save({"leaf": Leaf(Colour.RED, np.zeros(1))}, tmp_path / "r")
+    (tmp_path / "planted.py").write_text("import pathlib; pathlib.Path(__file__).with_suffix('.ran').touch()\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    file = tmp_path / "r" / "value.json"
+    text = file.read_text()
+    assert f'"module": "{Leaf.__module__}"' in text
+    file.write_text(text.replace('"Leaf"', '"Gone"').replace(f'"{Leaf.__module__}"', '"planted"'))
+    with pytest.raises(ValueError, match=r"class 'Gone' \(of planted\) is not registered"):
+        store.load(tmp_path / "r")
+    assert not (tmp_path / "planted.ran").exists()
 
 
 def test_an_object_column_of_any_values_round_trips(tmp_path):
