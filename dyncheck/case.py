@@ -535,7 +535,7 @@ class Case:
         model = guarded(f"{what}: {name}({{params}})", lambda: cls(self.params) if own is None else
                         isolation.guarded_call(own.label, name, own.budget, cls, self.params))
         if own is not None and not isinstance(model, derived.Equations):  # a class of the case's own code
-            model = isolation.Guarded(model, own.label, own.budget)
+            model = derived.Checked(isolation.Guarded(model, own.label, own.budget), len(self.coords))
         coords, reactions = getattr(model, "coords", None), getattr(model, "reaction_names", None)
         if coords is None or tuple(coords) != self.coords:
             raise ValueError(f"{what}: {name}.coords is {coords!r}, but case.toml's coords are {list(self.coords)}")
