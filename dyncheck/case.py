@@ -345,11 +345,26 @@ class Case:
         s = self.spec["sample"]
         bounds = lambda ranges: np.array([[self.value(lo), self.value(hi)] for lo, hi in ranges]).reshape(-1, 2)
         box = np.vstack([[[self.value(s["t"][0]), self.value(s["t"][1])]], bounds(s["q"]), bounds(s["v"])])
-        count = s["count"] if count is None else min(count, s["count"])
+        count = self.sample_count if count is None else min(count, s["count"])
         halton = qmc.Halton(len(box), scramble=True, seed=np.random.default_rng([s["seed"], stream]))
         points = box[:, 0] + halton.random(count) * (box[:, 1] - box[:, 0])
         n = len(self.coords)
         return [(float(x[0]), x[1:1 + n], x[1 + n:]) for x in points]
+
+    @cached_property
+    def sample_count(self):
+        """How many random states the pointwise check takes: [sample] count, or, where [sample] budget is given (a
+        case of two files has it), more where the case's own derivation is cheap: the power of two of its calls
+        that fits the budget, from count up to schema.MAX_ADAPTIVE_STATES.  A power of two: a cost measured a few
+        per cent off moves the count only across a boundary, and every count's states are the first of the same
+        sequence."""
+        s = self.spec["sample"]
+        if "budget" not in s or not self.foreign:
+            return s["count"]
+        self.model("reference")  # measures the cost of a call of the case's own code
+        cost = self.derivation.cost
+        fits = 2 ** math.floor(math.log2(s["budget"] / cost)) if cost > 0 else schema.MAX_ADAPTIVE_STATES
+        return int(min(schema.MAX_ADAPTIVE_STATES, max(s["count"], fits)))
 
     @property
     def integration(self):
@@ -556,7 +571,7 @@ class Case:
                     start = time.perf_counter()
                     answers[function] = getattr(model, function)(0.0, q0, v0)
                     if own is not None and name == "Reference" and function == "accelerations":
-                        own.cost = time.perf_counter() - start  # its calls' budget follows from their cost
+                        own.cost = call_cost(lambda: model.accelerations(0.0, q0, v0), time.perf_counter() - start)
                         own.budget = self.spec.get("budget", {}).get(
                             "call", max(isolation.CALL_FLOOR, isolation.CALLS_PER_BUDGET * own.cost))
             except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
@@ -593,6 +608,25 @@ class Case:
 
     def __repr__(self):
         return f"Case({self.name!r}, overrides={self.overrides})"
+
+
+def call_cost(call, first):
+    """The cost of a call, s: the least of up to COST_CALLS more calls, within COST_TIME, after the first (which
+    took `first` s and pays for numpy's first use of each function it calls)."""
+    least, spent = first, first
+    for _ in range(COST_CALLS):
+        if spent > COST_TIME:
+            break
+        start = time.perf_counter()
+        call()
+        took = time.perf_counter() - start
+        least, spent = min(least, took), spent + took
+    return least
+
+
+# The calls that measure a derivation's cost: the least of 10 is within a few per cent of its steady cost, and 0.05 s
+# bounds what a slow derivation (a generated 7-dof arm, 2-6 ms a call) spends on it.
+COST_CALLS, COST_TIME = 10, 0.05
 
 
 class ProgramUpTo:

@@ -28,11 +28,14 @@ ABOUT = {"mass": "mass of body '{name}'", "pos": "position of body '{name}' in i
          "stiffness": "stiffness of joint '{name}'", "damping": "viscous damping of joint '{name}'",
          "springref": "rest position of joint '{name}''s spring"}
 AXES = "xyz"
-DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)  # of an output step into MuJoCo's steps: 1-2-5 steps
 # States of the pointwise check: a region of 5 % of the state space holds about 13 of 256 evenly spread states
 # (Case.sample_states), where a derivation wrong only there must fail; 256 evaluations of the slowest
 # derivations known (a generated 7-dof inverse dynamics, 2-6 ms each) take about a second.
-SAMPLE_COUNT = 256  # of an output step into MuJoCo's steps: 1-2-5 steps
+SAMPLE_COUNT = 256
+# and more where the derivation is cheap (Case.sample_count): as many as its calls make in a quarter of a second, a
+# fraction of the run's own few seconds (the most, 1024, at the tutorial's 30 us a call; 256 at 1 ms)
+SAMPLE_BUDGET = 0.25  # s
 
 
 def is_plain(module):
@@ -332,7 +335,7 @@ def case_file(folder, module, scene, given, overrides=None):
                            name=bound[p][0]["name"], index=AXES[bound[p][0].get("index", 0)])}
                    for p, value in params.items()},  # every other parameter is bound (bindings refuses the rest)
         "initial": {"q": q0.tolist(), "v": v0.tolist(), "t_end": t_end},
-        "sample": {"count": SAMPLE_COUNT, "seed": 1, "t": [0.0, 4 * t_end],
+        "sample": {"count": SAMPLE_COUNT, "budget": SAMPLE_BUDGET, "seed": 1, "t": [0.0, 4 * t_end],
                    "q": [span(c, u) for c, u in zip(coords, units)], "v": [[-rate(u), rate(u)] for u in units],
                    "params": {"sets": 8, "states": 20, "seed": 2,
                               "ranges": {p: sorted([0.5 * v, 2.0 * v]) for p, v in params.items()}}},

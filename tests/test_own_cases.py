@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+import dyncheck.case as dyncheck_case
 from dyncheck.case import Case
 from dyncheck.cli import main
 from test_architecture import doc_example
@@ -48,7 +49,8 @@ def run(tmp_path, capsys, *args):
     ("equations.py", 'coords, reaction_names = ("x",), ()', 'coords, reaction_names = ("x",), ("R",)',
      "Reference.reaction_names is ('R',)"),
     ("equations.py", f"np.array([{ACC}])", f"np.array([{ACC}, 5.0])",
-     "Reference.accelerations gives shape (2,) at the initial state, not (1,)"),
+     "Reference.accelerations at the initial state: ValueError: accelerations(t, q, v) returned array([-2.5, 5. ]) "
+     "(numpy dtype float64, shape (2,)), not real numbers of shape (1,)"),
     ("case.toml", 'derivation = "equations.py"', 'derivation = "os"', "derivation = 'os' is neither a module of the package's reference/"),
 ])
 def test_a_broken_derivation_is_refused_before_any_work(tmp_path, capsys, file, old, new, message):
@@ -236,3 +238,30 @@ def test_a_scene_number_that_is_not_its_parameter_names_the_file_that_gives_it(t
                                         + params + "\n")
     assert main(["run", "--cases", str(tutorial.parent)]) == 2
     assert f"scene.xml of case 'cart_pendulum': body 'cart' mass[0] is 1.0, but {given_by}" in capsys.readouterr().err
+
+
+def test_a_case_of_two_files_takes_more_states_where_its_equations_are_cheap(tutorial):
+    """[sample] budget (0.25 s for a case of two files): the tutorial's equations, at about 30 us a call (under
+    0.24 ms on any load this machine sees), get the most states, 1024."""
+    case = Case(tutorial)
+    assert case.spec["sample"]["budget"] == 0.25 and case.sample_count == 1024, case.derivation.cost
+    assert len(case.sample_states()) == 1024
+
+
+@pytest.mark.parametrize("cost, expected", [(1e-5, 1024), (2.4e-4, 1024), (2.5e-4, 512), (4.8e-4, 512), (5e-4, 256), (1e-3, 256),
+                                            (2.0, 256)])
+def test_the_states_are_the_power_of_two_whose_calls_fit_the_budget(tutorial, monkeypatch, cost, expected):
+    """The count from a measured cost (Case.call_cost fixed here): 0.25 s of calls, a power of two within
+    256..1024; the states are the first of one sequence, whatever their number."""
+    monkeypatch.setattr(dyncheck_case, "call_cost", lambda call, first: cost)
+    case = Case(tutorial)
+    assert case.sample_count == expected
+    states, first = case.sample_states(), Case(tutorial).sample_states(256)
+    assert len(states) == expected
+    assert all(a[0] == b[0] and (a[1] == b[1]).all() and (a[2] == b[2]).all() for a, b in zip(states, first))
+
+
+def test_without_a_budget_a_case_takes_its_count(tutorial):
+    case = Case(tutorial)
+    spec = {**case.spec, "sample": {k: v for k, v in case.spec["sample"].items() if k != "budget"}}
+    assert Case(tutorial, spec=spec).sample_count == 256
