@@ -19,6 +19,7 @@ import pinocchio as pin
 from engines import euler, scene as scene_rules
 from engines.linalg import linear_solution
 from engines.loops import PinocchioLoops
+from engines.mjcf_joints import joint_values
 from engines.scene import Body
 
 ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
@@ -147,7 +148,7 @@ class PinocchioModel:
         option = document.find("option")
         gravity = option.get("gravity", DEFAULT_GRAVITY) if option is not None else DEFAULT_GRAVITY
         self.m.gravity.linear[:] = [float(x) for x in gravity.split()]
-        self.joint_values = _joint_values(document, self.path)
+        self.joint_values = joint_values(document, self.path)
         for joint in scene["driven"]:
             self.m.armature[self._joint(joint).idx_v] = 0.0
         for j in range(1, self.m.njoints):
@@ -688,52 +689,6 @@ def _misread(document):
         if element.tag == "include":
             yield (f'<include file="{element.get("file")}">: Pinocchio\'s MJCF parser skips included files; '
                    "write their elements into the scene")
-
-
-JOINT_VALUES = {"stiffness": "spring", "springref": "spring's rest position", "damping": "damper"}
-JOINT_DEFAULTS = {**dict.fromkeys(JOINT_VALUES, "0"), "type": "hinge"}  # MuJoCo's, where no class sets them
-
-
-def _joint_values(document, path):
-    """{attribute: {joint: value}} of an MJCF's named joints for each of JOINT_VALUES, where not 0, as MuJoCo's
-    compiler resolves it: the joint's own attribute, else the joint default of its class (its `class`, else the
-    `childclass` of the nearest element around it that has one, else "main"), else of the classes around that
-    one; a hinge's springref in rad, from the file's degrees under <compiler angle="degree"> (MJCF's default).
-    ValueError for a polynomial spring or damper ("a b c"): this adapter's are linear."""
-    defaults = {}
-
-    def collect(default, inherited):
-        joint = default.find("joint")
-        own = {a: joint.get(a, inherited[a]) for a in JOINT_DEFAULTS} if joint is not None else inherited
-        defaults[default.get("class", "main")] = own
-        for child in default.findall("default"):
-            collect(child, own)
-
-    for default in document.findall("default"):
-        collect(default, JOINT_DEFAULTS)
-    degrees = all(compiler.get("angle", "degree") == "degree" for compiler in document.iter("compiler"))
-    values = {attribute: {} for attribute in JOINT_VALUES}
-
-    def walk(element, childclass):
-        childclass = element.get("childclass", childclass)
-        for child in element:
-            if child.tag == "joint" and child.get("name"):  # an unnamed joint: the case cannot move it (refused)
-                inherited = defaults.get(child.get("class", childclass), JOINT_DEFAULTS)
-                for attribute, what in JOINT_VALUES.items():
-                    text = child.get(attribute, inherited[attribute])
-                    a, *higher = [float(x) for x in text.split()]
-                    if any(higher):
-                        raise ValueError(f'{path}: joint \'{child.get("name")}\' {attribute}="{text}": a polynomial '
-                                         f"{what}, which the Pinocchio side does not model; give the linear term only")
-                    if attribute == "springref" and degrees and child.get("type", inherited["type"]) == "hinge":
-                        a = math.radians(a)
-                    if a:
-                        values[attribute][child.get("name")] = a
-            else:
-                walk(child, childclass)
-
-    walk(document.find("worldbody"), "main")
-    return values
 
 
 # URDF cannot write an unlimited revolute or prismatic joint (urdfdom requires <limit> and refuses inf):
