@@ -104,7 +104,8 @@ class DrakeModel:
         self.parser_warnings = tuple(warnings.messages)
         for message in self.parser_warnings:
             if not any(known in message for known in IGNORED):
-                raise Refused(f"{self.path}: Drake's parser drops what MuJoCo's compiler reads: {message.strip()}")
+                raise Refused(f"{self.path}: Drake's parser drops or changes what MuJoCo's compiler reads: "
+                              f"{' '.join(message.split())}")
         mjcf = _is_mjcf(self.path)
         if mjcf:
             _refuse_misread(document, self.path)
@@ -119,8 +120,16 @@ class DrakeModel:
         self._refuse_free_bodies()
         self.context = self.plant.CreateDefaultContext()
         self.nq, self.nv = self.plant.num_positions(), self.plant.num_velocities()
+        self._inertias = {}  # (mass, com, inertia about the com), body frame, of each body: `_body_inertia`
+        self._last = None, None  # the last state asked and its dynamics (`_dynamics`)
+        self._written = set()  # the bodies whose inertia `_write` changed
         for location, value in writes:
             self._write(location, value)
+        for index in self._written:  # once all are written: Drake refuses an inertia no body can have
+            mass, com, inertia = self._inertias[index]
+            self.plant.get_body(BodyIndex(index)).SetSpatialInertiaInBodyFrame(
+                self.context, SpatialInertia.MakeFromCentralInertia(mass, com, RotationalInertia(
+                    *np.diag(inertia), inertia[0, 1], inertia[0, 2], inertia[1, 2])))
         if not mjcf:  # URDF dampers: Drake's joints' own (<dynamics damping>)
             self.joint_values["damping"] = {name: float(joint.GetDampingVector(self.context)[0])
                                             for name, joint in self._joints().items()
@@ -170,8 +179,6 @@ class DrakeModel:
         self.reaction_specs = {name: self._reaction_spec(name, spec) for name, spec in scene["reactions"].items()}
         self.point_specs = {name: (self._body(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
-        self._inertias = {}  # (mass, com, inertia about the com), body frame, of each body: `_body_inertia`
-        self._last = None, None
 
     # -- reading ----------------------------------------------------------
     def _hang_urdf_root(self, root):
@@ -243,7 +250,9 @@ class DrakeModel:
     # -- the scene's values: bindings ----------------------------------------
     def _write(self, location, value):
         """Set a binding location's value (as MujocoModel._write): body mass, ipos, pos, inertia_about_origin, joint
-        stiffness, springref, damping, option gravity."""
+        stiffness, springref, damping, option gravity.  A body's inertia is held in `_inertias` and set in Drake's
+        context after all the writes: Drake refuses an inertia that no body can have, which one of several writes to
+        a body may leave (the top's moments about its tip, written one axis after another)."""
         element, name, attribute = location["element"], location.get("name"), location.get("attribute")
         i = location.get("index", 0)
         if element == "option":
@@ -270,9 +279,9 @@ class DrakeModel:
             else:  # inertia_about_origin: less the parallel-axis term and a ball joint's armature (as MuJoCo's)
                 inertia = inertia.copy()
                 inertia[i, i] = value - mass * (com @ com - com[i] ** 2) - self._ball_armature(name)
-            self._body(name).SetSpatialInertiaInBodyFrame(
-                self.context, SpatialInertia.MakeFromCentralInertia(mass, com, RotationalInertia(inertia)))
-        self._inertias, self._last = {}, (None, None)
+            self._inertias[int(self._body(name).index())] = mass, com, inertia
+            self._written.add(int(self._body(name).index()))  # set in the context after the writes
+        self._last = None, None
 
     def _ball_armature(self, body):
         joint = self._inboard(body)
@@ -303,12 +312,13 @@ class DrakeModel:
 
     def _body_inertia(self, body):
         """(mass, centre of mass, inertia about it) of a body in its frame, as the context holds them."""
-        if body.index() not in self._inertias:
+        index = int(body.index())
+        if index not in self._inertias:
             spatial = body.CalcSpatialInertiaInBodyFrame(self.context)
             mass, com = spatial.get_mass(), spatial.get_com()
             about_origin = spatial.CalcRotationalInertia().CopyToFullMatrix3()
-            self._inertias[body.index()] = mass, com, about_origin - mass * (com @ com * np.eye(3) - np.outer(com, com))
-        return self._inertias[body.index()]
+            self._inertias[index] = mass, com, about_origin - mass * (com @ com * np.eye(3) - np.outer(com, com))
+        return self._inertias[index]
 
     @property
     def gravity(self):
