@@ -170,12 +170,15 @@ class DrakeModel:
                 joint = self._joint(name)
                 array[joint.velocity_start():joint.velocity_start() + joint.num_velocities()] = value
         self.armature[self._driven_dofs] = 0.0
+        self._armature = np.diag(self.armature)
         self.loops = DrakeLoops(self, document if mjcf else None)
         if self.loops.loops and (self.driven or any(kind != "scalar" for kind, _, _ in self.layout)):
             raise Refused(f"{self.path}: a scene with closed loops is evaluated with hinges and slides that the case's "
                           "coordinates move or the loops close; prescribed motions and ball joints in it are not "
                           "supported yet (nor by MuJoCo's adapter)")
         self._closed = None  # the last closed configuration, where the next closing starts
+        self._balls = [(joint.position_start(), joint.velocity_start()) for kind, joint, _ in self.layout
+                       if kind == "euler"]
         self.reaction_specs = {name: self._reaction_spec(name, spec) for name, spec in scene["reactions"].items()}
         self.point_specs = {name: (self._body(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
@@ -358,32 +361,47 @@ class DrakeModel:
         return True
 
     # -- state -------------------------------------------------------------
-    def _set_state(self, t, q, v):
-        """Drake's state in the context at the book's (t, q, v), and `_rotations` there: the dofs' velocities in the
-        body's axes (MuJoCo's and Pinocchio's) are Drake's through it."""
-        positions, dofs = np.zeros(self.nq), np.zeros(self.nv)
-        rotations = np.eye(self.nv)
+    def engine_state(self, t, q, v):
+        """Drake's positions and velocities at the book's state (t, q, v): a ball joint's roll, pitch and yaw of the
+        case's Euler angles, and the body's angular velocity turned into its parent's axes; the loops closed (from
+        the last closing, its branch)."""
+        q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
+        positions, velocities = np.zeros(self.nq), np.zeros(self.nv)
         for kind, joint, idx in self.layout:
             iq, iv = joint.position_start(), joint.velocity_start()
             if kind == "scalar":
-                positions[iq], dofs[iv] = q[idx[0]], v[idx[0]]
+                positions[iq], velocities[iv] = q[idx[0]], v[idx[0]]
                 continue
             w, x, y, z = euler.quaternion(q[idx])
             rotation = RotationMatrix(Quaternion(w, x, y, z))
             positions[iq:iq + 3] = RollPitchYaw(rotation).vector()
-            dofs[iv:iv + 3] = euler.angular_velocity(q[idx], v[idx])
-            rotations[iv:iv + 3, iv:iv + 3] = rotation.matrix()
+            velocities[iv:iv + 3] = rotation.matrix() @ euler.angular_velocity(q[idx], v[idx])
         for joint, (q0, rate, acc) in self.driven:
             positions[joint.position_start()] = q0 + rate * t + 0.5 * acc * t**2
-            dofs[joint.velocity_start()] = rate + acc * t
+            velocities[joint.velocity_start()] = rate + acc * t
         if self.loops.loops:
             positions_of = {joint.name(): q[idx[0]] for _, joint, idx in self.layout}
             rates_of = {joint.name(): v[idx[0]] for _, joint, idx in self.layout}
-            self._closed, dofs = self.loops.close(positions_of, rates_of, self._closed)
+            self._closed, velocities = self.loops.close(positions_of, rates_of, self._closed)
             positions = self._closed
-        self.plant.SetPositions(self.context, positions)
-        self.plant.SetVelocities(self.context, rotations @ dofs)
-        return positions, dofs, rotations
+        return positions, velocities
+
+    def _put(self, positions, velocities):
+        """Drake's state into the context, and `_rotations` at it."""
+        self.plant.SetPositionsAndVelocities(self.context, np.concatenate([positions, velocities]))
+        return self._rotations(positions)
+
+    def _rotations(self, positions):
+        """The map (nv, nv) from the dofs' velocities in the body's axes (MuJoCo's and Pinocchio's: a ball joint's
+        the body's angular velocity in its own axes) to Drake's (a ball joint's in its parent's axes): its
+        rotation, from Drake's roll, pitch and yaw, on each ball joint's dofs; 1 on the others'.  None (the
+        identity) in a scene without a ball joint."""
+        if not self._balls:  # hinges and slides: the same dofs (None: no products with an identity)
+            return None
+        rotations = np.eye(self.nv)
+        for iq, iv in self._balls:
+            rotations[iv:iv + 3, iv:iv + 3] = RollPitchYaw(positions[iq:iq + 3]).ToRotationMatrix().matrix()
+        return rotations
 
     def _applied_at(self, t, q, v):
         """The applied generalized forces at the case's state, every dof's (nv,), in the body's axes."""
@@ -396,11 +414,16 @@ class DrakeModel:
         accelerations alike (a ball: d(R w)/dt = R w' + w_parent x w_parent = R w')."""
         forces = MultibodyForces(self.plant) if external is None else external
         self.plant.CalcForceElementsContribution(self.context, forces)
+        if rotations is None:
+            return self.plant.CalcInverseDynamics(self.context, acc, forces)
         return rotations.T @ self.plant.CalcInverseDynamics(self.context, rotations @ acc, forces)
 
     def _mass(self, rotations):
         """The mass matrix in the dofs of the body's axes, with the armature that Drake drops."""
-        return rotations.T @ self.plant.CalcMassMatrix(self.context) @ rotations + np.diag(self.armature)
+        mass = self.plant.CalcMassMatrix(self.context)
+        if rotations is not None:
+            mass = rotations.T @ mass @ rotations
+        return mass + self._armature if self.armature.any() else mass
 
     def _passive(self, positions):
         """The springs' generalised forces, in the dofs (Drake's dampers act in its inverse dynamics)."""
@@ -409,30 +432,39 @@ class DrakeModel:
             force[iv] -= k * (positions[iq] - rest)
         return force
 
-    def _dynamics(self, t, q, v):
-        """(positions, dofs' velocities, rotations, dofs' accelerations, the inverse-dynamics forces that give them,
-        loop forces) at the book's state; the last state's remembered (an integrator asks for the accelerations, then
-        the drive power)."""
-        key = (t, np.asarray(q, dtype=float).tobytes(), np.asarray(v, dtype=float).tobytes())
-        if key == self._last[0]:
-            return self._last[1]
-        q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
-        positions, dofs, rotations = self._set_state(t, q, v)
-        applied = self._applied_at(t, q, v) if self.varying else self.applied
+    def engine_dynamics(self, positions, velocities, applied):
+        """Drake alone on its own state under the applied generalised forces `applied` (nv, the body's axes): every
+        dof's acceleration in the body's axes, the inverse-dynamics forces that give them (M acc + bias - dampers,
+        the loops' forces in it), and the loops' forces (None without loops)."""
+        rotations = self._put(positions, velocities)
         force = applied + self._passive(positions)
         mass = self._mass(rotations)
-        loop_forces = None
         if self.loops.loops:
             acc, loop_forces = self.loops.constrained(mass, force - self._inverse(rotations, np.zeros(self.nv)))
-            tau = force + self.loops.generalised(loop_forces)  # what the tree's inverse dynamics must match
-        else:
-            acc = self._driven_acc.copy()
-            tau = self._inverse(rotations, acc)
-            if len(self.free):
-                columns = mass[:, self.free]
-                acc[self.free] = linear_solution(columns[self.free], force[self.free] - tau[self.free])
-                tau = tau + columns @ acc[self.free]
-        self._last = key, (positions, dofs, rotations, acc, tau, loop_forces)
+            return acc, force + self.loops.generalised(loop_forces), loop_forces
+        acc = self._driven_acc.copy()
+        tau = self._inverse(rotations, acc)
+        if len(self.free):
+            columns = mass[:, self.free]
+            acc[self.free] = linear_solution(columns[self.free], force[self.free] - tau[self.free])
+            tau = tau + columns @ acc[self.free]
+        return acc, tau, None
+
+    def _dynamics(self, t, q, v):
+        """(positions, dofs' velocities in the body's axes, rotations, dofs' accelerations, inverse-dynamics forces,
+        loop forces) at the book's state; the last state's remembered (an integrator asks for the accelerations,
+        then the drive power; a run's outputs for the reactions, then the energy)."""
+        key = (t, np.asarray(q, dtype=float).tobytes(), np.asarray(v, dtype=float).tobytes())
+        if key != self._last[0]:
+            positions, velocities = self.engine_state(t, q, v)
+            applied = self._applied_at(t, np.asarray(q), np.asarray(v)) if self.varying else self.applied
+            acc, tau, loop_forces = self.engine_dynamics(positions, velocities, applied)
+            rotations = self._rotations(positions)
+            dofs = velocities if rotations is None else rotations.T @ velocities
+            self._last = key, (positions, dofs, rotations, acc, tau, loop_forces)
+        else:  # the context back at this state: another method may have moved it
+            positions, dofs, rotations = self._last[1][:3]
+            self._put(positions, dofs if rotations is None else rotations @ dofs)
         return self._last[1]
 
     # -- model interface ---------------------------------------------------
@@ -458,8 +490,7 @@ class DrakeModel:
     def mass_matrix(self, t, q, v):
         """The mass matrix in the case's coordinates (engines.scene.case_mass_matrix); with loops N^T M N, N every
         dof's rate per independent rate."""
-        rotations = self._set_state(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))[2]
-        mass = self._mass(rotations)
+        mass = self._mass(self._put(*self.engine_state(t, q, v)))
         if self.loops.loops:
             rates = self.loops.rates([joint.velocity_start() for _, joint, _ in self.layout])
             return rates.T @ mass @ rates
@@ -475,7 +506,9 @@ class DrakeModel:
     def energy(self, t, q, v):
         """Kinetic and gravity energy (Drake's, zero at the world origin), the springs' k x^2 / 2 and the
         armature's a v^2 / 2 (MuJoCo counts it in its kinetic energy)."""
-        positions, dofs, _ = self._set_state(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
+        positions, velocities = self.engine_state(t, q, v)
+        rotations = self._put(positions, velocities)
+        dofs = velocities if rotations is None else rotations.T @ velocities
         springs = sum(0.5 * k * (positions[iq] - rest) ** 2 for iq, _, k, rest in self.springs)
         return float(self.plant.CalcKineticEnergy(self.context) + self.plant.CalcPotentialEnergy(self.context)
                      + springs + 0.5 * self.armature @ dofs**2)
@@ -496,7 +529,7 @@ class DrakeModel:
         carries, from Drake's bodies' accelerations, gravity and the loops' forces (`_cut`), in the body's axes or
         the world's; a loop's force on its body1 at its anchor (world)."""
         _, _, rotations, acc, _, loop_forces = self._dynamics(t, q, v)
-        kinematics = self._kinematics(rotations @ acc)
+        kinematics = self._kinematics(acc if rotations is None else rotations @ acc)
         out = {}
         for name, (body, axis, frame, quantity) in self.reaction_specs.items():
             if body == "loop":
@@ -563,7 +596,7 @@ class DrakeModel:
         """The named bodies' kinematics, in their own or the world frame: the absolute acceleration of the body's
         origin or of its centre of mass, its angular velocity or angular acceleration."""
         _, _, rotations, acc, _, _ = self._dynamics(t, q, v)
-        kinematics = self._kinematics(rotations @ acc)
+        kinematics = self._kinematics(acc if rotations is None else rotations @ acc)
         out = {}
         for name, (body, frame, kind) in self.point_specs.items():
             rotation, _, w, alpha, a_origin = kinematics[int(body.index())]

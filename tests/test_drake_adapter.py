@@ -293,3 +293,16 @@ def test_what_drake_drops_otherwise_is_refused(tmp_path, attribute, refused):
     path = scratch(tmp_path, LINK.format("a", "0 0 0", "0 1 0", attribute, 1.0, ""))
     with pytest.raises(Refused, match=f"{path}: .*{refused}"):
         DrakeModel(path, hinge_scene(["a"]))
+
+
+@pytest.mark.parametrize("name", ["double_pendulum", "spinning_top", "spring_pendulum"])
+def test_the_bare_drake_step_gives_the_adapters_accelerations(name):
+    """engines.bench.drake_steps, Drake's engine step on its own state (what dyncheck bench times the adapter
+    against), gives every dof's accelerations that the adapter turns into the case's: the same numbers."""
+    from engines.bench import drake_steps
+    case = dyncheck.load_case(name)
+    model = drake(case)
+    states = case.sample_states()[:5]
+    bare = drake_steps(model, [model.engine_state(*state) for state in states])
+    for (t, q, v), (acc, _, _) in zip(states, bare):
+        np.testing.assert_array_equal(model._book_accelerations(q, v, acc), model.accelerations(t, q, v))
