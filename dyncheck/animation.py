@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
+from dyncheck import measured
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.results import Frames, heading
 from dyncheck.simulate import fastest_frequency
@@ -382,7 +383,7 @@ def caption(result, case, count, interval):
     if spec.get("graph"):
         parts.append(f"Right: {spec['graph']['title']}, growing with the frames; dashed, its largest value.")
     if spec.get("caption"):
-        parts.append(" ".join(case.prose(spec["caption"], "animation.caption").split()))
+        parts.append(" ".join(measured.fill(result, case.prose(spec["caption"], "animation.caption")).split()))
     return " ".join(parts)
 
 

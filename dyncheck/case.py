@@ -17,7 +17,7 @@ from types import MappingProxyType
 import numpy as np
 from scipy.stats import qmc
 
-from dyncheck import derived, expressions, isolation, schema
+from dyncheck import derived, expressions, isolation, measured, schema, words
 from dyncheck.messages import suggest
 from dyncheck.results import overrides_in_words
 
@@ -88,11 +88,6 @@ class AppliedForce:
 
 
 PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
-# A number's format spec in prose (Python's: [[fill]align][sign][z][#][0][width][grouping][.precision][type]), its
-# width and precision of at most 3 digits each: a double holds 17 significant digits and a page's line is under
-# 200 characters, so 999 already writes nothing but padding and noise, while format() would build whatever is
-# asked (width 99999999999: a MemoryError; precision 999999999: a 1 GB string, 73 s).
-FORMAT_SPEC = re.compile(r"(?:.?[<>=^])?[-+ ]?z?#?0?(?P<width>[0-9]*)[,_]?(?:\.(?P<precision>[0-9]+))?[eEfFgGn%]?")
 PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # an override given as text
 
 
@@ -210,6 +205,7 @@ class Case:
         schema.check_values(self.spec, self.origin, self.value)
         for field, text in prose_fields(self.spec):  # a formula in the prose that does not evaluate: at load
             self.prose(text, field)
+        measured.check(self)  # and a measured number that could not be
         q0, v0, _ = self.initial
         euler = self.spec["scene"].get("euler", {}).get("joint")
         for joint, force in self.scene["applied"].items():  # a law of the state that does not evaluate: at load
@@ -325,8 +321,7 @@ class Case:
         def number(match):
             expression, _, spec = match[1].rpartition(":") if ":" in match[1] else (match[1], "", ".3g")
             value = self.value(expression.strip(), field)
-            form = FORMAT_SPEC.fullmatch(spec.strip())
-            if not form or len(form["width"]) > 3 or len(form["precision"] or "") > 3:
+            if not words.is_format(spec.strip()):
                 raise ValueError(f"{self.origin}: {field}: cannot write {match[0]!r}: {spec.strip()!r} is not a format "
                                  "spec of a number with a width and a precision of at most 3 digits each")
             try:
@@ -540,7 +535,7 @@ class Case:
         model = guarded(f"{what}: {name}({{params}})", lambda: cls(self.params) if own is None else
                         isolation.guarded_call(own.label, name, own.budget, cls, self.params))
         if own is not None and not isinstance(model, derived.Equations):  # a class of the case's own code
-            model = isolation.Guarded(model, own.label, own.budget)
+            model = derived.Checked(isolation.Guarded(model, own.label, own.budget), len(self.coords))
         coords, reactions = getattr(model, "coords", None), getattr(model, "reaction_names", None)
         if coords is None or tuple(coords) != self.coords:
             raise ValueError(f"{what}: {name}.coords is {coords!r}, but case.toml's coords are {list(self.coords)}")

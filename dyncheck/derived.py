@@ -98,6 +98,38 @@ class Equations:
         return real(self._module.forces(t, q, v, self._p), self._vector, "forces(t, q, v, p)")
 
 
+class Checked:
+    """A class of a case's own code, each answer checked as a plain module's are (`real`): a complex q'' (numpy would
+    drop even a nonzero imaginary part, with only a warning), a string or a wrong shape fails its row, naming the
+    method, instead of being read as a number.  Its methods that this does not check (printed_rows, dependent) and
+    its attributes are the class's own."""
+
+    def __init__(self, model, n):
+        self._model = model
+        shapes = {"accelerations": (n,), "forces": (n,), "mass_matrix": (n, n), "energy": (), "drive_power": ()}
+        for name, shape in shapes.items():
+            if callable(getattr(model, name, None)):
+                setattr(self, name, self._checking(getattr(model, name), name, shape))
+        for name, shape in (("reactions", ()), ("point_accelerations", (3,))):
+            if callable(getattr(model, name, None)):
+                setattr(self, name, self._checking_each(getattr(model, name), name, shape))
+
+    @staticmethod
+    def _checking(method, name, shape):
+        if shape == ():
+            return lambda t, q, v: float(real(method(t, q, v), shape, f"{name}(t, q, v)"))
+        return lambda t, q, v: real(method(t, q, v), shape, f"{name}(t, q, v)")
+
+    @staticmethod
+    def _checking_each(method, name, shape):
+        as_value = float if shape == () else lambda array: array
+        return lambda t, q, v: {key: as_value(real(value, shape, f"{name}(t, q, v)[{key!r}]"))
+                                for key, value in dict(method(t, q, v)).items()}
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+
 def module_values(module, file):
     """COORDS and PARAMS of a plain module, checked: ValueError naming the file and the name."""
     coords, params = getattr(module, "COORDS", None), getattr(module, "PARAMS", None)

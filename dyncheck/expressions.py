@@ -17,7 +17,7 @@ import numpy as np
 
 from dyncheck.messages import suggest
 
-FUNCTIONS = ("sin", "cos", "tan", "arctan", "sqrt", "abs", "ceil", "max", "min")  # numpy's, by these names
+FUNCTIONS = ("sin", "cos", "tan", "arctan", "sqrt", "exp", "abs", "ceil", "max", "min")  # numpy's, by these names
 CALLABLE = FUNCTIONS + ("first",)  # and first(condition), see `namespace`
 # The case files' longest expression has 53 characters and the deepest syntax tree 8 levels (ast's
 # nodes, operators included); these bounds leave room for any formula of a page, and keep the parse
@@ -49,11 +49,15 @@ def namespace(case, run):
     the traced bodies' centre-of-mass coordinates <body>_x, _y, _z, see dyncheck.checks.with_paths),
     t, the parameters, numpy's functions, pi and first(condition); up to the case's `stop` condition,
     if it has one."""
+    return along(case.params, case.spec["report"].get("stop"), run)
+
+
+def along(params, stop, run):
+    """`namespace` of a run at the parameters `params`, cut where the expression `stop` (or None) first holds."""
     t = run.index.to_numpy()
-    names = of_parameters(case.params)
+    names = of_parameters(params)
     names.update({column: run[column].to_numpy() for column in run.columns})
     names["t"] = t
-    stop = case.spec["report"].get("stop")
     if stop:  # the book's program stops here: cut every series after the first time it holds
         hit = evaluate(stop, names)
         end = int(np.argmax(hit)) + 1 if np.any(hit) else len(t)

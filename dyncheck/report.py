@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck import animation, expressions, stability, student_page, typeset, vibration_page, work_precision
+from dyncheck import (animation, expressions, measured, stability, student_page, typeset, vibration_page,
+                      work_precision)
 from dyncheck.case import CASES_DIR, Case
 from dyncheck.expressions import evaluate, namespace
 from dyncheck.messages import ENGINE_NAMES, plural, statuses_in_words
@@ -493,8 +494,9 @@ def values_table(case, spaces):
 # -- pages --------------------------------------------------------------------------
 
 def size(error, spec=".3g"):
-    """A finding's largest error, or why there is none (its rows not applicable under overrides)."""
-    return "not measured with these parameters" if error is None else format(error, spec)
+    """A finding's largest error, or why there is none (its rows compare with what the book printed, not applicable
+    under overrides)."""
+    return "none: not applicable with these parameters" if error is None else format(error, spec)
 
 
 def worst_engine_error(rows):
@@ -727,12 +729,13 @@ def write_case_page(result, case, tmp, animations=True):
     ]
     if findings:
         lines += ["## Findings: where the book is wrong", ""]
-        for f in findings:
+        for f in (measured.finding(result, f) for f in findings):
             lines += [f"### {f.id}: {f.title}", "",
                       f"*Where:* {f.where}.  *Largest relative error:* {size(f.error)}"
                       f" (quantities {', '.join(f.quantities)}; comparisons: {', '.join(f.sources)};"
                       f" {f.established})."
                       + (f"  {f.effect}" if f.effect else ""), "",
+                      *([f"*Measured in this run:* {f.measured}", ""] if f.measured else []),
                       f"*Localised automatically* (edits of the printed expression searched until one agrees"
                       f" with the engines): {f.localised}.", "", f.explanation, ""]
     vibration_lines, vibration_files = vibration_page.section(result, case, tmp)
@@ -1052,6 +1055,7 @@ def write_errata(tmp, cases):
                       f"- *Quantities:* {', '.join(f['quantity'])}; largest relative error {size(f['error'])}",
                       f"- *How established:* {f['established']}",
                       *([f"- *Effect:* {f['effect']}"] if f["effect"] else []),
+                      *([f"- *Measured in this run:* {f['measured']}"] if f.get("measured") else []),
                       f"- *Localised edit:* {f['localised']}", "",
                       *errata_pairs([pair for pair in c.get("typeset", []) if pair["finding"] == f["id"]]),
                       f["explanation"], ""]

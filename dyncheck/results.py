@@ -12,11 +12,12 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from dyncheck import store
+from dyncheck import measured, store
 
-RESULTS_VERSION = 5  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
+RESULTS_VERSION = 6  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
 # 3: "status" and "counts" at the top and in each case, "reason" in each row, "tool" in run --json;
-# 4: "localisations" in each case, check "equation", sources "derivation" and "tight solution"; 5: check "vibration"
+# 4: "localisations" in each case, check "equation", sources "derivation" and "tight solution"; 5: check "vibration";
+# 6: "measured" in each finding, the listing's run against the exact motion measured under --set
 
 
 @store.register
@@ -162,6 +163,7 @@ class Finding:
     effect: str
     localised: str
     pairs: tuple = ()  # of Pair: the book's expressions or values and the right ones
+    measured: str = ""  # what this run measures of it: the case file's text, its `{~ ...}` written by the pages
 
 
 
@@ -281,11 +283,11 @@ def reason(row):
         return row.detail
     if row.status == Status.INCONCLUSIVE:
         return f"tolerance {row.tolerance:.2e} is above the ceiling {row.ceiling:.0e} of this comparison"
-    measured = inside_or_outside(row) + " the printed range" if row.yes_or_no else \
+    judged = inside_or_outside(row) + " the printed range" if row.yes_or_no else \
         f"error {row.error:.2e} {'>' if row.error > row.tolerance else '<='} tolerance {row.tolerance:.2e}"
     if row.finding:  # a registered error of the book that this row no longer shows
-        return f"registered finding {row.finding} no longer reproduces: {measured}"
-    return measured
+        return f"registered finding {row.finding} no longer reproduces: {judged}"
+    return judged
 
 
 def verdict(rows):
@@ -301,7 +303,7 @@ def status_counts(rows):
 def findings_json(findings):
     return [{"id": f.id, "title": f.title, "quantity": list(f.quantities), "sources": list(f.sources),
              "error": f.error, "explanation": f.explanation, "where": f.where, "established": f.established,
-             "effect": f.effect, "localised": f.localised} for f in findings]
+             "effect": f.effect, "measured": f.measured, "localised": f.localised} for f in findings]
 
 
 def case_json(result):
@@ -311,7 +313,8 @@ def case_json(result):
     return {"case": result.name, "section": result.spec.get("section", ""), "status": verdict(result.rows),
             "counts": status_counts(result.rows), "params": {**params, **result.overrides},
             "overrides": dict(result.overrides), "checks": rows_json(result.rows),
-            "findings": findings_json(result.findings), "localisations": localisations_json(result.localisations)}
+            "findings": findings_json([measured.finding(result, f) for f in result.findings]),
+            "localisations": localisations_json(result.localisations)}
 
 
 def localisations_json(localisations):

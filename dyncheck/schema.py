@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pint
 
-from dyncheck import ceilings, expressions
+from dyncheck import ceilings, expressions, measured, words
 from dyncheck.expressions import evaluate
 from dyncheck.messages import suggest
 
@@ -107,7 +107,12 @@ SCHEMA = ("table", {
     # right: {printed expression's key: the right expression}, checked against the reference (checks.right_sides)
     "findings?": ("list", ("table", {"id": "str", "title": "str", "where": "str", "effect?": "str",
                                      "sources": ("list", "str"), "quantities": ("list", "str"),
-                                     "explanation": "str", "right?": ("map", "str")})),
+                                     "explanation": "str", "measured?": "str", "right?": ("map", "str")})),
+    # numbers measured in the results, for the pages' prose (dyncheck/measured.py checks each kind's keys)
+    "measured?": ("map", ("table", {"kind": ("one of", *measured.KINDS), "of?": "str",
+                                    "run?": ("one of", *measured.RUNS), "against?": ("one of", *measured.RUNS),
+                                    "mode?": "int > 0", "source?": ("one of", "reference", "mujoco", "pinocchio"),
+                                    "check?": "str", "quantity?": "str", "sources?": "str"})),
     # data_checks divides by the formula's value
     "data?": ("list", ("table", {"name": "str", "printed": "expr", "formula": "expr != 0", "where": "str",
                                  "tolerance": "number >= 0", "relation?": ("one of", "equal", "at most")})),
@@ -782,7 +787,8 @@ MEANINGS = {
     "animation.graph.title": "The graph's title.",
     "animation.graph.ylabel": "Its axis's label, with the unit.",
     "animation.graph.ylim": "Its axis's range.  Absent: the data's.",
-    "animation.caption": "What to see in the animation: the caption's last sentences.",
+    "animation.caption": "What to see in the animation: the caption's last sentences, with measured numbers where it "
+                         "says what the runs show (see Measured numbers in prose).",
     "scene": "How the scene files (scene.xml for MuJoCo, scene.urdf for Pinocchio) map to the case.",
     "scene.coords": "Each coordinate of a hinge or slide joint, by name: that joint's name in the scene files.",
     "scene.euler": "A ball joint whose orientation the book writes in Euler angles.",
@@ -853,13 +859,38 @@ MEANINGS = {
     "findings": "Errors of the book that the checks establish: a failing check that a finding covers is "
                 "reported as the finding, not as a failure.",
     "findings[i].id": "A unique id, e.g. 1.8.3-R.",
-    "findings[i].title": "The error in a line.",
+    "findings[i].title": "The error in a line; it may hold measured numbers (see Measured numbers in prose), so "
+                         "that it stays true under `--set`.",
     "findings[i].where": "Where the book has it.",
     "findings[i].effect": "What it changes in the book's results, where the checks cannot compute that.",
     "findings[i].sources": "The comparisons it covers: book, program, or a comparison `X vs Y` with one of them; "
                            "never an engine's or the reference's alone.",
     "findings[i].quantities": "The quantities it covers.",
     "findings[i].explanation": "The evidence: what is printed, what is right, by how much.",
+    "findings[i].measured": "What this run measures of it, in sentences whose numbers are measured in the results "
+                            "(see Measured numbers in prose): shown on the case page and in the errata as this run's, "
+                            "never marked as the book's numbers.",
+    "measured": "Numbers measured in the saved results, by name, for the pages' prose (dyncheck/measured.py; see "
+                "Measured numbers in prose).",
+    "measured.<name>.kind": "What is measured: `span` (max - min of `of` along `run`), `rms` (its root mean square "
+                            "about its mean), `start`, `end`, `change` (its value at the run's first output, last, "
+                            "and the difference), `phase lag` (degrees by which `run`'s oscillation of `of` lags "
+                            "`against`'s, at the latter's dominant frequency over its last two periods), `frequency` "
+                            "(rad/s of the vibration analysis's oscillating mode `mode`), `error` (the error of the "
+                            "row with `check`, `quantity` and `sources`), `program step` (the book's program's time "
+                            "step, s).",
+    "measured.<name>.of": f"What is measured along the run: {ALONG_RUN}.",
+    "measured.<name>.run": "The run, named as the rows name it: `program` (the book's program), `book equations, "
+                           "same integrator` (the book's equations stepped as its program steps them, with the "
+                           "drives' work), `tight reference` (the exact motion), `reference`, `book`, `mujoco`, "
+                           "`pinocchio`.",
+    "measured.<name>.against": "The run a `phase lag` is taken against (named as `run`).",
+    "measured.<name>.mode": "The oscillating mode of a `frequency`, 1 the slowest.",
+    "measured.<name>.source": "Whose modes a `frequency` is: reference, mujoco or pinocchio.  Absent: reference.",
+    "measured.<name>.check": "The check of an `error`'s row.",
+    "measured.<name>.quantity": "The quantity of an `error`'s row.",
+    "measured.<name>.sources": "The comparison of an `error`'s row, as the pages write it: `program vs tight "
+                               "reference`.",
     "findings[i].right": "The right expression of a printed one the search of edits does not find, by its key in "
                          "the book's module's PRINTED, in that module's symbols; the run checks it against the "
                          "reference at the random states, and the errata typeset it beside the printed one.",
@@ -883,8 +914,9 @@ MEANINGS = {
     "course.intro": "The page's opening paragraph: what the example is and what it finds (Markdown, `$` maths).",
     "course.steps": "The steps, in the book's order.",
     "course.steps[i].title": "The step's heading.",
-    "course.steps[i].text": "What the step does, in plain words, with inline `$...$` maths and `{= expression}` "
-                            "numbers (see Numbers in prose).",
+    "course.steps[i].text": "What the step does, in plain words, with inline `$...$` maths, `{= expression}` "
+                            "numbers (see Numbers in prose) and `{~ expression}` numbers measured in the results "
+                            "(see Measured numbers in prose).",
     "course.steps[i].show": "The results the step typesets, each with its check.",
     "course.steps[i].show[i].expression": "The expression the code evaluates: `book:KEY` (the derivation's "
                                           "Book.PRINTED), `program:KEY` (Program.PRINTED), `frames:KEY` (the "
@@ -901,7 +933,8 @@ MEANINGS = {
     "course.steps[i].figures": "Figures of the case page shown in this step, each with its caption.",
     "course.steps[i].figures[i].figure": "The figure's kind: `figures/<case>_<figure>.png` of the case page "
                                          "(scene, coordinates, program, modes, ...).",
-    "course.steps[i].figures[i].caption": "What it shows and what to see in it, in plain words.",
+    "course.steps[i].figures[i].caption": "What it shows and what to see in it, in plain words; what it shows of "
+                                          "the runs in measured numbers (see Measured numbers in prose).",
     "course.steps[i].vibration": "Show the vibration analysis's equilibrium, frequencies and stability here.",
     "vibration.why": "What is linearised, and why about this state.",
     "vibration.overrides": "Parameters changed for the linearised scene, e.g. the arm at rest so that the disk's spin "
@@ -1075,8 +1108,28 @@ def markdown():
               "of the run, so that the page stays true under `--set`.  For example `sqrt(k/m) = "
               "{= sqrt(k/m) :.0f} rad/s` reads `sqrt(k/m) = 100 rad/s` at the book's k = 2000 N/m and `50 rad/s` "
               "at k = 500.  Every such number is evaluated on load (a bad one is refused, exit 2).  A number "
-              "measured at the book's numbers belongs in a finding's text, which a page under overrides marks "
-              "as the case file's account of the book's numbers.", "",
+              "measured in the results is written `{~ ...}` (see Measured numbers in prose); one measured once, "
+              "at the book's numbers, belongs only in a finding's `explanation` or `effect`, which a page under "
+              "overrides marks as the case file's account of the book's numbers.", "",
+              "## Measured numbers in prose", "",
+              "A number measured in the results, not computed from the parameters, is named in `[measured]` and "
+              "written `{~ expression}` or `{~ expression :format}`: an expression of those names and the "
+              "parameters, with a number's format spec (default `.3g`) or the name of a rule of `dyncheck/words.py` "
+              "that chooses the words from the number, such as " + "; ".join(
+                  f"`{name}`: " + ", ".join(f"{x:g} \"{rule(x)}\"" for x in words.EXAMPLES[name])
+                  for name, rule in words.WORDS.items())
+              + ".  The pages measure them from the saved results when they are rendered; a paragraph that needs "
+              "one the run could not take (its run blew up, the book's program did not finish) says so instead, "
+              "and why.  They may stand in the texts a page renders beside the results: the course's texts and "
+              "figure captions, `animation.caption`, a finding's `title` and `measured`.  On load each `{~ ...}` "
+              "must evaluate and each measure have the keys of its kind.  For example:", "",
+              "```toml", "[measured]", "l_listing = { kind = \"span\", of = \"l\", run = \"program\" }",
+              "l_exact = { kind = \"span\", of = \"l\", run = \"tight reference\" }",
+              "psi_lag = { kind = \"phase lag\", of = \"psi\", run = \"program\", against = \"tight reference\" }",
+              "```", "",
+              "with `The listing's l spans {~ l_listing :.3g} m, {~ l_listing / l_exact :ratio} the exact motion's; "
+              "its swing {~ psi_lag :lag} the exact one.`, which reads \"... 0.0427 m, 14 % larger than the exact "
+              "motion's; its swing lags 85 degrees behind the exact one.\" at the book's numbers.", "",
               "## Expressions", "",
               "An expression is text in quotes, parsed and evaluated by `dyncheck.expressions` (never by Python's "
               "eval).  It may hold only numbers, names, unary + and -, the operators + - * / **, one comparison "

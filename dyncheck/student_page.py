@@ -13,7 +13,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from dyncheck import style, typeset
+from dyncheck import measured, style, typeset, words
 from dyncheck.messages import ENGINE_NAMES
 from dyncheck.results import Status, heading
 from dyncheck.vibration_page import VERDICT_WORDS, equilibrium_value
@@ -139,15 +139,14 @@ def other_side(row):
 
 
 def agreement(rows):
-    """"MuJoCo to 3e-15 and Pinocchio exactly": the worst error against each engine (or other side)."""
-    worst = {}
+    """"agrees with MuJoCo to 3e-15 and Pinocchio exactly": the worst error against each engine (or other side),
+    in the words dyncheck.words chooses from it: it agrees only where every row is within its tolerance ("differs
+    from the exact motion by 95 %" where one is not)."""
+    sides = {}
     for r in rows:
-        worst[other_side(r)] = max(worst.get(other_side(r), 0.0), r.error)
-    return " and ".join(f"{words} exactly" if error == 0 else f"{words} to {error:.0e}" for words, error in worst.items())
-
-
-def _percent(error):
-    return f"{100 * error:.0f} %" if error >= 0.01 else f"{error:.1e}"
+        sides.setdefault(other_side(r), []).append(r)
+    return words.agreement([(whom, max(r.error for r in side), all(r.tolerance is not None and r.error <= r.tolerance
+                                                                    for r in side)) for whom, side in sides.items()])
 
 
 def _sentence(*parts):
@@ -167,15 +166,15 @@ def check_sentence(shown, rows):
     subject = SUBJECT_WORDS[shown.source]
     wrong = [r for r in mine if r.status == Status.FINDING]
     if not wrong:
-        return _sentence(head, subject, f"agrees with {agreement(mine)}", where_sampled(mine))
+        return _sentence(head, subject, agreement(mine), where_sampled(mine))
     ids = sorted({r.finding for r in wrong})
     worst = max(wrong, key=lambda r: r.error)
     right = [r for r in judged if r.sources[0] == "reference" and r.sources[1].startswith(tuple(ENGINE_NAMES))]
-    return _sentence(head, subject, f"is off by {_percent(worst.error)} of its largest value against",
+    return _sentence(head, subject, f"is off by {words.share(worst.error)} of its largest value against",
                      other_side(worst), where_sampled([worst]),
                      "(" + ", ".join(f"finding [{i}](errata.md#{i.replace('.', '').lower()})" for i in ids) + ")"
                      + (";" if right else ""),
-                     right and f"the right one agrees with {agreement(right)}", right and where_sampled(right))
+                     right and f"the right one {agreement(right)}", right and where_sampled(right))
 
 
 # -- the page -------------------------------------------------------------------------------
@@ -206,7 +205,7 @@ def maths(case, result, shown):
 
 
 def step_lines(number, step, case, result, tmp):
-    lines = [f"## {number}. {step.title}", "", *paragraphs(step.text)]
+    lines = [f"## {number}. {step.title}", "", *paragraphs(measured.fill(result, step.text))]
     for shown in step.shown:
         if shown.expression:
             lines += maths(case, result, shown)
@@ -219,7 +218,7 @@ def step_lines(number, step, case, result, tmp):
         drawn = [path for path in (f"figures/{case.name}_{figure}.png", f"figures/{case.name}_{figure}.gif")
                  if (tmp / path).is_file()]
         if drawn:
-            lines += style.embed(drawn[0], f"{case.title}: {figure}", caption)
+            lines += style.embed(drawn[0], f"{case.title}: {figure}", " ".join(measured.fill(result, caption).split()))
         elif figure == "animation":  # `dyncheck report --no-animations`, or results without frames
             lines += ["(The animation is not in this report: the case page says why.)", ""]
         elif case.overrides:  # a --set may leave a figure undrawn: a run that ran away, no oscillating mode, ...
@@ -253,7 +252,7 @@ def vibration_lines(case, result):
             f"${typeset.latex(c + '_rate', symbols)} = {equilibrium_value(x)}$ {units[c]}/s" for c, x in moving))
         + ".", ""]
     ref = vib.modes["reference"]
-    table = ["| mode | frequency [rad/s] | [Hz] | agrees with |", "|---|---|---|---|"]
+    table = ["| mode | frequency [rad/s] | [Hz] | check |", "|---|---|---|---|"]
     for k, i in enumerate(ref.oscillating()):
         rows = [r for r in vib.rows if r.quantity == f"frequency mode {k + 1}" and r.sources[0] == "reference"]
         omega = ref.eigenvalues[i].imag
@@ -276,8 +275,10 @@ def write(result, case, tmp):
              f"The book's procedure for this example, one step at a time.  Every formula below is the one the"
              f" computer evaluates; next to it, how far it is from what two independent physics engines, MuJoCo and"
              f" Pinocchio, compute for the same system (each difference relative to the largest value of the quantity"
-             f" over the states tried).  The full validation is on [the case page]({case.name}.md).",
-             "", *paragraphs(spec.intro)]
+             f" over the states tried).  The full validation is on [the case page]({case.name}.md).", "",
+             *([f"This page is for other parameters than the book's: {case.overrides_text()}.  Its numbers and"
+                " checks are this run's, at those parameters.", ""] if case.overrides else []),
+             *paragraphs(measured.fill(result, spec.intro))]
     for number, step in enumerate(spec.steps, 1):
         lines += step_lines(number, step, case, result, tmp)
     page = page_name(case)

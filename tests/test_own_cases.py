@@ -3,7 +3,9 @@ work (exit 2, one line naming the file and what is wrong) or becomes a row that 
 silently and none is a traceback."""
 
 import json
+import shutil
 import time
+from pathlib import Path
 
 import pytest
 
@@ -174,6 +176,25 @@ def test_equations_that_return_complex_numbers_after_the_start_fail_their_rows(t
     out = capsys.readouterr().out
     assert "pointwise every quantity (derivation vs mujoco): fail: reference: accelerations at random state 0: " \
            "ValueError: accelerations(t, q, v, p) returned array([" in out and "complex128" in out, out
+
+
+def test_a_class_of_the_case_s_own_that_returns_complex_numbers_fails_its_rows(tmp_path, capsys):
+    """The book's rotating pendulum as a class of the case's own folder (derivation = "own.py"), its Reference's q''
+    complex away from the start: its rows fail naming the method and the dtype, as a plain module's do (numpy would
+    drop the imaginary part with only a warning, and every row pass)."""
+    root = Path(__file__).resolve().parent.parent
+    folder = tmp_path / "cases" / "rotating_pendulum"
+    shutil.copytree(root / "cases" / "rotating_pendulum", folder, ignore=shutil.ignore_patterns("__pycache__"))
+    (folder / "own.py").write_text((root / "reference" / "rotating_pendulum.py").read_text() + """
+_real = Reference.accelerations
+Reference.accelerations = lambda self, t, q, v: _real(self, t, q, v) + (0 if t == 0 else 1e-3j)
+""")
+    toml = folder / "case.toml"
+    toml.write_text(toml.read_text().replace('derivation = "reference.rotating_pendulum"', 'derivation = "own.py"', 1))
+    assert main(["run", "--cases", str(folder.parent)]) == 1
+    out = capsys.readouterr().out
+    assert "pointwise every quantity (reference vs mujoco): fail: reference: accelerations at random state 0: " \
+           "ValueError: accelerations(t, q, v) returned array([" in out and "complex128" in out, out
 
 
 @pytest.mark.parametrize("toml, message", [
