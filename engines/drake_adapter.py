@@ -27,12 +27,13 @@ import logging
 import xml.etree.ElementTree as ET
 
 import numpy as np
+from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
 from pydrake.common.eigen_geometry import Quaternion
-from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+from pydrake.math import RigidTransform, RollPitchYaw, RollPitchYaw_, RotationMatrix
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import (BallRpyJoint, BodyIndex, JacobianWrtVariable, MultibodyForces, PrismaticJoint,
-                                    RevoluteJoint, RotationalInertia, SpatialInertia, WeldJoint)
+from pydrake.multibody.tree import (BallRpyJoint, BodyIndex, JacobianWrtVariable, MultibodyForces, MultibodyForces_,
+                                    PrismaticJoint, RevoluteJoint, RotationalInertia, SpatialInertia, WeldJoint)
 
 from engines import euler, scene as scene_rules
 from engines.linalg import linear_solution
@@ -55,6 +56,17 @@ IGNORED = {
     "The attribute 'stiffness' found in a 'joint'": "corrected: this adapter applies the spring",
     "The attribute 'springref' found in a 'joint'": "corrected: this adapter applies the spring",
 }
+
+# The rounding error of Drake's AutoDiffXd derivatives, relative to their largest entry.  Forward-mode automatic
+# differentiation carries each derivative through the same operations as the value, exactly but for rounding: each
+# entry sums, over the chain's few bodies, products of poses, inertias, velocities and accelerations, a few dozen
+# operations rounding by eps of a term that cancellation (gyroscopic against gravity terms) may make a few times the
+# largest entry; 1e3 eps allows some ten times that.  Where the entries are far below the terms they sum (a
+# degenerate equilibrium) their rounding is measured instead (`DrakeModel._rounding`), NOISE_MARGIN times the
+# largest noise over a few ulps, the sample's allowance for missing the worst.
+EPS = np.finfo(float).eps
+ROUNDING = 1e3 * EPS
+NOISE_MARGIN = 10.0
 
 
 class Refused(ValueError):
@@ -123,6 +135,7 @@ class DrakeModel:
         self._inertias = {}  # (mass, com, inertia about the com), body frame, of each body: `_body_inertia`
         self._last = None, None  # the last state asked and its dynamics (`_dynamics`)
         self._written = set()  # the bodies whose inertia `_write` changed
+        self._ad = None  # Drake's AutoDiffXd plant and its context, made at the first linearisation (`_autodiff`)
         for location, value in writes:
             self._write(location, value)
         for index in self._written:  # once all are written: Drake refuses an inertia no body can have
@@ -613,7 +626,74 @@ class DrakeModel:
         return out
 
     def linearisation(self, t, q, v):
-        raise Refused(f"{self.path}: Drake's linearisation is not wired into this adapter yet (issue 39, phase 2)")
+        """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): Drake's inverse dynamics
+        differentiated by automatic differentiation (its AutoDiffXd plant, `_inverse_gradient`) at the state's
+        accelerations, the prescribed joints' imposed, with the springs' -k on their dofs, in the case's coordinates
+        (engines.scene.case_linearisation, which differences applied laws of the state).  Its error: the rounding
+        of Drake's arithmetic (`_rounding`).  Refused for a scene with loops, as the other adapters refuse it."""
+        if self.loops.loops:
+            raise Refused(f"{self.path}: linearisation of a scene with closed loops "
+                          f"({', '.join(loop.name for loop in self.loops.loops)}) is not supported: its coordinates' "
+                          "equations hold the loops' constraint forces, which Drake's inverse dynamics does not give")
+        positions, dofs, rotations, acc = self._dynamics(t, q, v)[:4]
+        mass = self._mass(rotations)  # `mass_matrix`'s to the bit
+        tangent = self.plant.MakeVelocityToQDotMap(self.context).toarray()  # Drake's q' per Drake's dof velocity
+        if rotations is not None:
+            tangent = tangent @ rotations  # per the body's axes' dofs: a turn dtheta of the body is R dtheta
+        at = lambda step_q, step_v: self._inverse_gradient(positions + tangent @ step_q, dofs + step_v, acc, tangent)
+        dtau_dq, dtau_dv = at(np.zeros(self.nv), np.zeros(self.nv))
+        force_q, force_v = -dtau_dq, -dtau_dv  # Drake's dampers act in its inverse dynamics: they are in force_v
+        for _, iv, k, _ in self.springs:
+            force_q[iv, iv] -= k
+        error = self._rounding(at, (dtau_dq, dtau_dv), dofs)
+        error += EPS * max((abs(k) for _, _, k, _ in self.springs), default=0.0)  # the springs' sums, half an ulp
+        layout = [(kind, joint.velocity_start(), idx) for kind, joint, idx in self.layout]
+        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self._book_accelerations(q, v, acc), mass,
+                                              force_q, force_v, error, "Drake CalcInverseDynamics (AutoDiffXd)")
+
+    def _inverse_gradient(self, positions, dofs, acc, tangent):
+        """d(Drake's inverse dynamics, in the body's axes' dofs)/d(dof positions, dof velocities) (nv, nv each) at
+        Drake's positions, the dofs' velocities and accelerations in the body's axes (as `_inverse`): Drake's
+        AutoDiffXd plant seeded with positions + tangent dx (a ball's body turned by dx in its own axes) and
+        velocities dofs + dv.  A ball's Drake velocity and acceleration are R(rpy) of the body's, R of the AutoDiff
+        angles (so a turn at fixed body-axes velocity turns them), and its forces R^T of Drake's."""
+        plant, context = self._autodiff()
+        nv = self.nv
+        seeds = np.eye(2 * nv)
+        q_ad = np.array([AutoDiffXd(value, np.concatenate([row, np.zeros(nv)])) for value, row in zip(positions, tangent)])
+        v_ad = np.array([AutoDiffXd(value, seed) for value, seed in zip(dofs, seeds[nv:])])
+        vdot = acc.astype(object)
+        turns = [(iv, RollPitchYaw_[AutoDiffXd](q_ad[iq:iq + 3]).ToRotationMatrix().matrix()) for iq, iv in self._balls]
+        for iv, rotation in turns:
+            v_ad[iv:iv + 3], vdot[iv:iv + 3] = rotation @ v_ad[iv:iv + 3], rotation @ vdot[iv:iv + 3]
+        plant.SetPositions(context, q_ad)
+        plant.SetVelocities(context, v_ad)
+        forces = MultibodyForces_[AutoDiffXd](plant)
+        plant.CalcForceElementsContribution(context, forces)
+        tau = plant.CalcInverseDynamics(context, vdot, forces)
+        for iv, rotation in turns:
+            tau[iv:iv + 3] = rotation.T @ tau[iv:iv + 3]
+        gradient = ExtractGradient(tau)
+        return gradient[:, :nv], gradient[:, nv:]
+
+    def _autodiff(self):
+        """Drake's AutoDiffXd copy of the plant and a context of it with this model's parameters (the bindings'
+        inertias, poses and dampers) and gravity."""
+        if self._ad is None:
+            plant = self.plant.ToAutoDiffXd()
+            self._ad = plant, plant.CreateDefaultContext()
+        plant, context = self._ad
+        context.SetTimeStateAndParametersFrom(self.context)
+        plant.mutable_gravity_field().set_gravity_vector(self.gravity)
+        return plant, context
+
+    def _rounding(self, at, derivatives, dofs):
+        """The rounding error of Drake's derivatives `derivatives` (`at(0, 0)`): ROUNDING of their largest entry,
+        or, where they are far below the terms they sum, NOISE_MARGIN times their noise as measured over a few ulps
+        of each dof (engines.scene.rounding_noise, as Pinocchio's adapter measures its own; at the rotating
+        pendulum's degenerate equilibrium under g = 0 the noise is 5e-18 and Drake's A 4e-18 off MuJoCo's)."""
+        largest = max(float(np.max(np.abs(d), initial=0.0)) for d in derivatives)
+        return max(ROUNDING * largest, NOISE_MARGIN * scene_rules.rounding_noise(at, derivatives, dofs))
 
 
 class DrakeLoops:

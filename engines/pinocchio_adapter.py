@@ -511,9 +511,11 @@ class PinocchioModel:
         # RNEA's rounding is of RNEA's own entries: a stiff spring's -k, added here in one rounding, would make it
         # 1e3 eps of k on every entry (k = 4929 N/m on a spring pendulum's length row put 2e-6 on its angle's row,
         # whose entries are about 10, and its mode rows were inconclusive); or, where its entries are far below the
-        # terms they sum, its noise as measured (`_rounding_noise`)
+        # terms they sum, its noise as measured (engines.scene.rounding_noise)
         error = max(ROUNDING * max(np.max(np.abs(dtau_dq)), np.max(np.abs(dtau_dv))),
-                    NOISE_MARGIN * self._rounding_noise(derivatives, config, velocity, (dtau_dq, dtau_dv)))
+                    NOISE_MARGIN * scene_rules.rounding_noise(
+                        lambda step_q, step_v: derivatives(pin.integrate(self.m, config, step_q), velocity + step_v),
+                        (dtau_dq, dtau_dv), velocity))
         force_q, force_v = -dtau_dq, -dtau_dv
         mass = pin.crba(self.m, self.d, config)[self._whole]  # `mass_matrix`'s to the bit (RNEA's rounds otherwise)
         for _, iv, k, _, damping in self.passive:
@@ -525,23 +527,6 @@ class PinocchioModel:
         return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
                                               mass, force_q, force_v, error,
                                               "Pinocchio computeRNEADerivatives (analytic)")
-
-    def _rounding_noise(self, derivatives, config, velocity, at):
-        """The largest second difference of RNEA's derivatives (`derivatives(config, velocity)`, which are `at` here)
-        over 1 to 3 ulps of each dof's position and velocity, in which their slope cancels: their rounding as
-        measured.  At a degenerate equilibrium (a pendulum on a turning disk under g = 0, at psi = -pi/2) the
-        entries are 4e-11 of the terms they sum, 1e3 eps of them 8e-24, and the measured noise 1.4e-17, against
-        an error of 4e-17 (Pinocchio's A beside the derivation's and MuJoCo's)."""
-        noise = 0.0
-        for k in (1, 2, 3):
-            for j in range(self.m.nv):
-                step = np.zeros(self.m.nv)
-                step[j] = k * EPS
-                for moved in ((lambda d: (pin.integrate(self.m, config, d), velocity)),
-                              (lambda d: (config, velocity + d * max(1.0, abs(velocity[j]))))):
-                    plus, minus = derivatives(*moved(step)), derivatives(*moved(-step))
-                    noise = max(noise, *(float(np.max(np.abs((p + m) / 2 - a))) for p, m, a in zip(plus, minus, at)))
-        return noise
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state (`engine_state`)."""
@@ -654,7 +639,7 @@ def _equalities(path):
 # MuJoCo's own rounding (tests/test_engine_linearisation.py).
 EPS = np.finfo(float).eps
 ROUNDING = 1e3 * EPS
-# The rounding noise measured over a few ulps (`_rounding_noise`) samples the rounding of one evaluation: the error
+# The rounding noise measured over a few ulps (engines.scene.rounding_noise) samples the rounding of one evaluation: the error
 # of Pinocchio's A at the degenerate equilibrium there was 3 times it; 10 times allows for a sample that misses.
 NOISE_MARGIN = 10.0
 
