@@ -74,7 +74,7 @@ def test_the_walk_sees_a_cycle(tmp_path):
     assert imports(known["a"], "a", known) == {"b"} and imports(known["b"], "b", known) == {"a"}
 
 
-@pytest.mark.parametrize("engine", ["mujoco", "pinocchio"])
+@pytest.mark.parametrize("engine", ["mujoco", "pinocchio", "pydrake"])
 def test_only_engines_import_the_engines(engine):
     importers = []
     for folder in ("dyncheck", "reference", "cases"):
