@@ -691,7 +691,7 @@ class DrakeModel:
         """The rounding error of Drake's derivatives `derivatives` (`at(0, 0)`): ROUNDING of their largest entry,
         or, where they are far below the terms they sum, NOISE_MARGIN times their noise as measured over a few ulps
         of each dof (engines.scene.rounding_noise, as Pinocchio's adapter measures its own; at the rotating
-        pendulum's degenerate equilibrium under g = 0 the noise is 5e-18 and Drake's A 4e-18 off MuJoCo's)."""
+        pendulum's degenerate equilibrium under g = 0 the noise is 5e-18, its df/dq 2.3e-11 and 4e-18 off MuJoCo's)."""
         largest = max(float(np.max(np.abs(d), initial=0.0)) for d in derivatives)
         return max(ROUNDING * largest, NOISE_MARGIN * scene_rules.rounding_noise(at, derivatives, dofs))
 

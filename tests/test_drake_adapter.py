@@ -23,6 +23,7 @@ import pytest
 pytest.importorskip("pydrake", reason="Drake is an optional extra: pip install -e '.[drake]'")
 
 import dyncheck  # noqa: E402
+from dyncheck import vibration  # noqa: E402
 from engines.drake_adapter import DrakeModel, Refused  # noqa: E402
 from engines.mujoco_adapter import MujocoModel  # noqa: E402
 from engines.pinocchio_adapter import PinocchioModel  # noqa: E402
@@ -306,3 +307,79 @@ def test_the_bare_drake_step_gives_the_adapters_accelerations(name):
     bare = drake_steps(model, [model.engine_state(*state) for state in states])
     for (t, q, v), (acc, _, _) in zip(states, bare):
         np.testing.assert_array_equal(model._book_accelerations(q, v, acc), model.accelerations(t, q, v))
+
+
+# -- linearisation -----------------------------------------------------------------------------------
+
+# Every scene whose coordinates are not all prescribed (piston, rotating_particle: an empty linearisation) and
+# without loops (the slider-crank: refused, below), and the rotating pendulum under g = 0, whose equilibrium at
+# psi = -pi/2 is degenerate: A's entries there are 1e-8 of the terms they sum, so its error is the measured noise.
+LINEAR = [(name, folder, {}) for name, folder in SCENES if name not in ("piston", "rotating_particle", "slider_crank")]
+LINEAR += [("rotating_pendulum", ROOT / "cases", {"g": 0.0})]
+
+
+# The least error of MuJoCo's linearisation, relative to its largest entry: centred differences of mj_inverse at the
+# step of least estimated error (1e-3 to 3e-5) round by ~1.5 g eps |F| / h (engines.scene.difference_rounding), |F|
+# the largest term summed, a few times the entries: at h = 1e-3 some 1e-12 of them (1.0e-12 measured, above), and
+# 1e-11 allows ten times that.
+MUJOCO_FLOOR = 1e-11
+
+
+def linearisation_states(name, folder, overrides):
+    """(case, states) pairs: the vibration analysis's equilibrium, on its linearised scene (dyncheck.vibration), and
+    the case's initial state with two of the pointwise check's random ones (off equilibrium: the springs stretched,
+    the drives turning; the top's second with a nutation in (0.3, 2.5), away from its Euler angles' singularity)."""
+    case = dyncheck.load_case(name, folder, **overrides)
+    table, scene = vibration.settings(case), vibration.linearised(case)
+    eq = vibration.equilibrium(scene.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords,
+                               scene.model("pinocchio").mass_matrix)
+    (t, q, v), (random, other) = (0.0, *case.initial[:2]), case.sample_states()[:2]
+    if "nutation" in case.coords:
+        other[1][case.coords.index("nutation")] = np.random.default_rng(15).uniform(0.3, 2.5)
+    return [(scene, [(eq.t, eq.q, eq.v)]), (case, [(t, q, v), random, other])]
+
+
+def largest_difference(a, b):
+    return max(np.max(np.abs(a.force_q - b.force_q)), np.max(np.abs(a.force_v - b.force_v)))
+
+
+@pytest.mark.parametrize("name, folder, overrides", LINEAR,
+                         ids=[name + ("-g0" if overrides else "") for name, _, overrides in LINEAR])
+def test_drakes_linearisation_agrees_with_pinocchios_and_mujocos(name, folder, overrides):
+    """Drake's AutoDiff derivatives against Pinocchio's analytic ones on the same file (scene.xml, by Pinocchio's
+    own MJCF reader: MuJoCo's placeholder inertias in both), and against MuJoCo's differences of mj_inverse, at the
+    vibration analysis's equilibrium and at random states.  Each linearisation's `error` bounds its entries' error:
+    Drake's and Pinocchio's their rounding (1e3 eps of the largest entry, or 10 times the noise measured over a few
+    ulps at a degenerate state), MuJoCo's the differences' truncation (extrapolated) and rounding; two of them
+    differ by at most the sum.  MuJoCo's evaluation model holds approximations the others have not (its prescribed
+    motions' armature: the rotating pendulum's A 1e-12 of its entries off): their effect, measured on MuJoCo's scene
+    with them doubled (case.approximations_doubled, with its own error), is allowed besides, as
+    tests/test_engine_linearisation.py allows it between MuJoCo and Pinocchio.  MuJoCo's estimate is not always a
+    bound: at the rotating pendulum's equilibrium it says 1.8e-15, and its force_q lies 2.0e-13 (1.0e-12 of the
+    entry) from Drake's and Pinocchio's, which agree there to 1e-16; so MuJoCo's error is taken at least as
+    MUJOCO_FLOOR of the largest entry.  M is `mass_matrix`'s, which agrees to RTOL (argued at the top)."""
+    path = ROOT / folder.name / name / "scene.xml"
+    for case, states in linearisation_states(name, folder, overrides):
+        model = drake(case)
+        pinocchio = PinocchioModel(path, case.scene, writes(case, PinocchioModel, path))
+        for t, q, v in states:
+            ours, theirs, mujoco, doubled = (m.linearisation(t, q, v) for m in (model, pinocchio, case.model("mujoco"),
+                                                                              case.approximations_doubled()))
+            assert largest_difference(ours, theirs) <= ours.error + theirs.error, (name, t, q, v)
+            approximations = largest_difference(doubled, mujoco) + doubled.error
+            floor = MUJOCO_FLOOR * max(np.max(np.abs(mujoco.force_q)), np.max(np.abs(mujoco.force_v)))
+            tolerance = ours.error + max(mujoco.error, floor) + approximations
+            assert largest_difference(ours, mujoco) <= tolerance, (name, t, q, v)
+            assert np.array_equal(ours.mass, model.mass_matrix(t, q, v))
+            assert np.max(np.abs(ours.mass - theirs.mass)) <= RTOL * np.max(np.abs(theirs.mass))
+            # the estimate is not vacuous: far below the entries (at the degenerate equilibrium, 1e-11 themselves)
+            assert ours.error <= 1e-10 * max(1e-3, np.max(np.abs(ours.force_q)), np.max(np.abs(ours.force_v)))
+            assert "AutoDiffXd" in ours.method
+
+
+def test_drakes_linearisation_refuses_loops():
+    """The slider-crank's coordinates' equations hold its loop's forces: refused, as the other adapters refuse it."""
+    case = dyncheck.load_case("slider_crank", ROOT / "examples")
+    t, q, v = case.sample_states()[0]
+    with pytest.raises(Refused, match=r"scene\.xml: linearisation of a scene with closed loops \(loop\)"):
+        drake(case).linearisation(t, q, v)
