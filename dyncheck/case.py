@@ -285,7 +285,7 @@ class Case:
                 return derived.case_file(self.folder, module, scene, given, overrides)
         if not given:
             raise ValueError(f"{self.file}: no such file, and {self.folder / derived.EQUATIONS} defines no COORDS and "
-                             "accelerations(t, q, v, p) (docs/own-case.md)")
+                             "accelerations(t, q, v, p) or inverse_dynamics(t, q, v, a, p) (docs/own-case.md)")
         return given
 
     def _toml(self):

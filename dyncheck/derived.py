@@ -39,8 +39,16 @@ SAMPLE_BUDGET = 0.25  # s
 
 
 def is_plain(module):
-    """Whether a derivation is a plain module (COORDS, PARAMS, accelerations) rather than classes."""
-    return hasattr(module, "COORDS") and callable(getattr(module, "accelerations", None))
+    """Whether a derivation is a plain module (COORDS, PARAMS, accelerations or inverse_dynamics) rather than
+    classes."""
+    return hasattr(module, "COORDS") and (callable(getattr(module, "accelerations", None)) or by_inverse_dynamics(module))
+
+
+def by_inverse_dynamics(module):
+    """Whether a plain module gives its equations as inverse dynamics, inverse_dynamics(t, q, v, a, p): the
+    generalised forces tau = M a - f that the accelerations a need (the form generated code comes in), and no
+    accelerations of its own."""
+    return callable(getattr(module, "inverse_dynamics", None)) and not callable(getattr(module, "accelerations", None))
 
 
 # numpy's kinds of real numbers: float, signed and unsigned integer.  Not bool, nor complex (numpy would drop the
@@ -74,9 +82,32 @@ class Equations:
         for name in OPTIONAL:
             if callable(getattr(module, name, None)):
                 setattr(self, name, getattr(self, "_" + name))
+        if by_inverse_dynamics(module):  # q'' = M^-1 f, M and f from it (where the module gives no M or f of its own)
+            self.accelerations = lambda t, q, v: np.linalg.solve(*self._by_inverse_dynamics(t, q, v))
+            if not hasattr(self, "mass_matrix"):
+                self.mass_matrix = lambda t, q, v: self._by_inverse_dynamics(t, q, v)[0]
+            if not hasattr(self, "forces"):
+                self.forces = lambda t, q, v: self._by_inverse_dynamics(t, q, v)[1]
 
     def accelerations(self, t, q, v):
         return real(self._module.accelerations(t, q, v, self._p), self._vector, "accelerations(t, q, v, p)")
+
+    def _inverse_dynamics(self, t, q, v, a):
+        return real(self._module.inverse_dynamics(t, q, v, a, self._p), self._vector, "inverse_dynamics(t, q, v, a, p)")
+
+    def _by_inverse_dynamics(self, t, q, v):
+        """(M, f) of M q'' = f from the module's inverse dynamics tau(a) = M a - f, which is linear in a: f = -tau(0),
+        and M's column j = (tau(s e_j) + f) / s, with s a power of two that makes |M s| at least |f|, so that the
+        difference keeps M's digits (a stiff spring's f is 1e9 times M): M to a few eps of |M|, in n + 1 calls (2n + 1
+        where f outweighs M)."""
+        n = len(self.coords)
+        f = -self._inverse_dynamics(t, q, v, np.zeros(n))
+        columns = lambda s: np.column_stack([(self._inverse_dynamics(t, q, v, s * e) + f) / s for e in np.eye(n)])
+        mass = columns(1.0)
+        ratio = np.max(np.abs(f)) / np.max(np.abs(mass)) if np.max(np.abs(mass)) > 0 else 0.0
+        if np.isfinite(ratio) and ratio > 1:
+            mass = columns(2.0 ** math.ceil(math.log2(ratio)))
+        return mass, f
 
     def reactions(self, t, q, v):
         if not self.reaction_names:
@@ -145,7 +176,7 @@ def module_values(module, file):
     for name, value in params.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ValueError(f"{file}: PARAMS['{name}'] = {value!r} is not a finite number (SI units)")
-    for name in OPTIONAL + ("accelerations", "reactions"):
+    for name in OPTIONAL + ("accelerations", "inverse_dynamics", "reactions"):
         if hasattr(module, name) and not callable(getattr(module, name)):
             raise ValueError(f"{file}: {name} is not a function")
     return tuple(coords), {name: float(value) for name, value in params.items()}
@@ -237,11 +268,11 @@ def frequency(module, coords, params, q0, v0):
     the square root of the largest |eigenvalue| of d q''/d q (central differences); at least 1 rad/s, so
     that a scene with no restoring force (a free slide) still gets a horizon of seconds."""
     h, n = 1e-6, len(coords)
+    equations = Equations(module, params, ())
     jacobian = np.empty((n, n))
     for j in range(n):
         step = np.eye(n)[j] * h
-        plus, minus = (real(module.accelerations(0.0, q, v0, params), (n,), "accelerations(t, q, v, p)")
-                       for q in (q0 + step, q0 - step))
+        plus, minus = (equations.accelerations(0.0, q, v0) for q in (q0 + step, q0 - step))
         jacobian[:, j] = (plus - minus) / (2 * h)
     largest = float(np.max(np.abs(np.linalg.eigvals(jacobian)))) if np.all(np.isfinite(jacobian)) else 1.0
     return max(math.sqrt(largest), 1.0)

@@ -7,12 +7,15 @@ import shutil
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import dyncheck.case as dyncheck_case
 from dyncheck.case import Case
 from dyncheck.cli import main
 from test_architecture import doc_example
+
+EPS = np.finfo(float).eps
 
 ACC = '-self.p["k"] / self.p["m"] * q[0]'
 
@@ -265,3 +268,58 @@ def test_without_a_budget_a_case_takes_its_count(tutorial):
     case = Case(tutorial)
     spec = {**case.spec, "sample": {k: v for k, v in case.spec["sample"].items() if k != "budget"}}
     assert Case(tutorial, spec=spec).sample_count == 256
+
+
+INVERSE_DYNAMICS = '''
+def inverse_dynamics(t, q, v, a, p):
+    """tau = M(q) a - f(t, q, q'), as generated code gives it."""
+    x, theta = q
+    x_rate, theta_rate = v
+    x_acc, theta_acc = a
+    M, m, l, k, g = p["M"], p["m"], p["l"], p["k"], p["g"]
+    return np.array([(M + m) * x_acc + m * l * np.cos(theta) * theta_acc - m * l * np.sin(theta) * theta_rate**2 + k * x,
+                     m * l * np.cos(theta) * x_acc + m * l**2 * theta_acc + m * g * l * np.sin(theta)])
+
+
+'''
+
+
+def as_inverse_dynamics(tutorial, wrong=None):
+    """The tutorial's equations given as inverse dynamics alone (no accelerations, M or f), `wrong` (old, new)
+    replaced in it."""
+    equations = tutorial / "equations.py"
+    text = equations.read_text()
+    form = INVERSE_DYNAMICS if wrong is None else INVERSE_DYNAMICS.replace(*wrong)
+    start = text.index("def inverse_dynamics" if "def inverse_dynamics" in text else "def mass_matrix")
+    equations.write_text(text[:start] + form.lstrip("\n") + text[text.index("def energy"):])
+    return equations
+
+
+@pytest.mark.parametrize("k", [20.0, 1e9])
+def test_m_and_f_from_inverse_dynamics_are_the_derivation_s_own(tutorial, k):
+    """M's columns tau(e_j) + f, f = -tau(0): the tutorial's M and f to a few eps of |M| and |f|, also under a spring
+    of 1e9 N/m, whose f outweighs M 1e9 times (the unit accelerations are scaled up, or M would keep 7 digits)."""
+    from dyncheck import derived
+    original = Case(tutorial, {"k": k}).model("reference")
+    as_inverse_dynamics(tutorial)
+    case = Case(tutorial, {"k": k})
+    model = case.model("reference")
+    for t, q, v in case.sample_states(64):
+        mass, f = model.mass_matrix(t, q, v), model.forces(t, q, v)
+        np.testing.assert_allclose(mass, original.mass_matrix(t, q, v), rtol=0, atol=8 * EPS * np.abs(mass).max())
+        np.testing.assert_allclose(f, original.forces(t, q, v), rtol=0, atol=8 * EPS * np.abs(f).max())
+        np.testing.assert_allclose(model.accelerations(t, q, v), original.accelerations(t, q, v), rtol=1e-12)
+    assert derived.by_inverse_dynamics(case.derivation)
+
+
+@pytest.mark.full
+def test_a_derivation_given_as_inverse_dynamics_passes_and_its_error_is_named(tutorial, capsys):
+    """Generated code's form: the tutorial as inverse dynamics runs green; half of theta's gravity term missing
+    from it, the run fails and names that term in theta's equation."""
+    as_inverse_dynamics(tutorial)
+    assert main(["run", "--cases", str(tutorial.parent)]) == 0, capsys.readouterr().out
+    capsys.readouterr()
+    as_inverse_dynamics(tutorial, (" + m * g * l * np.sin(theta)])", " + 0.5 * m * g * l * np.sin(theta)])"))
+    assert main(["run", "--cases", str(tutorial.parent)]) == 1
+    out = capsys.readouterr().out
+    assert "the derivation's equation theta: add - m l g / 2 sin(theta) to its force side f" in out, out
