@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from dyncheck import expressions
-from dyncheck.messages import suggest
+from dyncheck.messages import WithBlock, suggest
 
 EQUATIONS = "equations.py"
 SCENE = "scene.xml"
@@ -182,6 +182,23 @@ def module_values(module, file):
     return tuple(coords), {name: float(value) for name, value in params.items()}
 
 
+def declared_units(module, params, file):
+    """The module's UNITS, {parameter: unit}: optional, the units of some parameters, which tell a mass from a length
+    of the same value; ValueError naming the file and the entry where it names no parameter or no unit of a scene
+    number."""
+    declared = getattr(module, "UNITS", {})
+    known = sorted(set(UNITS.values()))
+    if not isinstance(declared, dict):
+        raise ValueError(f"{file}: UNITS = {declared!r:.80} is not a dict of parameter names to units")
+    for name, unit in declared.items():
+        if name not in params:
+            raise ValueError(f"{file}: UNITS[{name!r}] names no parameter of PARAMS")
+        if unit not in known:
+            raise ValueError(f"{file}: UNITS[{name!r}] = {unit!r:.40} is not a unit of a scene number: one of "
+                             + ", ".join(known))
+    return dict(declared)
+
+
 def coordinate_joints(coords, scene, file):
     """{coordinate: joint}: by name, or, where no coordinate is named after a joint, the scene's hinges and
     slides in the file's order when there are as many as coordinates.  In a scene with closed loops the
@@ -225,36 +242,61 @@ def applied_parameters(params, given, file):
     return used & set(params)
 
 
-def bindings(params, scene, joints_kind, file, given):
+def bindings(params, scene, joints_kind, file, given, declared=None):
     """{parameter: [location]} and {parameter: unit}: each parameter bound where `given` (a case.toml's
-    [scene.bindings]) says, or else to the one scene number equal to it (or to minus it for a position
-    or gravity); no match or several is refused, naming them."""
-    found, units = {}, {}
+    [scene.bindings]) says, or else to the one scene number equal to it (or to minus it for a position or gravity)
+    whose unit is the one `declared` ({parameter: unit}, the module's UNITS, where it gives one).  Every parameter
+    that matches no number or several is refused in one message, with a [scene.bindings] block to complete."""
+    found, units, unbound, ambiguous = {}, {}, [], {}
     unit = lambda location: UNITS[(location.get("attribute"), joints_kind.get(location["name"]))
                                   if location.get("attribute") in JOINT_ATTRIBUTES else location.get("attribute")]
+    declared = declared or {}
     for name, value in params.items():
         if name in given:
             found[name] = given[name]
             units[name] = unit(given[name][0])
             continue
-        matches = [(v, scale) for v in scene.values for scale in ((1.0, -1.0) if v.location.get("attribute") in SIGNED
-                                                                   else (1.0,))
-                   if value != 0 and abs(v.value - scale * value) <= MATCH_RTOL * abs(value)]
-        if not matches:
-            raise ValueError(f"{file}: PARAMS['{name}'] = {value!r} is no number of {scene.path} (a body's mass, "
-                             "position or centre of mass, a joint's stiffness, damping or spring rest position, gravity), so the "
-                             "engines cannot follow "
-                             "it; bind it in a case.toml [scene.bindings] (docs/own-case.md) or make it equal to the "
-                             "scene's number")
-        if len(matches) > 1:
-            where = "; ".join(f"{v.where}" + (" (x -1)" if scale < 0 else "") for v, scale in matches)
-            raise ValueError(f"{file}: PARAMS['{name}'] = {value!r} matches {len(matches)} numbers of {scene.path} "
-                             f"({where}): bind it in a case.toml [scene.bindings] (docs/own-case.md), or give the "
-                             "scene numbers that tell them apart")
-        v, scale = matches[0]
-        found[name] = [{**v.location, **({"scale": scale} if scale != 1.0 else {})}]
-        units[name] = unit(v.location)
+        matches = [{**v.location, **({"scale": scale} if scale != 1.0 else {})}
+                   for v in scene.values for scale in ((1.0, -1.0) if v.location.get("attribute") in SIGNED else (1.0,))
+                   if value != 0 and abs(v.value - scale * value) <= MATCH_RTOL * abs(value)
+                   and declared.get(name, unit(v.location)) == unit(v.location)]
+        if len(matches) == 1:
+            found[name], units[name] = matches, unit(matches[0])
+        elif matches:
+            ambiguous[name] = matches
+        else:
+            unbound.append(name)
+    if unbound or ambiguous:
+        raise binding_refusal(file, scene, params, unbound, ambiguous, unit, declared)
     return found, units
+
+
+def binding_refusal(file, scene, params, unbound, ambiguous, unit, declared):
+    """The refusal of the parameters that bind to no scene number or to several: each named on one line, and a
+    [scene.bindings] block for a case.toml beside the module, a line a parameter (the first of several candidates,
+    the others in its comment; where there is none, a commented template)."""
+    where = lambda location: (f"{location['element']} '{location['name']}' {location.get('attribute', '')}"
+                              + (f"[{location['index']}]" if "index" in location else "")
+                              + (" x -1" if location.get("scale", 1.0) < 0 else "")
+                              + f" ({unit(location)})").replace("  ", " ")
+    as_toml = lambda location: "{ " + ", ".join(f"{k} = {_toml(x)}" for k, x in location.items()) + " }"
+    unit_of = lambda name: f" in {declared[name]}" if name in declared else ""
+    problems = [f"PARAMS['{name}'] = {params[name]!r} matches {len(found)} numbers{unit_of(name)}: "
+                + ", ".join(where(location) for location in found) for name, found in ambiguous.items()]
+    problems += [f"PARAMS['{name}'] = {params[name]!r} is no number{unit_of(name)} of the scene (a body's mass, "
+                 "position or centre of mass, a joint's stiffness, damping or spring rest position, gravity)"
+                 for name in unbound]
+    verb = "does not bind" if len(problems) == 1 else "do not each bind"
+    message = (f"{file}: {len(problems)} of PARAMS' values {verb} to one number of {scene.path}, so the "
+               f"engines cannot follow them: {'; '.join(problems)}.  Write a case.toml beside it with the table below "
+               "(docs/own-case.md), keeping the location each parameter means (the others are in its comment); or "
+               "give the scene numbers that tell them apart, or the module a UNITS = {name: unit}")
+    block = ["[scene.bindings]"]
+    block += [f"{name} = [{as_toml(found[0])}]  # or: " + "; ".join(as_toml(location) for location in found[1:])
+              for name, found in ambiguous.items()]
+    block += [f'# {name} = [{{ element = "body", name = "...", attribute = "mass" }}]  # no number of the scene is '
+              f"{params[name]!r}: write where it goes" for name in unbound]
+    return WithBlock(message, "\n".join(block))
 
 
 def nice(x):
@@ -314,7 +356,7 @@ def case_file(folder, module, scene, given, overrides=None):
     given_bindings = given.get("scene", {}).get("bindings", {})
     forcing = applied_parameters(params, given, file) - set(given_bindings)
     bound, param_units = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds, file,
-                                  given_bindings)
+                                  given_bindings, declared_units(module, params, file))
     for p in forcing:
         param_units[p] = given["params"][p]["unit"]
     length = max(scene.length, 0.1)

@@ -597,6 +597,15 @@ def check_bindings(bindings, params, file, elements=None):
             if names is not None and location["name"] not in names:
                 raise _error(file, f"{field}.name", location["name"], f"is no {location['element']} of the scene"
                              + _hint(location["name"], sorted(names)))
+    # one scene number set by two parameters would follow whichever is written last: an override of one moves both
+    seen = {}
+    for p, locations in bindings.items():
+        for i, location in enumerate(locations):
+            key = (location["element"], location.get("name"), location.get("attribute"), location.get("index", 0))
+            if key in seen and seen[key] != p:
+                raise _error(file, f"scene.bindings.{p}[{i}]", location, f"is also bound by {seen[key]}: one scene "
+                             "number can follow one parameter")
+            seen[key] = p
 
 
 def _binding(location, field, params, file):

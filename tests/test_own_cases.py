@@ -3,6 +3,7 @@ work (exit 2, one line naming the file and what is wrong) or becomes a row that 
 silently and none is a traceback."""
 
 import json
+import re
 import shutil
 import time
 from pathlib import Path
@@ -323,3 +324,59 @@ def test_a_derivation_given_as_inverse_dynamics_passes_and_its_error_is_named(tu
     assert main(["run", "--cases", str(tutorial.parent)]) == 1
     out = capsys.readouterr().out
     assert "the derivation's equation theta: add - m l g / 2 sin(theta) to its force side f" in out, out
+
+
+def coinciding(tutorial):
+    """The tutorial with the bob's mass equal to the rod's length (0.5), and a parameter J found nowhere in the
+    scene."""
+    equations, scene = tutorial / "equations.py", tutorial / "scene.xml"
+    old = '"m": 0.3, "l": 0.5, "k": 20.0, "g": 9.81}'
+    assert old in equations.read_text() and 'mass="0.3"' in scene.read_text()
+    equations.write_text(equations.read_text().replace(old, '"m": 0.5, "l": 0.5, "k": 20.0, "g": 9.81, "J": 0.0025}'))
+    scene.write_text(scene.read_text().replace('mass="0.3"', 'mass="0.5"'))
+    return equations
+
+
+def test_every_parameter_that_does_not_bind_is_named_at_once_with_a_table_to_paste(tutorial, capsys):
+    """m and l both 0.5 (the bob's mass and minus its centre's z), J in no number of the scene: one refusal names
+    all three with their candidates, and gives a [scene.bindings] table; pasted with the right choices (and J's
+    line written), the case loads."""
+    equations = coinciding(tutorial)
+    status, out, err = run(tutorial.parent.parent, capsys)
+    first, *block = err.splitlines()
+    assert status == 2 and first.startswith(f"dyncheck: error: {equations}: 3 of PARAMS' values do not each bind"), err
+    assert "PARAMS['m'] = 0.5 matches 2 numbers: body 'bob' mass (kg), body 'bob' ipos[2] x -1 (m)" in first
+    assert "PARAMS['l'] = 0.5 matches 2 numbers" in first and "PARAMS['J'] = 0.0025 is no number" in first
+    assert block[0] == "[scene.bindings]" and [line.split(" =")[0] for line in block[1:]] == ["m", "l", "# J"], block
+    table = "\n".join(block).replace('l = [{ element = "body", name = "bob", attribute = "mass" }]',
+                                     'l = [{ element = "body", name = "bob", attribute = "ipos", index = 2, scale = -1.0 }]')
+    table = table.replace('# J = [{ element = "body", name = "...", attribute = "mass" }]',
+                          'J = [{ element = "joint", name = "theta", attribute = "damping" }]')
+    (tutorial / "case.toml").write_text(table)
+    # J now binds to the hinge's damping, which is 0, not 0.0025: the case says so (the binding itself was taken)
+    with pytest.raises(ValueError, match=r"joint 'theta' damping\[0\] is 0.0, but .* gives J = 0.0025"):
+        Case(tutorial).model("mujoco")
+
+
+def test_a_module_s_units_tell_a_mass_from_a_length(tutorial):
+    equations = coinciding(tutorial)
+    equations.write_text(equations.read_text().replace(', "J": 0.0025}', '}') + '\nUNITS = {"m": "kg", "l": "m"}\n')
+    bindings = Case(tutorial).spec["scene"]["bindings"]
+    assert bindings["m"] == [{"element": "body", "name": "bob", "attribute": "mass"}]
+    assert bindings["l"] == [{"element": "body", "name": "bob", "attribute": "ipos", "index": 2, "scale": -1.0}]
+
+
+@pytest.mark.parametrize("units, message", [('["kg"]', "is not a dict"), ('{"q": "kg"}', "UNITS['q'] names no parameter"),
+                                            ('{"m": "pounds"}', "UNITS['m'] = 'pounds' is not a unit of a scene number")])
+def test_units_that_name_nothing_are_refused(tutorial, units, message):
+    equations = tutorial / "equations.py"
+    equations.write_text(equations.read_text() + f"\nUNITS = {units}\n")
+    with pytest.raises(ValueError, match=re.escape(message)):
+        Case(tutorial)
+
+
+def test_one_scene_number_bound_by_two_parameters_is_refused(tutorial):
+    (tutorial / "case.toml").write_text('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "mass" }]\n'
+                                        'l = [{ element = "body", name = "bob", attribute = "mass" }]\n')
+    with pytest.raises(ValueError, match=r"scene.bindings.l\[0\] = .* is also bound by m"):
+        Case(tutorial)
