@@ -56,7 +56,7 @@ SCHEMA = ("table", {
     # physical limits past which a coordinate grows without bound (dyncheck/checks.py, runaway)
     "runaway?": ("list", ("table", {"when": "str", "coordinate": "str", "escape": "expr > 0", "why": "str"})),
     "sample": ("table", {
-        "count": "int > 0", "budget?": "number > 0", "seed": "int >= 0", "t": ("pair", "expr"),
+        "count": "int > 0", "budget?": "number >= 0", "seed": "int >= 0", "t": ("pair", "expr"),
         "q": ("list", ("pair", "expr")), "v": ("list", ("pair", "expr")),
         # random parameter sets of the "random parameters" check (dyncheck/checks.py)
         "params?": ("table", {"sets": "int > 0", "states": "int > 0", "seed": "int >= 0",
@@ -311,9 +311,8 @@ def _check_integration(spec, values, file):
 # How much work one case file may ask for, so that a run ends in minutes (dyncheck.simulate bounds
 # each integration as it runs; these bound what is asked before anything runs).
 # The most random states a [sample] budget gives (Case.sample_count): 4 times a case of two files' 256, so that a
-# region of 5 % of the state space holds about 50 of them.  Each state costs the checks about 0.45 ms besides the
-# derivation's calls (the engines' accelerations, reactions, energy and mass matrices, and the calls' isolation:
-# measured on docs/own-case.md's tutorial, whose run 4096 states made 2 s longer and 1024 states 0.1-0.4 s).
+# region of 5 % of the state space holds about 50 of them, at a quarter of a second of evaluations (0.25 s, its
+# budget) where a state costs 0.24 ms or less.
 MAX_ADAPTIVE_STATES = 1024
 MAX_STATES = 10_000  # random states of the pointwise check, and sets x states of the random parameters:
 #                      four sources at ~0.25 ms each per state, 10 s
@@ -715,10 +714,12 @@ MEANINGS = {
                       "parameters.",
     "sample": "The random states of the pointwise check, at which every source is evaluated.",
     "sample.count": f"How many random states (at most {MAX_STATES}).",
-    "sample.budget": "Seconds that the derivation's calls at the random states may take, for a case whose derivation "
-                     "is a file of its folder: more states where its calls are cheap, the power of two of them that "
-                     f"fits, from `count` up to {MAX_ADAPTIVE_STATES} (the cost of a call measured at the initial state). A case of "
-                     "two files has 0.25 s. Without it: `count` states.",
+    "sample.budget": ("Seconds that the pointwise and equation checks may spend on their random states, for a case "
+                      "whose derivation is a file of its folder: more states where a state's evaluations (the "
+                      "derivation's, each engine's) are cheap, the power of two of them that fits, from `count` up "
+                      f"to {MAX_ADAPTIVE_STATES} (the costs measured at the initial state). A case of two files has "
+                      "0.25 s. 0, or without it: `count` states, whatever the machine's speed (a case whose report is "
+                      "committed)."),
     "sample.seed": "The seed of their random generator: two runs draw the same states.",
     "sample.t": "The interval of the random times.",
     "sample.q": "The interval of each coordinate's random values, one per coordinate.",
