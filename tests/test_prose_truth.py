@@ -213,23 +213,24 @@ def test_no_shown_sentence_judges_a_size_but_by_a_rule(folder, name):
 # -- the pages, from whole runs ----------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def varied(tmp_path_factory):
-    """Every case's runs at the book's numbers and at its first random parameter set (dyncheck.checks.parameter_sets),
-    and both sets of pages rendered from them: ({case: {"book": result, "other": result}}, {"book": folder, "other":
-    folder} of the pages)."""
+def varied(results, example_results, rendered, tmp_path_factory):
+    """Every case's runs at the book's numbers (the session's, and their pages: conftest) and at its first random
+    parameter set (dyncheck.checks.parameter_sets), and both sets of pages: ({case: {"book": result, "other":
+    result}}, {"book": folder, "other": folder} of the pages)."""
     from dyncheck.cli import run_cases
     from dyncheck.report import write_reports
-    results, pages = {}, {label: tmp_path_factory.mktemp(label) / "reports" for label in ("book", "other")}
+    results = {name: {"book": result} for name, result in {**results, **example_results}.items()}
+    pages = {"book": rendered / "reports", "other": tmp_path_factory.mktemp("other") / "reports"}
     for folder in FOLDERS:
         book = [dyncheck.load_case(name, folder) for name in dyncheck.case_names(folder)]
         other = [case.with_params(**parameter_sets(case, 1)[0][0]) for case in book if parameter_sets(case, 1)[0]]
-        for label, cases in (("book", book), ("other", other)):
-            ran, interrupted = run_cases(cases)
-            assert interrupted is None
-            (pages[label] / folder.name).mkdir(parents=True, exist_ok=True)
-            write_reports(ran, pages[label] / folder.name, animations=False)
-            for result in ran:
-                results.setdefault(result.name, {})[label] = result
+        ran, interrupted = run_cases(other)
+        assert interrupted is None
+        out = pages["other"] / ("examples" if folder.name == "examples" else "")
+        out.mkdir(parents=True, exist_ok=True)
+        write_reports(ran, out, animations=False)
+        for result in ran:
+            results[result.name]["other"] = result
     return results, pages
 
 
