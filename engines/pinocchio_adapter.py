@@ -37,7 +37,7 @@ class PinocchioModel:
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
         root = scene.get("urdf_root_joint")
-        constraints = []  # the loops' (a URDF closes none: refused against the MJCF's, dyncheck.case)
+        constraints = []  # the loops' (a URDF closes none: refused against the MJCF's, dyncheck.case.folder)
         try:
             if _is_mjcf(self.path) and _equalities(self.path):
                 self.m, constraints = pin.buildModelAndLegacyConstraintsFromMJCF(self.path)
@@ -121,7 +121,7 @@ class PinocchioModel:
         for nq, iq, iv, i in self._scalars:
             self._coord_dofs[i] = iv
         self._last = None, None  # the last state asked and its engine pass (`_dynamics`)
-        # A lone ball joint under constant forces is integrated in Pinocchio's own coordinates (dyncheck.simulate)
+        # A lone ball joint under constant forces is integrated in Pinocchio's own coordinates (dyncheck.run.simulate)
         lone_ball = [kind for kind, _, _ in self.layout] == ["euler"] and not self.driven
         self.native = BallJointCoordinates(self) if lone_ball and not self.varying else None
         # CRBA fills the upper triangle of M: M[i, j] for i > j is read at [j, i].
@@ -586,7 +586,7 @@ class PinocchioModel:
 
 
 class BallJointCoordinates:
-    """A lone ball joint's state in Pinocchio's own coordinates, for an integrator (dyncheck.simulate's
+    """A lone ball joint's state in Pinocchio's own coordinates, for an integrator (dyncheck.run.simulate's
     `native`): its quaternion (x, y, z, w) and the body's angular velocity w.  The rates q' = q (w, 0) / 2
     and ABA's w' take no Euler angle: no conversion at each evaluation, and no singularity at zero
     nutation; the book's Euler angles and rates come back at the outputs only (`book`)."""
@@ -660,7 +660,7 @@ NOISE_MARGIN = 10.0
 DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>
 
 # A unit axis written in decimals has a norm within an ulp or two of 1; Pinocchio's rotation is off
-# by about |axis| - 1, which the scene comparison would find beyond 16 eps (dyncheck.case.SCENE_RTOL).
+# by about |axis| - 1, which the scene comparison would find beyond 16 eps (dyncheck.case.folder.SCENE_RTOL).
 UNIT_AXIS_RTOL = 4 * np.finfo(float).eps
 
 

@@ -289,7 +289,7 @@ RULES = [
          " explicitly, unlike the Euler runs that body-joint damping describes (measured: 2.5e-5 of the tutorial's"
          " cart-pendulum's Euler run with a damper)"),
     Rule("MJCF", "option-flag", "autoreset", NO_EFFECT, "a run's blow-up is found from its state and MuJoCo's"
-         " warnings, which it counts with or without the reset (dyncheck.simulate)"),
+         " warnings, which it counts with or without the reset (dyncheck.run.simulate)"),
     Rule("MJCF", "option-flag", "energy", NO_EFFECT, "fills mjData.energy in mj_forward; the harness computes the"
          " energy itself (mj_energyPos, mj_energyVel)"),
     Rule("MJCF", "option-flag", "fwdinv", NO_EFFECT, "a diagnostic (mjData.solver_fwdinv) that the harness does not"

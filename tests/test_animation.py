@@ -12,12 +12,13 @@ import pytest
 from PIL import Image
 
 import dyncheck
-from dyncheck import animation, style
-from dyncheck.case import Case
-from dyncheck.checks import run_case
-from dyncheck.results import save_results
-from dyncheck.report import write_reports
-from dyncheck.style import check_text
+from dyncheck.pages import animation
+from dyncheck.common import style
+from dyncheck.case.folder import Case
+from dyncheck.checks.runs import run_case
+from dyncheck.results.values import save_results
+from dyncheck.pages.report import write_reports
+from dyncheck.common.style import check_text
 
 
 @pytest.fixture(scope="module")
@@ -128,9 +129,10 @@ RENDER_BOTH = """
 import sys
 from pathlib import Path
 import numpy as np
-from dyncheck import animation, style
-from dyncheck.case import Case
-from dyncheck.results import load_result
+from dyncheck.pages import animation
+from dyncheck.common import style
+from dyncheck.case.folder import Case
+from dyncheck.results.values import load_result
 result = load_result(Path(sys.argv[1]))
 case = Case(result.folder, result.overrides, result.spec)
 gl = animation.painter(animation.WIDTH, animation.HEIGHT)

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import dyncheck
-from dyncheck.case import Case
+from dyncheck.case.folder import Case
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("dyncheck", "engines", "reference")
@@ -99,7 +99,7 @@ def test_rendering_saved_results_needs_no_engine(results, tmp_path):
     """`report --from` in a process where importing MuJoCo or Pinocchio fails renders the same pages,
     byte for byte, as the report that saved the results (its figures included)."""
     full = tmp_path / "full"
-    from dyncheck.report import write_reports
+    from dyncheck.pages.report import write_reports
     write_reports([results["rotating_particle"], results["spring_pendulum"]], full)
     again = tmp_path / "again"
     code = ("import sys; sys.modules['mujoco'] = sys.modules['pinocchio'] = None\n"
@@ -118,10 +118,10 @@ def test_rendering_saved_results_needs_no_engine(results, tmp_path):
 def test_loading_the_cases_for_a_run_imports_no_matplotlib():
     """What `dyncheck run` does before its checks start (the command line and the checks imported, every case
     of cases/ and examples/ loaded with its models, studies and own study module) imports no matplotlib: only
-    figures need it (dyncheck.style.pyplot), and it would be a quarter of a second of the run's start-up."""
+    figures need it (dyncheck.common.style.pyplot), and it would be a quarter of a second of the run's start-up."""
     code = ("import sys\nfrom pathlib import Path\n"
             "from dyncheck.cli import select_cases\n"
-            "import dyncheck.checks\n"
+            "import dyncheck.checks.runs\n"
             f"for folder in {[str(ROOT / 'cases'), str(ROOT / 'examples')]!r}:\n"
             "    select_cases([], [], Path(folder))\n"
             "print(sorted(m for m in sys.modules if m.partition('.')[0] == 'matplotlib'))\n")
@@ -139,7 +139,7 @@ def test_a_whole_run_imports_no_matplotlib(tmp_path):
                           cwd=tmp_path)
     assert done.returncode == 0, done.stdout[-2000:]
     imported = [line.rpartition("|")[2].strip() for line in done.stderr.splitlines() if line.startswith("import time:")]
-    assert "dyncheck.checks" in imported  # the imports are reported
+    assert "dyncheck.checks.runs" in imported  # the imports are reported
     assert not [m for m in imported if m.partition(".")[0] == "matplotlib"]
 
 

@@ -1,5 +1,5 @@
 """Localisation is bounded in memory and time at any number of coordinates, and never loses a case's rows: the term
-library is counted before it is built, narrowed or not searched where it would not fit (dyncheck.terms.MEMORY,
+library is counted before it is built, narrowed or not searched where it would not fit (dyncheck.checks.terms.MEMORY,
 WORK), and a search that fails is a localisation that says so."""
 
 import tracemalloc
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import chain
-from dyncheck import checks, residuals, terms
-from dyncheck.case import Case
-from dyncheck.results import Status
+from dyncheck.checks import runs as checks, residuals, terms
+from dyncheck.case.folder import Case
+from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
 
 # The planted error: half the middle mass's weight moment about its own joint, in that joint's equation only.

@@ -9,10 +9,10 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import cache
-from dyncheck.simulate import simulate
+from dyncheck.run import cache
+from dyncheck.run.simulate import simulate
 
-CASES = dyncheck.case.CASES_DIR
+CASES = dyncheck.case.folder.CASES_DIR
 OPTIONS = dict(rtol=1e-12, output_step=1e-3, work=False)
 
 

@@ -14,7 +14,9 @@ from pathlib import Path
 import pytest
 
 import dyncheck
-from dyncheck import campbell, vibration, vibration_page
+from dyncheck.studies import campbell
+from dyncheck.checks import vibration
+from dyncheck.pages import vibration_page
 
 
 def spring(**overrides):
@@ -127,17 +129,17 @@ def test_a_scale_is_checked_for_its_names_on_load_and_evaluated_where_the_study_
 
 def test_the_pages_load_a_saved_sweep_without_running_anything():
     """`dyncheck report --from` imports the pages alone: the Sweep's classes must be registered by them (a saved
-    Campbell diagram was 'not registered with dyncheck.store' once it had a module of its own)."""
-    code = ("import dyncheck.report, dyncheck.store as store; "
+    Campbell diagram was 'not registered with dyncheck.results.store' once it had a module of its own)."""
+    code = ("import dyncheck.pages.report, dyncheck.results.store as store; "
             "assert {'Sweep', 'Approach'} <= set(store._registry), sorted(store._registry)")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).resolve().parent.parent)
 
 
 def test_saved_results_load_in_python_alone(results, tmp_path):
-    """docs/results.md's `dyncheck.results.load_results(Path(DIR))`, in a process that imports nothing else: the
+    """docs/results.md's `dyncheck.results.values.load_results(Path(DIR))`, in a process that imports nothing else: the
     classes a saved result holds (its runs, its vibration analysis) are registered by load_result itself."""
-    from dyncheck.results import save_results
+    from dyncheck.results.values import save_results
     save_results([results["double_pendulum"]], tmp_path)
-    code = (f"from pathlib import Path; from dyncheck.results import load_results; "
+    code = (f"from pathlib import Path; from dyncheck.results.values import load_results; "
             f"assert load_results(Path({str(tmp_path)!r}))[0].vibration is not None")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).resolve().parent.parent)

@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck.case import CASES_DIR, Case
-from dyncheck.checks import compare, evaluate
+from dyncheck.case.folder import CASES_DIR, Case
+from dyncheck.checks.runs import compare, evaluate
 from engines import euler, mujoco_adapter
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
@@ -63,7 +63,7 @@ def test_an_override_reaches_every_source():
 
 def copy_case(tmp_path, name):
     folder = tmp_path / name
-    shutil.copytree(dyncheck.case.CASES_DIR / name, folder)
+    shutil.copytree(dyncheck.case.folder.CASES_DIR / name, folder)
     return folder
 
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.case import compare_scenes
-from dyncheck.checks import compare, evaluate
+from dyncheck.case.folder import compare_scenes
+from dyncheck.checks.runs import compare, evaluate
 from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
 
@@ -16,7 +16,7 @@ WITH_COORDS = [name for name in NAMES if dyncheck.load_case(name).coords]
 
 
 def writes(case, Model, path):
-    """The writes that dyncheck.case.Case._build gives `Model` on the scene file `path`: what the file
+    """The writes that dyncheck.case.folder.Case._build gives `Model` on the scene file `path`: what the file
     does not hold of the bindings, and the overrides (after them, what depends on them)."""
     held = Model.elements_in(path)
     changed = lambda p, loc: p in case.overrides or set(loc.get("depends", ())) & set(case.overrides)
@@ -31,7 +31,7 @@ def pinocchio_on_mjcf(case):
 
 
 class WithModel:
-    """The case, with `model` answering every source with one given model (for dyncheck.checks.evaluate)."""
+    """The case, with `model` answering every source with one given model (for dyncheck.checks.runs.evaluate)."""
 
     def __init__(self, case, model):
         self.case, self._model = case, model

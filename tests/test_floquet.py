@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck import vibration
-from dyncheck.results import Status
+from dyncheck.checks import vibration
+from dyncheck.results.values import Status
 from test_vibration import edited_case
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dyncheck import stability
-from dyncheck.case import load_case
-from dyncheck.stability.common import settings_of
+from dyncheck.studies import stability
+from dyncheck.case.folder import load_case
+from dyncheck.case.folder import settings_of
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
 

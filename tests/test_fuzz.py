@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 import dyncheck
 import dyncheck.cli
-from dyncheck.case import CASES_DIR, SOURCES, Case
+from dyncheck.case.folder import CASES_DIR, SOURCES, Case
 
 N = int(os.environ.get("DYNCHECK_FUZZ_EXAMPLES", "0"))
 LOG = os.environ.get("DYNCHECK_FUZZ_LOG")

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from dyncheck.case import Case
+from dyncheck.case.folder import Case
 from dyncheck.cli import main
 from test_architecture import doc_example
 
@@ -110,8 +110,8 @@ def test_run_results_will_not_replace_a_folder_it_did_not_write(tmp_path, capsys
 
 
 STUDIES = '''
-from dyncheck.stability.common import Study
-from dyncheck.stability.long_runs import energy_drift, figure_energy_drift
+from dyncheck.studies.stability.common import Study
+from dyncheck.studies.stability.long_runs import energy_drift, figure_energy_drift
 
 STUDIES = {"lyapunov": Study(energy_drift, figure_energy_drift, ())}
 '''

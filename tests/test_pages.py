@@ -8,9 +8,9 @@ import re
 import pandas as pd
 import pytest
 
-from dyncheck.messages import statuses_in_words
-from dyncheck.report import law_of_time, markdown_table
-from dyncheck.schema import UNIT_REGISTRY
+from dyncheck.common.messages import statuses_in_words
+from dyncheck.pages.report import law_of_time, markdown_table
+from dyncheck.case.schema import UNIT_REGISTRY
 
 
 # The nouns the pages count, singular and plural, for "1 cases" and "16 finding".

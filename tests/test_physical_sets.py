@@ -2,10 +2,10 @@
 principal moments about the centre of mass that a rigid body has) are drawn within, and a set the engines still
 cannot load is a failing row that says why, never a traceback."""
 
-from dyncheck import checks
-from dyncheck.case import Case
+from dyncheck.checks import runs as checks
+from dyncheck.case.folder import Case
 from dyncheck.cli import main
-from dyncheck.results import Status
+from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
 
 

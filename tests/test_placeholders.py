@@ -1,9 +1,10 @@
 """MuJoCo's placeholders (a mass or an inertia where the scene means none): measured on load and refused where they
 are not negligible at the case's parameters; allowed at a random parameter set where a MuJoCo row fails."""
 
-from dyncheck import checks, cli
-from dyncheck.case import load_case
-from dyncheck.results import Status
+from dyncheck.checks import runs as checks
+from dyncheck import cli
+from dyncheck.case.folder import load_case
+from dyncheck.results.values import Status
 
 
 def test_bodies_a_thousandth_of_the_book_s_are_refused_naming_file_override_bodies_and_quantity(capsys):

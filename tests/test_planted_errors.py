@@ -26,9 +26,9 @@ import pandas as pd
 import pytest
 
 import planting
-from dyncheck import checks, residuals
-from dyncheck.case import Case
-from dyncheck.results import Status
+from dyncheck.checks import runs as checks, residuals
+from dyncheck.case.folder import Case
+from dyncheck.results.values import Status
 from test_own_case_doc import steps
 
 ROOT = Path(__file__).resolve().parent.parent

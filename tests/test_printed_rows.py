@@ -3,8 +3,8 @@
 import pytest
 
 import dyncheck
-from dyncheck import checks, residuals
-from dyncheck.results import Status
+from dyncheck.checks import runs as checks, residuals
+from dyncheck.results.values import Status
 
 BOOK_CASES = ("piston", "rotating_pendulum", "rotating_particle", "spring_pendulum", "double_pendulum",
               "spinning_top")

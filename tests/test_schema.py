@@ -12,9 +12,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck import case as case_module
-from dyncheck import cli, schema
-from dyncheck.case import Case
+from dyncheck.case import folder as case_module
+from dyncheck import cli
+from dyncheck.case import schema
+from dyncheck.case.folder import Case
 
 DOCS = Path(__file__).resolve().parent.parent / "docs" / "case-file.md"
 
@@ -81,7 +82,7 @@ BAD_CASE_FILES = [
      "+ max(alpha_rate**2, (alpha_rate + beta_rate)**2)) / 10.5)), 166)' = 0.0001"),
     ("spring_pendulum", "tight_rtol = 1e-12", "tight_rtol = 1e-8",
      "integration.tight_rtol = 1e-08 is not below integration.rtol"),
-    # runs the integrators cannot make as asked (dyncheck.simulate.LEAST_RTOL), or whose rows would mean nothing
+    # runs the integrators cannot make as asked (dyncheck.common.ceilings.LEAST_RTOL), or whose rows would mean nothing
     ("spring_pendulum", "rtol = 1e-10\n", "rtol = 1e-300\n", "integration.rtol = 1e-300 is below 2.22e-14, 100 machine "
                                                              "epsilons: scipy's integrators raise a smaller rtol to that"),
     ("spring_pendulum", "tight_rtol = 1e-12", "tight_rtol = 1e-15", "integration.tight_rtol = 1e-15 is below 2.22e-14"),
@@ -296,7 +297,7 @@ def test_every_key_has_a_meaning():
 
 def test_the_case_file_reference_is_current():
     assert DOCS.read_text() == schema.markdown(), \
-        "regenerate: python -c 'import dyncheck.schema as s; print(s.markdown(), end=\"\")' > docs/case-file.md"
+        "regenerate: python -c 'import dyncheck.case.schema as s; print(s.markdown(), end=\"\")' > docs/case-file.md"
 
 
 def test_without_its_urdf_pinocchio_reads_the_mjcf(cases):

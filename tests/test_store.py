@@ -1,4 +1,4 @@
-"""dyncheck.store: every kind of value comes back as it was saved, every float bit for bit, and saving
+"""dyncheck.results.store: every kind of value comes back as it was saved, every float bit for bit, and saving
 the same value twice gives the same bytes."""
 
 import dataclasses
@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from dyncheck import store
+from dyncheck.results import store
 
 
 @store.register

@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import pytest
 
 import dyncheck
-from dyncheck import student_page
+from dyncheck.pages import student_page
 
 BOOK = ("piston", "rotating_pendulum", "rotating_particle", "spring_pendulum", "double_pendulum", "spinning_top")
 JARGON = re.compile(r"\b(armature|rollout|placeholder|rows?|tolerance ceiling|ceiling)\b", re.IGNORECASE)

@@ -12,8 +12,11 @@ import pytest
 import scipy.linalg
 
 import dyncheck
-from dyncheck import campbell, ceilings, vibration, vibration_page
-from dyncheck.results import Status
+from dyncheck.studies import campbell
+from dyncheck.common import ceilings
+from dyncheck.checks import vibration
+from dyncheck.pages import vibration_page
+from dyncheck.results.values import Status
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
 

@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck import ceilings, vibration, vibration_page
-from dyncheck.results import Status
+from dyncheck.common import ceilings
+from dyncheck.checks import vibration
+from dyncheck.pages import vibration_page
+from dyncheck.results.values import Status
 
 
 class _Run:  # a run's measured exponent, as a Motion gives it

@@ -1,0 +1,15 @@
+"""Stage 2, the case: reading a case folder and evaluating its numbers at the parameters (folder: `Case`,
+`load_case`), what a case file may hold (schema), a case derived from a scene and a plain equations.py (derived), the
+case's own code bounded in time and memory (isolation).  Imports dyncheck.common, dyncheck.results and engines/
+(which read the scene files)."""
+
+__all__ = ["CASES_DIR", "Case", "case_names", "load_case"]
+
+
+def __getattr__(name):
+    # Loaded when first asked for, so that importing one module of the package (dyncheck.case.schema) does not load
+    # the others.
+    if name in __all__:
+        from dyncheck.case import folder
+        return getattr(folder, name)
+    raise AttributeError(f"module 'dyncheck.case' has no attribute {name!r}")
