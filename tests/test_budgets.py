@@ -13,6 +13,7 @@ from dyncheck.case.folder import load_case
 from dyncheck.checks.runs import evaluate, parameter_sets, pointwise, random_parameters
 from dyncheck.cli import main
 from dyncheck.run.simulate import Unstable, fastest_frequency, simulate
+from dyncheck.common import ceilings
 
 
 def test_a_run_past_its_step_budget_gives_up_with_when_and_why():
@@ -34,7 +35,7 @@ def test_a_stiff_scene_is_not_started_when_its_expected_steps_exceed_the_cap():
 def test_fixed_step_runs_longer_than_the_cap_are_not_started():
     case = load_case("spring_pendulum")
     with pytest.raises(Unstable, match="not started"):
-        simulate(case.model("book"), case.initial[:2], 3.0, "RK4", dt=1e-6 * 3 / sim.MAX_STEPS, output_step=1e-3)
+        simulate(case.model("book"), case.initial[:2], 3.0, "RK4", dt=1e-6 * 3 / ceilings.MAX_STEPS, output_step=1e-3)
 
 
 def test_a_run_past_its_wall_budget_gives_up(monkeypatch):

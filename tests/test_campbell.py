@@ -15,13 +15,13 @@ import pytest
 
 import dyncheck
 from dyncheck.studies import campbell
-from dyncheck.checks import vibration
+from dyncheck.checks import linear, vibration
 from dyncheck.pages import vibration_page
 
 
 def spring(**overrides):
     case = dyncheck.load_case("spring_pendulum", **overrides)
-    return case, vibration.settings(case), vibration.linearised(case)
+    return case, linear.settings(case), linear.linearised(case)
 
 
 @pytest.mark.parametrize("k", [500.0, 2000.0, 5000.0])

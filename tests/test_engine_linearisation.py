@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from dyncheck.checks import vibration
+from dyncheck.checks import linear
 from dyncheck.case.folder import load_case
 from engines import scene
 
@@ -36,8 +36,8 @@ def accelerations_jacobian(model, t, q, v):
     """d(q'')/d(q, q') (n, 2n) of a model's own `accelerations`, by dyncheck.checks.vibration's extrapolated differences (the
     derivation's linearisation), and their largest error estimate."""
     x = np.concatenate([q, v])
-    jacobian, errors = vibration.jacobian(lambda y: np.asarray(model.accelerations(t, *np.split(y, 2)), dtype=float),
-                                          x, vibration.scales_of(x))
+    jacobian, errors = linear.jacobian(lambda y: np.asarray(model.accelerations(t, *np.split(y, 2)), dtype=float),
+                                          x, linear.scales_of(x))
     return jacobian, float(np.max(errors))
 
 

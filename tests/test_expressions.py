@@ -14,10 +14,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck.studies import stability, work_precision
+from dyncheck.studies import stability
 from dyncheck.case.folder import CASES_DIR, Case
 from dyncheck.cli import main
 from dyncheck.common.expressions import evaluate, namespace, of_parameters
+from dyncheck.checks import convergence
 
 # The classic escape of eval with empty builtins: through object's subclasses to a module's builtins.
 ESCAPE = ("[c for c in ().__class__.__base__.__subclasses__() if c.__name__ == 'catch_warnings'][0]()"
@@ -131,7 +132,7 @@ def test_every_number_of_the_case_files_evaluates_as_before(name, monkeypatch):
     case = dyncheck.load_case(name)
     case.initial, case.sample_states(), case.integration, case.scene
     if "work_precision" in case.spec:
-        work_precision.settings(case)
+        convergence.settings(case)
     stability.validate(case)
     for start in case.spec.get("stability", {}).get("lyapunov", {}).get("initial", []):
         for x in start["q"] + start["v"]:  # as stability.double_pendulum.lyapunov reads them

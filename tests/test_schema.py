@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 import dyncheck
 from dyncheck.case import folder as case_module
 from dyncheck import cli
-from dyncheck.case import schema
+from dyncheck.case import meanings, schema
 from dyncheck.case.folder import Case
 
 DOCS = Path(__file__).resolve().parent.parent / "docs" / "case-file.md"
@@ -289,15 +289,15 @@ def test_the_schema_names_no_case():
 
 
 def test_every_key_has_a_meaning():
-    keys = {key for key, _, _ in schema.keys()}
-    assert not keys - set(schema.MEANINGS), f"keys without a meaning in schema.MEANINGS: {keys - set(schema.MEANINGS)}"
-    assert not set(schema.MEANINGS) - keys, f"meanings of no key: {set(schema.MEANINGS) - keys}"
-    assert set(schema.KEY_UNITS) <= keys, f"units of no key: {set(schema.KEY_UNITS) - keys}"
+    keys = {key for key, _, _ in meanings.keys()}
+    assert not keys - set(meanings.MEANINGS), f"keys without a meaning in meanings.MEANINGS: {keys - set(meanings.MEANINGS)}"
+    assert not set(meanings.MEANINGS) - keys, f"meanings of no key: {set(meanings.MEANINGS) - keys}"
+    assert set(meanings.KEY_UNITS) <= keys, f"units of no key: {set(meanings.KEY_UNITS) - keys}"
 
 
 def test_the_case_file_reference_is_current():
-    assert DOCS.read_text() == schema.markdown(), \
-        "regenerate: python -c 'import dyncheck.case.schema as s; print(s.markdown(), end=\"\")' > docs/case-file.md"
+    assert DOCS.read_text() == meanings.markdown(), \
+        "regenerate: python -c 'import dyncheck.case.meanings as s; print(s.markdown(), end=\"\")' > docs/case-file.md"
 
 
 def test_without_its_urdf_pinocchio_reads_the_mjcf(cases):

@@ -8,11 +8,10 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import brentq
 
-from dyncheck.run.simulate import Unstable, fastest_frequency, simulate
+from dyncheck.run.simulate import Unstable, attempt, describe, fastest_frequency, simulate
 from dyncheck.studies.stability.common import EPS, Map, NotApplicable, Study, fmt, study_result
-from dyncheck.run.simulate import attempt, describe
 from dyncheck.case.folder import settings_of
-from dyncheck.checks.vibration import SAFETY
+from dyncheck.checks.linear import SAFETY
 from dyncheck.common.style import legend_below, panels, save, title
 
 

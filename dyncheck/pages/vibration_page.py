@@ -10,7 +10,8 @@ import pandas as pd
 from dyncheck.studies.campbell import Sweep  # and with it its classes registered for loading saved results (report --from)
 from dyncheck.common.messages import ENGINE_NAMES
 from dyncheck.results.values import OWN_WORDS, heading
-from dyncheck.checks.vibration import MATRIX_NAMES, SAFETY, match
+from dyncheck.checks.vibration import MATRIX_NAMES
+from dyncheck.checks.linear import SAFETY, match
 from dyncheck.common.style import SOURCE_STYLE, embed, legend_below, panels, save, title
 
 NAMES = {"reference": "reference", **ENGINE_NAMES}
