@@ -25,7 +25,8 @@ from dyncheck.run import cache
 from dyncheck.results import ci
 from dyncheck.case import isolation
 from dyncheck.case.folder import CASES_DIR, SOURCES, case_names, load_case
-from dyncheck.checks.runs import run_case, unfinished, validate_placeholders
+from dyncheck.checks.runs import run_case, unfinished
+from dyncheck.checks.pointwise import validate_placeholders
 from dyncheck.run.simulate import fastest_frequency
 from dyncheck.common.messages import suggest
 from dyncheck.common.progress import Progress

@@ -12,6 +12,7 @@ from dyncheck.checks import runs as checks, residuals, terms
 from dyncheck.case.folder import Case
 from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
+from dyncheck.checks import pointwise
 
 # The planted error: half the middle mass's weight moment about its own joint, in that joint's equation only.
 PLANTED = '0.5 * p["m3"] * p["g"] * np.sin(q[2]) * (np.arange(len(q)) == 2)'
@@ -34,9 +35,9 @@ def test_the_full_library_grows_as_n_to_the_sixth():
 def equations(case):
     """The equation rows and localisations of a case as `dyncheck run` makes them, with the peak of the memory the
     localisation takes (tracemalloc: numpy's arrays are counted)."""
-    _, sample = checks.pointwise(case)
+    _, sample = pointwise.pointwise(case)
     rows, found = residuals.equation_rows(case, sample)
-    drawn = checks.parameter_sets(case)[0]
+    drawn = pointwise.parameter_sets(case)[0]
     tracemalloc.start()
     try:
         localisations = residuals.localise(case, rows, found, drawn)

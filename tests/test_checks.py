@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks.runs import apply_findings, pointwise
+from dyncheck.checks.runs import apply_findings
+from dyncheck.checks.pointwise import pointwise
 from dyncheck.run.simulate import Unstable, simulate
 from reference import spring_pendulum
 
@@ -112,7 +113,7 @@ def test_random_parameter_sets_agree_and_say_what_was_tried(results):
 def test_a_listing_that_blows_up_gives_unstable_rows_not_a_crash():
     """At k = 1e5 N/m the Matlab listing's explicit Euler at 5e-5 s grows by exp(omega^2 dt t / 2): it
     blows up within the run, and its run checks say when and at which step."""
-    from dyncheck.checks.runs import program_checks
+    from dyncheck.checks.programs import program_checks
     case = dyncheck.load_case("spring_pendulum", k=1e5)
     rows, runs = program_checks(case, pointwise(case)[1])
     rows = apply_findings(case, rows)

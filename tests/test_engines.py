@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 
 import dyncheck
 from dyncheck.case.folder import CASES_DIR, Case
-from dyncheck.checks.runs import compare, evaluate
+from dyncheck.checks.pointwise import compare
+from dyncheck.checks.runs import evaluate
 from engines import euler, mujoco_adapter
 
 EXAMPLES = Path(__file__).parent.parent / "examples"

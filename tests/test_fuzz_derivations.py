@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks.runs import pointwise, validate_placeholders
+from dyncheck.checks.pointwise import pointwise, validate_placeholders
 from dyncheck.cli import exit_code, run_cases
 
 GUIDE = Path(__file__).resolve().parent.parent / "docs" / "own-case.md"

@@ -7,6 +7,7 @@ from dyncheck.case.folder import Case
 from dyncheck.cli import main
 from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
+from dyncheck.checks import pointwise
 
 
 def cart_with_bound_inertia(tmp_path):
@@ -27,17 +28,17 @@ def test_sets_that_break_a_body_s_triangle_inequality_are_not_drawn(tmp_path, ca
     """Before: `dyncheck run` raised MuJoCo's 'inertia must satisfy A + B >= C' out of the run."""
     folder = cart_with_bound_inertia(tmp_path)
     case = Case(folder)
-    sets, missing = checks.parameter_sets(case)
+    sets, missing = pointwise.parameter_sets(case)
     assert missing == 0 and sets and all(s["Iz"] <= 3e-3 for s in sets)
-    assert "A + B >= C" in checks.scene_breaks(case, {"Iz": 3.5e-3})
-    assert checks.scene_breaks(case, {"Iz": 2.9e-3}) is None
+    assert "A + B >= C" in pointwise.scene_breaks(case, {"Iz": 3.5e-3})
+    assert pointwise.scene_breaks(case, {"Iz": 2.9e-3}) is None
     assert main(["run", "--cases", str(folder.parent)]) == 0, capsys.readouterr().out[-2000:]
 
 
 def test_a_set_the_engines_cannot_load_is_a_failing_row_naming_it(tmp_path, monkeypatch):
     case = Case(cart_with_bound_inertia(tmp_path))
     monkeypatch.setattr(checks, "scene_breaks", lambda case, drawn: None)  # as if the constraints missed it
-    failing = [r for r in checks.random_parameters(case) if r.status == Status.FAIL]
+    failing = [r for r in pointwise.random_parameters(case) if r.status == Status.FAIL]
     assert failing and all(r.error is None for r in failing)
     assert "the scene cannot be loaded there: ValueError: " in failing[0].detail
     assert "inertia must satisfy A + B >= C" in failing[0].detail and "Iz = " in failing[0].detail

@@ -26,10 +26,11 @@ import pandas as pd
 import pytest
 
 import planting
-from dyncheck.checks import runs as checks, residuals
+from dyncheck.checks import residuals
 from dyncheck.case.folder import Case
 from dyncheck.results.values import Status
 from test_own_case_doc import steps
+from dyncheck.checks import pointwise
 
 ROOT = Path(__file__).resolve().parent.parent
 # The functions that compute each book case's accelerations (the others' joints are all driven: no
@@ -122,9 +123,9 @@ class Verdict:
 
 def equations(case):
     """dyncheck's equation rows of a case, their residuals against the engines and the localisations."""
-    _, sample = checks.pointwise(case)
+    _, sample = pointwise.pointwise(case)
     rows, found = residuals.equation_rows(case, sample)
-    return sample, rows, residuals.localise(case, rows, found, checks.parameter_sets(case)[0])
+    return sample, rows, residuals.localise(case, rows, found, pointwise.parameter_sets(case)[0])
 
 
 def judge(subject, mutant, where):

@@ -20,7 +20,7 @@ import pytest
 import dyncheck
 from dyncheck.results import measured
 from dyncheck.common import words
-from dyncheck.checks.runs import parameter_sets
+from dyncheck.checks.pointwise import parameter_sets
 from dyncheck.results.values import CaseResult, Outcome, Row, Status
 
 ROOT = dyncheck.case.folder.CASES_DIR.parent

@@ -1,7 +1,7 @@
 """`dyncheck campaign`: a case's sources compared at many random parameter sets, and its stability maps, on Dask.
 
-Each parameter set (drawn as `checks.parameter_sets` draws them) gets its own seeded random states; at each the
-pointwise checks run as `dyncheck run` runs them (`checks.pointwise`, the book's printed rows, the program's
+Each parameter set (drawn as `pointwise.parameter_sets` draws them) gets its own seeded random states; at each the
+pointwise checks run as `dyncheck run` runs them (`pointwise.pointwise`, the book's printed rows, the program's
 formulas, the findings' right sides), and `checks.apply_findings` marks the rows each registered finding explains,
 so a finding's size at a set is the largest error of its rows there.  The sets go to the workers in chunks; each
 finished chunk is one Parquet file named by its index and a key of everything it depends on (the case folder, the
@@ -23,6 +23,7 @@ from dyncheck.studies import stability
 from dyncheck.run.cache import case_version, code_version
 from dyncheck.case.folder import Case, load_case
 from dyncheck.results.values import Status
+from dyncheck.checks import pointwise, programs
 
 # The columns of a chunk's table besides the case's parameters (one per parameter, its value at the set) and the
 # state where a comparison of two sources differs most (state_t, state_<coordinate>, state_<coordinate>_rate).
@@ -66,7 +67,7 @@ class Plan:
 
 def plan(case, sets, states, chunk, out):
     """The campaign's chunks: `sets` parameter sets of `case` (its overrides fixed), `chunk` sets per task."""
-    drawn, missing = checks.parameter_sets(case, sets)
+    drawn, missing = pointwise.parameter_sets(case, sets)
     clash = set(case.params) & (set(COLUMNS) | {c for c in case.params if c.startswith("state_")})
     if clash:
         raise ValueError(f"{case.origin}: parameter {sorted(clash)[0]!r} has the name of a campaign column; "
@@ -92,10 +93,10 @@ def at_set(case, params, states, index):
 def measure_set(case, params, states, index):
     """The rows of the pointwise checks at one parameter set, the findings' rows marked, and the sample."""
     at = at_set(case, params, states, index)
-    rows, sample = checks.pointwise(at)
+    rows, sample = pointwise.pointwise(at)
     rows += residuals.printed_rows(at, sample)
-    rows += checks.program_pointwise(at, sample) if at.has_program else []
-    rows = checks.apply_findings(at, rows) + checks.right_sides(at, sample)[0]
+    rows += programs.program_pointwise(at, sample) if at.has_program else []
+    rows = checks.apply_findings(at, rows) + programs.right_sides(at, sample)[0]
     return (checks.in_own_words(rows) if at.one_derivation else rows), sample, at
 
 
