@@ -135,14 +135,14 @@ def test_bench_prints_throughput_and_ratios(capsys):
 
 
 def test_a_failed_report_leaves_the_previous_one_intact(canned, monkeypatch, tmp_path):
-    from dyncheck.pages import report
+    from dyncheck.pages import case_page
     assert cli.main(["report", "double_pendulum", "--out", str(tmp_path)]) == 0
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
 
     def broken(*args, **_):
         args[-1].write_text("half a figure")
         raise RuntimeError("disk full")
-    monkeypatch.setattr(report, "figure_energy", broken)
+    monkeypatch.setattr(case_page, "figure_energy", broken)
     with pytest.raises(RuntimeError, match="disk full"):
         cli.main(["report", "double_pendulum", "--out", str(tmp_path)])
     after = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}

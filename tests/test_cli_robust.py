@@ -15,7 +15,7 @@ import pytest
 
 from dyncheck.case import folder as case_module
 from dyncheck import cli
-from dyncheck.pages import report
+from dyncheck.pages import case_page, report
 from dyncheck.case.folder import Case
 
 PISTON_FILES = {"piston.md", "piston_timing.md", "piston_student.md", "index.md", "errata.md", "data/piston.json",
@@ -38,8 +38,8 @@ def quick_figures(monkeypatch):
         path.write_bytes(b"figure")
         path.with_suffix(".pdf").write_bytes(b"figure")
     for name in ("figure_scene", "figure_energy", "figure_pointwise"):
-        monkeypatch.setattr(report, name, lambda *args, **kwargs: quick(*args) or "A caption.")
-    monkeypatch.setattr(report, "figure_series", lambda *args, **kwargs: quick(*args) or {})  # no departures
+        monkeypatch.setattr(case_page, name, lambda *args, **kwargs: quick(*args) or "A caption.")
+    monkeypatch.setattr(case_page, "figure_series", lambda *args, **kwargs: quick(*args) or {})  # no departures
 
 
 def result(results, name):

@@ -63,7 +63,7 @@ def test_a_figure_drawn_twice_is_the_same_bytes(tmp_path):
 def test_quantities_are_named_in_the_pages_words():
     """As the prose writes them (psi'', l''), typeset: a symbol in mathtext, primes for a rate or an
     acceleration, a vector's component after it; words stay words."""
-    from dyncheck.pages.report import quantity_label
+    from dyncheck.pages.figures import quantity_label
     assert quantity_label("theta1_acc") == r"$\theta_{1}''$"
     assert quantity_label("omega3_dot_x") == r"$\omega_{3}'$ x"
     assert quantity_label("a_D_x") == "$a_{D}$ x"
@@ -77,13 +77,13 @@ def test_the_pointwise_panels_name_no_code(monkeypatch):
     """Each panel's title is the quantity in the page's words (it was the code's name, omega3_dot_x), and the
     dashed tolerance is in the legend."""
     import dyncheck
-    from dyncheck.pages import report
+    from dyncheck.pages import figures
     from dyncheck.case.folder import Case
     from dyncheck.checks.runs import run_case
     result = run_case(dyncheck.load_case("piston"), localise=False)  # seconds: its motions prescribed
     drawn = {}
-    monkeypatch.setattr(report, "save", lambda fig, path: drawn.update(fig=fig))
-    report.figure_pointwise(result, Case(result.folder, result.overrides, result.spec), "x.png", words={})
+    monkeypatch.setattr(figures, "save", lambda fig, path: drawn.update(fig=fig))
+    figures.figure_pointwise(result, Case(result.folder, result.overrides, result.spec), "x.png", words={})
     titles = [ax.get_title() for ax in drawn["fig"].axes if ax.get_title()]
     assert len(titles) == len(result.sample["values"]["reference"])
     assert not [t for t in titles if "_" in re.sub(r"\$[^$]*\$", "", t)], titles

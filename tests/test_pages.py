@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from dyncheck.common.messages import statuses_in_words
-from dyncheck.pages.report import law_of_time, markdown_table
+from dyncheck.pages.case_page import law_of_time, markdown_table
 from dyncheck.case.schema import UNIT_REGISTRY
 
 

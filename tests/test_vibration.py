@@ -107,7 +107,7 @@ def test_a_soft_spring_finds_only_the_unstable_equilibrium_through_the_hinge():
 
 
 def test_no_equilibrium_in_either_is_not_applicable(monkeypatch):
-    monkeypatch.setattr(vibration, "NEWTON_ITERATIONS", 0)  # Newton-Raphson gives up at once, in every source
+    monkeypatch.setattr(linear, "NEWTON_ITERATIONS", 0)  # Newton-Raphson gives up at once, in every source
     vib = vibration.analyse(dyncheck.load_case("double_pendulum"))
     assert [r.status for r in vib.rows] == [Status.NOT_APPLICABLE] and "finds none from the guess in either" in vib.rows[0].detail
 

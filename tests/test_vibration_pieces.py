@@ -51,7 +51,7 @@ def test_a_singular_shooting_jacobian_is_no_orbit_not_a_traceback(monkeypatch):
     case = dyncheck.load_case("rotating_pendulum")
     table = floquet.floquet_settings(case)
     period = floquet.period_of(case, table)
-    monkeypatch.setattr(vibration, "transition", lambda samples, *args: (np.eye(2)[None], None))
+    monkeypatch.setattr(floquet, "transition", lambda samples, *args: (np.eye(2)[None], None))
     guess = np.concatenate([table["q"], table["v"]]) + 0.1  # off the orbit: Newton must step
     with pytest.raises(floquet.NoOrbit, match=r"Phi\(T\) - I is singular at psi = "):
         floquet.periodic_orbit(case, "reference", guess, period)
@@ -63,10 +63,10 @@ def test_a_shooting_whose_steps_do_nothing_stops_after_stall_iterations(monkeypa
     case = dyncheck.load_case("rotating_pendulum")
     table = floquet.floquet_settings(case)
     period = floquet.period_of(case, table)
-    monkeypatch.setattr(vibration, "transition", lambda samples, *args: (1e12 * np.eye(2)[None], None))
+    monkeypatch.setattr(floquet, "transition", lambda samples, *args: (1e12 * np.eye(2)[None], None))
     runs = []
     orbit_run = floquet.orbit_run
-    monkeypatch.setattr(vibration, "orbit_run", lambda *args: runs.append(args[-1]) or orbit_run(*args))
+    monkeypatch.setattr(floquet, "orbit_run", lambda *args: runs.append(args[-1]) or orbit_run(*args))
     guess = np.concatenate([table["q"], table["v"]]) + 0.1
     with pytest.raises(floquet.NoOrbit, match=r"stalled: \|x\(T\) - x\(0\)\| stayed at .* for 5 iterations"):
         floquet.periodic_orbit(case, "reference", guess, period)
@@ -91,7 +91,7 @@ def test_each_step_of_the_continuation_shoots_at_its_own_period(monkeypatch):
     case = dyncheck.load_case("rotating_pendulum", alpha_rate=3.14, beta_rate=0.6)
     periods = []
     periodic_orbit = floquet.periodic_orbit
-    monkeypatch.setattr(vibration, "periodic_orbit",
+    monkeypatch.setattr(floquet, "periodic_orbit",
                         lambda at, source, start, period, *rest: periods.append((dict(at.overrides), period))
                         or periodic_orbit(at, source, start, period, *rest))
     analysis = floquet.floquet(case)
