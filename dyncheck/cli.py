@@ -10,7 +10,6 @@ import contextlib
 import json
 import multiprocessing
 import os
-import signal
 import sys
 import tempfile
 import textwrap
@@ -395,7 +394,7 @@ def parse_overrides(pairs):
 
 def select_cases(names, set_pairs, cases_dir=CASES_DIR):
     from dyncheck.studies import stability, work_precision
-    from dyncheck.checks import vibration
+    from dyncheck.checks import linear
     names = list(dict.fromkeys(names)) or case_names(cases_dir)  # a case named twice runs once
     defaults = {name: load_case(name, cases_dir).defaults for name in names}  # an unknown case name is named here
     overrides = parse_overrides(set_pairs)
@@ -410,7 +409,7 @@ def select_cases(names, set_pairs, cases_dir=CASES_DIR):
         for source in SOURCES:  # or a setting that is vacuous or runs away, is bad input
             case.model(source)
         stability.validate(case)
-        vibration.validate(case)
+        linear.validate(case)
         validate_placeholders(case)
         work_precision.settings(case)
     return cases

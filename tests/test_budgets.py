@@ -10,8 +10,7 @@ from hypothesis import strategies as st
 
 from dyncheck.run import simulate as sim
 from dyncheck.case.folder import load_case
-from dyncheck.checks.runs import evaluate
-from dyncheck.checks.pointwise import parameter_sets, pointwise, random_parameters
+from dyncheck.checks.pointwise import evaluate, parameter_sets, pointwise, random_parameters
 from dyncheck.cli import main
 from dyncheck.run.simulate import Unstable, fastest_frequency, simulate
 from dyncheck.common import ceilings

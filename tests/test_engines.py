@@ -14,8 +14,7 @@ from hypothesis import strategies as st
 
 import dyncheck
 from dyncheck.case.folder import CASES_DIR, Case
-from dyncheck.checks.pointwise import compare
-from dyncheck.checks.runs import evaluate
+from dyncheck.checks.pointwise import compare, evaluate
 from engines import euler, mujoco_adapter
 
 EXAMPLES = Path(__file__).parent.parent / "examples"

@@ -7,8 +7,7 @@ import pytest
 
 import dyncheck
 from dyncheck.case.folder import compare_scenes
-from dyncheck.checks.pointwise import compare
-from dyncheck.checks.runs import evaluate
+from dyncheck.checks.pointwise import compare, evaluate
 from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks import floquet, linear, vibration
+from dyncheck.checks import floquet, linear
 from dyncheck.results.values import Status
 from test_vibration import edited_case
 from dyncheck.run import simulate
@@ -102,7 +102,7 @@ def test_a_disk_at_rest_has_no_period_and_is_not_applicable():
 ])
 def test_a_bad_floquet_table_is_refused_naming_its_field(tmp_path, edit, message):
     with pytest.raises(ValueError, match=re.escape(message)):
-        vibration.validate(edited_case(tmp_path, CASES / "rotating_pendulum", ("case.toml", *edit)))
+        linear.validate(edited_case(tmp_path, CASES / "rotating_pendulum", ("case.toml", *edit)))
 
 
 @pytest.mark.parametrize("edit, message", [

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks.runs import evaluate
+from dyncheck.checks.pointwise import evaluate
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 

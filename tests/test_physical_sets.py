@@ -2,7 +2,6 @@
 principal moments about the centre of mass that a rigid body has) are drawn within, and a set the engines still
 cannot load is a failing row that says why, never a traceback."""
 
-from dyncheck.checks import runs as checks
 from dyncheck.case.folder import Case
 from dyncheck.cli import main
 from dyncheck.results.values import Status
@@ -37,7 +36,7 @@ def test_sets_that_break_a_body_s_triangle_inequality_are_not_drawn(tmp_path, ca
 
 def test_a_set_the_engines_cannot_load_is_a_failing_row_naming_it(tmp_path, monkeypatch):
     case = Case(cart_with_bound_inertia(tmp_path))
-    monkeypatch.setattr(checks, "scene_breaks", lambda case, drawn: None)  # as if the constraints missed it
+    monkeypatch.setattr(pointwise, "scene_breaks", lambda case, drawn: None)  # as if the constraints missed it
     failing = [r for r in pointwise.random_parameters(case) if r.status == Status.FAIL]
     assert failing and all(r.error is None for r in failing)
     assert "the scene cannot be loaded there: ValueError: " in failing[0].detail

@@ -1,7 +1,6 @@
 """MuJoCo's placeholders (a mass or an inertia where the scene means none): measured on load and refused where they
 are not negligible at the case's parameters; allowed at a random parameter set where a MuJoCo row fails."""
 
-from dyncheck.checks import runs as checks
 from dyncheck import cli
 from dyncheck.case.folder import load_case
 from dyncheck.results.values import Status
@@ -41,7 +40,7 @@ def test_a_random_set_s_failing_mujoco_row_is_judged_with_that_set_s_placeholder
     rows = pointwise.random_parameters(case)
     assert rows and all(r.status == Status.PASS for r in rows)
     assert all(r.tolerance == case.tolerance["pointwise"]["value"] for r in rows if "mujoco" not in r.sources)
-    monkeypatch.setattr(checks, "placeholders_effect", lambda *args: dict.fromkeys(("drive_power", "energy"), 1e-12))
+    monkeypatch.setattr(pointwise, "placeholders_effect", lambda *args: dict.fromkeys(("drive_power", "energy"), 1e-12))
     failing = [r for r in pointwise.random_parameters(case) if r.status == Status.FAIL]
     assert failing and all("mujoco" in r.sources and "placeholders' effect there 1e-12 allowed" in r.detail
                            for r in failing)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from dyncheck.case.folder import Case
-from dyncheck.checks.runs import evaluate
+from dyncheck.checks.pointwise import evaluate
 from dyncheck.cli import main
 from engines import scene
 from engines.mujoco_adapter import OPTION_ATTRIBUTES, options_set

@@ -134,7 +134,7 @@ def test_a_blown_up_run_is_recorded_with_time_and_step():
                                                                   bound=100.0, index=1))
         assert out is None and fail["status"] == "unstable"
         assert 0 < fail["t"] <= 0.5 and fail["step"] > 0 and fail["why"]
-        assert "unstable at t = " in common.describe(fail)
+        assert "unstable at t = " in simulate.describe(fail)
     with pytest.raises(Unstable):  # outside `attempt` it is the simulator's own exception
         common.run_fixed(case, "book", "RK4", 0.01, 0.5, bound=100.0, index=1)
 

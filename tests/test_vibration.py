@@ -176,7 +176,7 @@ def test_a_derivation_without_the_engines_equilibrium_fails(tmp_path):
 ])
 def test_a_bad_vibration_table_is_refused_naming_its_field(tmp_path, edit, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace("[", r"\[")):
-        vibration.validate(edited_case(tmp_path, EXAMPLES / "forced_cart_pendulum", ("case.toml", *edit)))
+        linear.validate(edited_case(tmp_path, EXAMPLES / "forced_cart_pendulum", ("case.toml", *edit)))
 
 
 

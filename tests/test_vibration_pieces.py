@@ -163,7 +163,7 @@ def test_dop853_s_error_on_a_linear_motion_is_its_stability_function_s(lam):
     # rows allowed nothing for it, and a spring pendulum's mode off by 6.3e-12 failed at 5.0e-12 (pytest -m slow)
     step, steps = 2 * math.pi / lam.imag / linear.STEPS_PER_PERIOD, 200
     rates = lambda t, y: [lam.real * y[0] - lam.imag * y[1], lam.imag * y[0] + lam.real * y[1]]  # z' = lambda z
-    solver = vibration.DOP853(rates, 0.0, [1.0, 0.0], steps * step, first_step=step, max_step=step, rtol=1e-3, atol=1e-3)
+    solver = linear.DOP853(rates, 0.0, [1.0, 0.0], steps * step, first_step=step, max_step=step, rtol=1e-3, atol=1e-3)
     while solver.status == "running":
         solver.step()
     assert solver.t == pytest.approx(steps * step, rel=1e-12)
@@ -195,7 +195,7 @@ def test_a_boundary_formula_that_is_no_number_at_the_parameters_is_no_bad_input(
     case.spec["vibration"]["boundary"][0]["expected"] = "2*sqrt(m*g*hh)"
     with pytest.raises(ValueError, match=r"vibration\.boundary\[0\]\.expected = '2\*sqrt\(m\*g\*hh\)' names hh, "
                                          "not a parameter"):
-        vibration.validate(case)
+        linear.validate(case)
 
 
 

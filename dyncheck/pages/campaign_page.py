@@ -7,7 +7,7 @@ import matplotlib.colors as colors
 import numpy as np
 import pandas as pd
 
-from dyncheck.checks.runs import ENGINES
+from dyncheck.checks.pointwise import ENGINES
 from dyncheck.results.values import heading
 from dyncheck.common.style import embed, panels, save, title
 

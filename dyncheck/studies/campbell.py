@@ -15,9 +15,8 @@ from scipy.optimize import minimize_scalar
 
 from dyncheck.results import store
 from dyncheck.run.simulate import Unstable, simulate
-from dyncheck.checks.linear import (ENGINES, NoEquilibrium, RUNS_PER_PERIOD, SAFETY, derivation_linear, engine_linear,
-                                    equilibrium, linearised, modal, settings, state_names)
-from dyncheck.checks.vibration import along
+from dyncheck.checks.linear import (ENGINES, RUNS_PER_PERIOD, SAFETY, NoEquilibrium, along, derivation_linear,
+                                    engine_linear, equilibrium, linearised, modal, settings, state_names)
 
 
 @store.register
