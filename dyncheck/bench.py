@@ -58,8 +58,8 @@ import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
-from dyncheck.run import cache
 from dyncheck.checks.runs import run_case
+from dyncheck.run import cache
 from dyncheck.run.simulate import simulate
 from engines.bench import MujocoLoops, pinocchio_rhs, pinocchio_steps
 

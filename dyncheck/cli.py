@@ -20,16 +20,16 @@ from pathlib import Path
 
 import pandas as pd
 
-from dyncheck.run import cache
-from dyncheck.results import ci
 from dyncheck.case import isolation
 from dyncheck.case.folder import CASES_DIR, SOURCES, case_names, load_case
-from dyncheck.checks.runs import run_case, unfinished
 from dyncheck.checks.pointwise import validate_placeholders
-from dyncheck.run.simulate import fastest_frequency
+from dyncheck.checks.runs import run_case, unfinished
 from dyncheck.common.messages import suggest
 from dyncheck.common.progress import Progress
+from dyncheck.results import ci
 from dyncheck.results.values import format_rows, heading, load_results, save_results, to_json
+from dyncheck.run import cache
+from dyncheck.run.simulate import fastest_frequency
 
 
 def entry():

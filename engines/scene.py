@@ -220,8 +220,8 @@ def applied_forces(forces, nv, t, q, v):
 
 # Joint names the case's [scene] moves or its loops close; any other joint would sit locked at its reference position.
 def named_joints(scene):
-    return ({joint for _, joint, _ in scene["layout"]} | set(scene["driven"]) | set(scene.get("dependent", ()))
-            | ({scene["urdf_root_joint"]["name"]} if scene.get("urdf_root_joint") else set()))
+    return ({c.joint for c in scene.layout} | set(scene.driven) | set(scene.dependent)
+            | ({scene.urdf_root_joint.name} if scene.urdf_root_joint else set()))
 
 
 PINOCCHIO_IGNORES = "Pinocchio's dynamics ignore it"

@@ -12,14 +12,14 @@ import pytest
 from PIL import Image
 
 import dyncheck
-from dyncheck.pages import animation
-from dyncheck.common import style
 from dyncheck.case.folder import Case
-from dyncheck.checks.runs import run_case
-from dyncheck.results.values import save_results
-from dyncheck.pages.report import write_reports
-from dyncheck.common.style import check_text
 from dyncheck.checks import drawings
+from dyncheck.checks.runs import run_case
+from dyncheck.common import style
+from dyncheck.common.style import check_text
+from dyncheck.pages import animation
+from dyncheck.pages.report import write_reports
+from dyncheck.results.values import save_results
 
 
 @pytest.fixture(scope="module")

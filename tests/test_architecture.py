@@ -1,6 +1,7 @@
 """The architecture's rules, checked on the source (docs/architecture.md): no import cycle among the
-project's modules, only engines/ imports the engines, the harness names no case, and a mechanism
-added from a folder outside the tree runs without a change to dyncheck/ or engines/."""
+project's modules, a stage of dyncheck/ imports only earlier stages, no module of dyncheck/ is over MAX_LINES
+lines, only engines/ imports the engines, the harness names no case, and a mechanism added from a folder outside
+the tree runs without a change to dyncheck/ or engines/."""
 
 import ast
 import re
@@ -72,6 +73,47 @@ def test_the_walk_sees_a_cycle(tmp_path):
     (tmp_path / "b.py").write_text("def f():\n    from a import x\n")
     known = {"a": tmp_path / "a.py", "b": tmp_path / "b.py"}
     assert imports(known["a"], "a", known) == {"b"} and imports(known["b"], "b", known) == {"a"}
+
+
+# The stages of dyncheck/, one package each, in the order of the data flow (docs/architecture.md); the modules at
+# the top of dyncheck/ (the command line, `bench`) come after them all.  engines/ and reference/ are outside the order.
+STAGES = ("common", "results", "case", "run", "checks", "studies", "pages")
+MAX_LINES = 600
+
+
+def stage(name):
+    """The index of module `name`'s stage in STAGES (len(STAGES) for the commands), None outside dyncheck/."""
+    parts = name.split(".")
+    if parts[0] != "dyncheck":
+        return None
+    return STAGES.index(parts[1]) if len(parts) > 1 and parts[1] in STAGES else len(STAGES)
+
+
+def upward(known):
+    """(module, module it imports) where the second is of a later stage than the first."""
+    return [(name, other) for name, path in sorted(known.items()) if stage(name) is not None
+            for other in sorted(imports(path, name, known)) if stage(other) is not None and stage(other) > stage(name)]
+
+
+def test_a_stage_imports_only_earlier_stages():
+    known = modules()
+    assert {name.split(".")[1] for name in known if name.count(".") == 1 and (ROOT / name.replace(".", "/")).is_dir()} \
+        == set(STAGES), "a package of dyncheck/ that is no stage, or a stage that is no package"
+    assert not upward(known), "imports of a later stage: " + "; ".join(f"{a} -> {b}" for a, b in upward(known))
+
+
+def test_the_stage_order_sees_an_upward_import(tmp_path):
+    """The test above can fail: a check importing a page, inside a function."""
+    (tmp_path / "checks.py").write_text("def f():\n    from dyncheck.pages import report\n")
+    (tmp_path / "report.py").write_text("from dyncheck.checks import runs\n")  # downward: allowed
+    known = {"dyncheck.checks.runs": tmp_path / "checks.py", "dyncheck.pages.report": tmp_path / "report.py"}
+    assert upward(known) == [("dyncheck.checks.runs", "dyncheck.pages.report")]
+
+
+def test_no_module_of_the_harness_is_over_max_lines():
+    long = {str(path.relative_to(ROOT)): n for path in sorted((ROOT / "dyncheck").rglob("*.py"))
+            if (n := len(path.read_text().splitlines())) > MAX_LINES}
+    assert not long, f"modules over {MAX_LINES} lines (split them by job): {long}"
 
 
 @pytest.mark.parametrize("engine", ["mujoco", "pinocchio"])

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 import chain
-from dyncheck.checks import runs as checks, residuals, terms
 from dyncheck.case.folder import Case
+from dyncheck.checks import pointwise
+from dyncheck.checks import runs as checks, residuals, terms
 from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
-from dyncheck.checks import pointwise
 
 # The planted error: half the middle mass's weight moment about its own joint, in that joint's equation only.
 PLANTED = '0.5 * p["m3"] * p["g"] * np.sin(q[2]) * (np.arange(len(q)) == 2)'

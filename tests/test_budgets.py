@@ -8,12 +8,12 @@ import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
 
-from dyncheck.run import simulate as sim
 from dyncheck.case.folder import load_case
 from dyncheck.checks.pointwise import evaluate, parameter_sets, pointwise, random_parameters
 from dyncheck.cli import main
-from dyncheck.run.simulate import Unstable, fastest_frequency, simulate
 from dyncheck.common import ceilings
+from dyncheck.run import simulate as sim
+from dyncheck.run.simulate import Unstable, fastest_frequency, simulate
 
 
 def test_a_run_past_its_step_budget_gives_up_with_when_and_why():
@@ -154,7 +154,7 @@ def test_random_parameter_sets_are_physical_beside_an_override(ixx):
 
 
 def test_random_sets_that_cannot_be_drawn_are_a_failing_row(monkeypatch):
-    monkeypatch.setattr("dyncheck.checks.runs.DRAWS", 1)
+    monkeypatch.setattr("dyncheck.checks.pointwise.DRAWS", 1)
     case = load_case("spinning_top", Ixx=0.0029393)
     rows = random_parameters(case)
     assert rows[0].status == "fail" and "not physical in 1 draws" in rows[0].detail

@@ -14,9 +14,9 @@ from pathlib import Path
 import pytest
 
 import dyncheck
-from dyncheck.studies import campbell
 from dyncheck.checks import linear
 from dyncheck.pages import vibration_page
+from dyncheck.studies import campbell
 
 
 def spring(**overrides):

@@ -5,8 +5,8 @@ import shutil
 import pytest
 
 from dyncheck.case import folder as case_module
-from dyncheck.common import ceilings
 from dyncheck.checks.runs import run_sources, trajectory
+from dyncheck.common import ceilings
 from dyncheck.results.values import row
 
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks.runs import apply_findings
 from dyncheck.checks.pointwise import pointwise
+from dyncheck.checks.runs import apply_findings
 from dyncheck.run.simulate import Unstable, simulate
 from reference import spring_pendulum
 

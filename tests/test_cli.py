@@ -8,9 +8,9 @@ import pytest
 
 import dyncheck
 from dyncheck import cli
+from dyncheck.results.values import RESULTS_VERSION, Status
 from dyncheck.studies import stability, work_precision
 from dyncheck.studies.stability import long_runs
-from dyncheck.results.values import RESULTS_VERSION, Status
 
 
 @pytest.fixture

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from dyncheck.case import folder as case_module
 from dyncheck import cli
-from dyncheck.pages import case_page, report
+from dyncheck.case import folder as case_module
 from dyncheck.case.folder import Case
+from dyncheck.pages import case_page, report
 
 PISTON_FILES = {"piston.md", "piston_timing.md", "piston_student.md", "index.md", "errata.md", "data/piston.json",
                 *(f"figures/piston_{kind}.{suffix}" for kind in ("scene", "energy", "reactions", "pointwise")

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from dyncheck.checks import linear
 from dyncheck.case.folder import load_case
+from dyncheck.checks import linear
 from engines import scene
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -206,7 +206,7 @@ def test_mujoco_skips_only_stages_that_change_no_number(name, folder, monkeypatc
     np.testing.assert_array_equal(model.drive_powers(t, q, v), plain.drive_powers(t, q, v))
     np.testing.assert_array_equal(model.energy_many(t, q, v), plain.energy_many(t, q, v))
     reactions, plain_reactions = model.reactions_many(t, q, v), plain.reactions_many(t, q, v)
-    for name in case.scene["reactions"]:
+    for name in case.scene.reactions:
         np.testing.assert_array_equal(reactions[name], plain_reactions[name], err_msg=name)
 
 

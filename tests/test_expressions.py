@@ -14,11 +14,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck.studies import stability
 from dyncheck.case.folder import CASES_DIR, Case
+from dyncheck.checks import convergence
 from dyncheck.cli import main
 from dyncheck.common.expressions import evaluate, namespace, of_parameters
-from dyncheck.checks import convergence
+from dyncheck.studies import stability
 
 # The classic escape of eval with empty builtins: through object's subclasses to a module's builtins.
 ESCAPE = ("[c for c in ().__class__.__base__.__subclasses__() if c.__name__ == 'catch_warnings'][0]()"
@@ -149,7 +149,7 @@ def test_every_expression_along_a_run_evaluates_as_before(name):
     t = np.linspace(0.0, 1.0, 41)
     rng = np.random.default_rng(0)
     columns = list(case.coords) + [f"{c}_rate" for c in case.coords] + list(case.reaction_names) + ["energy", "work"] \
-        + [f"{body}_{axis}" for body in case.scene["paths"] for axis in "xyz"]  # dyncheck.checks.runs.with_paths
+        + [f"{body}_{axis}" for body in case.scene.paths for axis in "xyz"]  # dyncheck.checks.runs.with_paths
     run = pd.DataFrame({c: rng.uniform(-1.0, 1.0, t.size) for c in columns}, index=pd.Index(t, name="t"))
     names = namespace(case, run)
     report, program = case.spec["report"], case.spec.get("program", {})

@@ -9,7 +9,6 @@ import pytest
 from dyncheck.common import style
 
 
-
 @pytest.fixture(scope="module")
 def pages(rendered):
     """Both report trees, rendered from this session's runs (conftest.rendered)."""

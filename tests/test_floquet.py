@@ -12,8 +12,8 @@ import pytest
 import dyncheck
 from dyncheck.checks import floquet, linear
 from dyncheck.results.values import Status
-from test_vibration import edited_case
 from dyncheck.run import simulate
+from test_vibration import edited_case
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
 

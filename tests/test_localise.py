@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-
 from dyncheck.checks.localise import edits, localise
 
 RNG = np.random.default_rng(7)

@@ -3,10 +3,10 @@ principal moments about the centre of mass that a rigid body has) are drawn with
 cannot load is a failing row that says why, never a traceback."""
 
 from dyncheck.case.folder import Case
+from dyncheck.checks import pointwise
 from dyncheck.cli import main
 from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
-from dyncheck.checks import pointwise
 
 
 def cart_with_bound_inertia(tmp_path):

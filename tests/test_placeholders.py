@@ -3,8 +3,8 @@ are not negligible at the case's parameters; allowed at a random parameter set w
 
 from dyncheck import cli
 from dyncheck.case.folder import load_case
-from dyncheck.results.values import Status
 from dyncheck.checks import pointwise
+from dyncheck.results.values import Status
 
 
 def test_bodies_a_thousandth_of_the_book_s_are_refused_naming_file_override_bodies_and_quantity(capsys):

@@ -25,12 +25,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import planting
-from dyncheck.checks import residuals
 from dyncheck.case.folder import Case
+from dyncheck.checks import pointwise, residuals
 from dyncheck.results.values import Status
+import planting
 from test_own_case_doc import steps
-from dyncheck.checks import pointwise
 
 ROOT = Path(__file__).resolve().parent.parent
 # The functions that compute each book case's accelerations (the others' joints are all driven: no

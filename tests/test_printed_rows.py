@@ -3,9 +3,9 @@
 import pytest
 
 import dyncheck
+from dyncheck.checks import pointwise
 from dyncheck.checks import runs as checks, residuals
 from dyncheck.results.values import Status
-from dyncheck.checks import pointwise
 
 BOOK_CASES = ("piston", "rotating_pendulum", "rotating_particle", "spring_pendulum", "double_pendulum",
               "spinning_top")

@@ -6,8 +6,8 @@ import pytest
 
 import dyncheck
 from dyncheck.case.folder import Case
-from dyncheck.checks.runs import apply_findings
 from dyncheck.checks.programs import program_output_checks
+from dyncheck.checks.runs import apply_findings
 from dyncheck.results.values import Status
 
 CASES = ("double_pendulum", "spinning_top", "spring_pendulum")

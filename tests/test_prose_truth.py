@@ -18,9 +18,9 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck.results import measured
-from dyncheck.common import words
 from dyncheck.checks.pointwise import parameter_sets
+from dyncheck.common import words
+from dyncheck.results import measured
 from dyncheck.results.values import CaseResult, Outcome, Row, Status
 
 ROOT = dyncheck.case.folder.CASES_DIR.parent

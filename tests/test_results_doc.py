@@ -7,8 +7,8 @@ import re
 from pathlib import Path
 
 from dyncheck.case.folder import Case
-from dyncheck.results.ci import tool_versions
 from dyncheck.pages.report import write_summary
+from dyncheck.results.ci import tool_versions
 from dyncheck.results.values import RESULTS_VERSION, to_json
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "results.md"

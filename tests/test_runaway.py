@@ -8,8 +8,7 @@ import pytest
 
 import dyncheck
 from dyncheck import cli
-from dyncheck.case.folder import Case
-from dyncheck.case.folder import Runaway
+from dyncheck.case.folder import Case, Runaway
 from dyncheck.checks.runs import run_sources, runaway_rows
 from dyncheck.results.values import Failure, Outcome, Row, Status
 from dyncheck.run.simulate import Escape, Escaped, simulate

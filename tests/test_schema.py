@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck.case import folder as case_module
 from dyncheck import cli
+from dyncheck.case import folder as case_module
 from dyncheck.case import meanings, schema
 from dyncheck.case.folder import Case
 

@@ -16,12 +16,12 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck.studies import stability
-from dyncheck.common import style
-from dyncheck.studies.stability import common, long_runs
 from dyncheck.checks.horizon import agreement_horizon, benettin
-from dyncheck.run.simulate import Unstable
+from dyncheck.common import style
 from dyncheck.run import simulate
+from dyncheck.run.simulate import Unstable
+from dyncheck.studies import stability
+from dyncheck.studies.stability import common, long_runs
 
 
 def settings(case, study, **changes):

@@ -12,11 +12,11 @@ import pytest
 import scipy.linalg
 
 import dyncheck
-from dyncheck.studies import campbell
-from dyncheck.common import ceilings
 from dyncheck.checks import floquet, linear, vibration
+from dyncheck.common import ceilings
 from dyncheck.pages import vibration_page
 from dyncheck.results.values import Status
+from dyncheck.studies import campbell
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
 
@@ -179,7 +179,6 @@ def test_a_bad_vibration_table_is_refused_naming_its_field(tmp_path, edit, messa
         linear.validate(edited_case(tmp_path, EXAMPLES / "forced_cart_pendulum", ("case.toml", *edit)))
 
 
-
 @pytest.mark.parametrize("name, override", [("spring_pendulum", {"m": 0.9})])
 def test_a_lighter_bob_gives_conclusive_vibration_rows(name, override):
     # At the case's amplitude the stroboscopic rows' tolerance was 1.7e-4, above the ceiling 1e-4 (the nonlinear
@@ -195,7 +194,6 @@ def test_newton_finds_the_heavy_double_pendulums_equilibrium():
     vib = vibration.analyse(dyncheck.load_case("double_pendulum", m2=3.7))
     assert vib.equilibrium is not None and np.max(np.abs(vib.equilibrium.q)) < 1e-12
     assert all(r.status is Status.PASS for r in vib.rows), [(r.quantity, str(r.status)) for r in vib.rows]
-
 
 
 def test_a_small_multiplier_beside_a_large_one_is_judged_by_its_condition():

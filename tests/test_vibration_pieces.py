@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.common import ceilings
 from dyncheck.checks import floquet, linear, vibration
+from dyncheck.common import ceilings
 from dyncheck.pages import vibration_page
 from dyncheck.results.values import Status
 
@@ -174,7 +174,6 @@ def test_dop853_s_error_on_a_linear_motion_is_its_stability_function_s(lam):
     assert 5e-12 < measured / abs(lam) < 8e-12
 
 
-
 @pytest.mark.parametrize("overrides", [{"m1": 0.05, "m2": 2.0}, {"m1": 0.0533416, "l1": 0.0789191, "m2": 0.713027}])
 def test_newton_finds_the_hanging_state_where_the_mass_matrix_is_nearly_singular(overrides):
     # A light inner mass makes M's condition 1,000: q'' = M^-1 f is far from linear near the hanging state, and
@@ -196,7 +195,6 @@ def test_a_boundary_formula_that_is_no_number_at_the_parameters_is_no_bad_input(
     with pytest.raises(ValueError, match=r"vibration\.boundary\[0\]\.expected = '2\*sqrt\(m\*g\*hh\)' names hh, "
                                          "not a parameter"):
         linear.validate(case)
-
 
 
 def test_a_degenerate_equilibrium_is_found_and_its_linearisations_compared_within_their_rounding():

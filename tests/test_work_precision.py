@@ -8,8 +8,8 @@ import pytest
 
 import dyncheck
 from dyncheck.checks import convergence
-from dyncheck.studies import work_precision
 from dyncheck.run.simulate import simulate as real_simulate
+from dyncheck.studies import work_precision
 
 
 def test_convergence_observes_the_orders():

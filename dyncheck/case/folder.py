@@ -17,10 +17,11 @@ from types import MappingProxyType
 import numpy as np
 from scipy.stats import qmc
 
-from dyncheck.case import derived, isolation, schema
+from dyncheck.case import derived, files, isolation, scene, schema
+from dyncheck.case.scene import PLACEHOLDER_INERTIA, PLACEHOLDER_MASS, compare_scenes
 from dyncheck.common import expressions, words
-from dyncheck.results import measured
 from dyncheck.common.messages import suggest
+from dyncheck.results import measured
 from dyncheck.results.values import overrides_in_words
 
 
@@ -46,18 +47,6 @@ INTERFACE = ("accelerations", "reactions", "energy", "drive_power", "mass_matrix
 # Scene values are parsed from decimal text by each loader; they must equal case.toml's to
 # within a few ulps (binding scales are exact: +-1).
 BINDING_RTOL = 4 * np.finfo(float).eps
-# The two scene files' bodies and gravity (engines.scene.Body) must agree to within SCENE_RTOL of the
-# largest entry compared: each number is parsed from decimal text (half an ulp) and passes through a
-# few roundings in each loader (a quaternion or rpy to a rotation matrix, a normalised axis,
-# R diag(I) R^T, a ball joint's armature added back), each within an ulp or two of that entry.
-SCENE_RTOL = 16 * np.finfo(float).eps
-# MuJoCo needs mass and inertia on every moving body: the MJCF's massless bodies carry placeholders of at
-# most 1e-12 kg and 1e-14 kg m^2 where the URDF has nothing.  Each case.toml (`why` of its pointwise
-# tolerance) bounds their effect below that tolerance, and the engine tests keep m l^2 >= 1e-4 kg m^2,
-# where 1e-14 is 1e-10 of it.  Mass and inertia may differ by these much more; a centre of mass is
-# compared only on a body heavier than a placeholder.
-PLACEHOLDER_MASS = 1e-12
-PLACEHOLDER_INERTIA = 1e-14
 
 
 @dataclass(frozen=True)
@@ -83,25 +72,6 @@ class Parameter:
     def allowed(self):
         """The bounds in words, as the pages and `dyncheck list` show them: "> 0", or "any"."""
         return ", ".join(f"{relation} {bound:g}" for relation, bound in self.bounds) or "any"
-
-
-class AppliedForce:
-    """A joint's generalised force (case.toml [scene.applied]) at a state: force(t, q, v) in the case's
-    coordinates, one number per degree of freedom of the joint, each a number or an expression of t, the
-    coordinates, their rates (<coordinate>_rate) and the parameters.  `constant` when none names t, a
-    coordinate or a rate: the engines then evaluate it once."""
-
-    def __init__(self, components, coords, params):
-        self.components = tuple(components)
-        self._coords, self._rates = tuple(coords), tuple(f"{c}_rate" for c in coords)
-        self._names = expressions.of_parameters(params)
-        state = {"t", *self._coords, *self._rates}
-        self.constant = not any(expressions.names(x) & state for x in self.components if isinstance(x, str))
-
-    def __call__(self, t, q, v):
-        names = {**self._names, "t": t, **dict(zip(self._coords, q)), **dict(zip(self._rates, v))}
-        return np.array([float(expressions.evaluate(x, names)) if isinstance(x, str) else float(x)
-                         for x in self.components])
 
 
 PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
@@ -225,7 +195,7 @@ class Case:
         measured.check(self)  # and a measured number that could not be
         q0, v0, _ = self.initial
         euler = self.spec["scene"].get("euler", {}).get("joint")
-        for joint, force in self.scene["applied"].items():  # a law of the state that does not evaluate: at load
+        for joint, force in self.scene.applied.items():  # a law of the state that does not evaluate: at load
             dofs = 3 if joint == euler else 1  # a ball joint's three moments, a hinge's or slide's one force
             if len(force.components) != dofs:
                 raise ValueError(f"{self.origin}: scene.applied.{joint} = {list(force.components)} has "
@@ -289,17 +259,17 @@ class Case:
         given = self._toml() if self.file.is_file() or not (self.folder / derived.EQUATIONS).is_file() else {}
         where = given.get("derivation", derived.EQUATIONS)
         if isinstance(where, str) and where.endswith(".py") and (self.folder / derived.SCENE).is_file() \
-                and schema.own_file(self.folder, where, "derivation",
+                and files.own_file(self.folder, where, "derivation",
                                     self.file if "derivation" in given else self.folder / where).is_file():
             module = self._own_code(self.folder / where, where, f"{self.origin}: derivation = {where!r}"
                                     if "derivation" in given else str(self.folder / where))
             if derived.is_plain(module):
                 from engines.mjcf import describe  # the harness reads a scene only through engines/
-                scene = describe(self.folder / derived.SCENE)
+                mjcf = describe(self.folder / derived.SCENE)
                 _, params = derived.module_values(module, self.folder / where)
                 schema.check_bindings(given.get("scene", {}).get("bindings", {}), params, self.file,
-                                      {"body": scene.masses, "joint": [j.name for j in scene.joints]})
-                return derived.case_file(self.folder, module, scene, given, overrides)
+                                      {"body": mjcf.masses, "joint": [j.name for j in mjcf.joints]})
+                return derived.case_file(self.folder, module, mjcf, given, overrides)
         if not given:
             raise ValueError(f"{self.file}: no such file, and {self.folder / derived.EQUATIONS} defines no COORDS and "
                              "accelerations(t, q, v, p) (docs/own-case.md)")
@@ -379,34 +349,19 @@ class Case:
     # -- the scene as the engines see it ---------------------------------------
     @cached_property
     def scene(self):
-        """The scene as the engine adapters take it (see engines.mujoco_adapter.MujocoModel)."""
-        s = self.spec["scene"]
-        index = {c: i for i, c in enumerate(self.coords)}
-        layout = [("scalar", joint, [index[c]]) for c, joint in s["coords"].items()]
-        if "euler" in s:
-            layout.append(("euler", s["euler"]["joint"], [index[c] for c in s["euler"]["coords"]]))
-        driven = {joint: tuple(self.value(m.get(key, 0.0)) for key in ("angle", "rate", "acc"))
-                  for joint, m in s["driven"].items()}
-        applied = {}
-        for joint, force in s.get("applied", {}).items():
-            try:
-                applied[joint] = AppliedForce(force, self.coords, self.params)
-            except ValueError as error:  # an expression that does not parse, or names what it may not
-                raise ValueError(f"{self.origin}: scene.applied.{joint} = {force!r}: {error}") from None
-        return {"coords": self.coords, "layout": layout, "driven": driven, "applied": applied,
-                "reactions": s["reactions"], "points": s.get("points", {}), "paths": s.get("paths", []),
-                "urdf_root_joint": s.get("urdf_root_joint"), "dependent": s.get("dependent", [])}
+        """The scene as the engine adapters take it (engines.description.Scene)."""
+        return scene.describe(self)
 
     def least_reaction_scale(self, name):
         """The least scale reaction `name` is judged against: the case's force scale, or for a moment its moment
         scale (tolerance.pointwise), so that a reaction that vanishes is not judged by rounding noise."""
-        moment = self.scene["reactions"][name].get("quantity", "force") == "moment"
+        moment = self.scene.reactions[name].quantity == "moment"
         return self.value(self.tolerance["pointwise"]["moment_scale" if moment else "force_scale"])
 
     @property
     def driven(self):
         """Whether anything does work on the scene: prescribed motions, applied forces or dampers."""
-        return bool(self.scene["driven"] or self.scene["applied"] or self.damped)
+        return bool(self.scene.driven or self.scene.applied or self.damped)
 
     @cached_property
     def damped(self):
@@ -422,7 +377,7 @@ class Case:
         """The module of the case's equations (its `derivation`: a .py file in the case folder, or a module of
         the package's reference/), with its classes Reference, Book and, where the book prints one, Program."""
         where = self.spec["derivation"]
-        path = schema.derivation_file(where, self.folder, self.file)  # refused before anything runs
+        path = files.derivation_file(where, self.folder, self.file)  # refused before anything runs
         if not where.endswith(".py"):
             return guarded(self._where_derived, lambda: importlib.import_module(where))
         return self._own_code(path, where, self._where_derived)
@@ -627,40 +582,4 @@ class ProgramUpTo:
         return self.program.run(q0, v0).loc[:self.t_end]
 
 
-def compare_scenes(mujoco_model, pinocchio_model, case_name):
-    """Refuse two scene files that model different bodies or gravity (see engines.scene): ValueError
-    naming both files, the body and the attribute."""
-    mjcf, urdf = Path(mujoco_model.path).name, Path(pinocchio_model.path).name
-
-    def differ(what, a, b, absolute=0.0):
-        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-        tolerance = SCENE_RTOL * max(np.max(np.abs(a)), np.max(np.abs(b))) + absolute
-        if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))) or np.max(np.abs(a - b)) > tolerance:
-            show = lambda x: np.array2string(x, precision=17, separator=", ").replace("\n", "")
-            raise ValueError(f"{mjcf} and {urdf} of case '{case_name}' disagree: {what} is {show(a)} in {mjcf} "
-                             f"and {show(b)} in {urdf} (tolerance {tolerance:.2g})")
-
-    differ("gravity", mujoco_model.gravity, pinocchio_model.gravity)
-    bodies = {engine: {b.name: b for b in model.tree()}
-              for engine, model in (("mujoco", mujoco_model), ("pinocchio", pinocchio_model))}
-    for name in bodies["mujoco"].keys() ^ bodies["pinocchio"].keys():
-        present, absent = (mjcf, urdf) if name in bodies["mujoco"] else (urdf, mjcf)
-        raise ValueError(f"{mjcf} and {urdf} of case '{case_name}' disagree: body '{name}' is in {present} "
-                         f"but not in {absent}")
-    for name, mj in bodies["mujoco"].items():
-        pn = bodies["pinocchio"][name]
-        for attribute in ("parent", "joint", "joint_type"):
-            if getattr(mj, attribute) != getattr(pn, attribute):
-                raise ValueError(f"{mjcf} and {urdf} of case '{case_name}' disagree: body '{name}' {attribute} "
-                                 f"is '{getattr(mj, attribute)}' in {mjcf} and '{getattr(pn, attribute)}' in {urdf}")
-        for attribute in ("axis", "position", "rotation", "stiffness", "springref", "damping"):
-            differ(f"body '{name}' {attribute}", getattr(mj, attribute), getattr(pn, attribute))
-        differ(f"body '{name}' mass", mj.mass, pn.mass, PLACEHOLDER_MASS)
-        if max(mj.mass, pn.mass) > PLACEHOLDER_MASS:
-            differ(f"body '{name}' centre of mass", mj.com, pn.com)
-        for file, body in ((mjcf, mj), (urdf, pn)):  # a placeholder's centre of mass, about the body origin
-            if body.mass <= PLACEHOLDER_MASS and not body.mass * (body.com @ body.com) <= PLACEHOLDER_INERTIA:
-                raise ValueError(f"{file} of case '{case_name}': body '{name}' is a placeholder of {body.mass:.3g} kg "
-                                 f"whose centre of mass {body.com.tolist()} puts {body.mass * (body.com @ body.com):.3g} "
-                                 f"kg m^2 about its origin, beyond the {PLACEHOLDER_INERTIA:g} a placeholder may carry")
-        differ(f"body '{name}' inertia about the centre of mass", mj.inertia, pn.inertia, PLACEHOLDER_INERTIA)
+#END

@@ -2,10 +2,9 @@
 generated from them and the schema: docs/case-file.md is `markdown()`; a test demands one meaning per key of
 dyncheck.case.schema.SCHEMA, and no other."""
 
+from dyncheck.case.schema import BINDABLE, BOUNDS, MAX_SETS, MAX_STATES, SCHEMA, joined, kind_in_words
+from dyncheck.case.units import DIMENSIONLESS, POSITIVE_UNITS
 from dyncheck.common import ceilings, expressions, words
-from dyncheck.case.schema import (BINDABLE, BOUNDS, DIMENSIONLESS, MAX_SETS, MAX_STATES, POSITIVE_UNITS, SCHEMA,
-                                  kind_in_words, joined)
-
 
 # -- the reference: docs/case-file.md ---------------------------------------------------------------
 # What each key of SCHEMA means, by its dotted path: `<name>` stands for any key of a table whose keys

@@ -12,20 +12,20 @@ docs/case-file.md, the reference of the case file, is `dyncheck.case.meanings.ma
 """
 
 import ast
-import functools
 import math
 import operator
 import re
 from pathlib import Path
 
 import numpy as np
-import pint
 
+from dyncheck.case.files import derivation_file, own_file
+from dyncheck.case.units import POSITIVE_DIMENSIONS, si_dimension
 from dyncheck.common import ceilings, expressions
 from dyncheck.common.ceilings import LEAST_RTOL, MAX_STEPS
-from dyncheck.results import measured
 from dyncheck.common.expressions import evaluate
-from dyncheck.common.messages import suggest
+from dyncheck.common.messages import field_error, hint
+from dyncheck.results import measured
 
 # -- the schema -----------------------------------------------------------------------------------
 # A type is a string: "str", "int", "bool", "number" (a TOML integer or float), "expr" (a number,
@@ -154,37 +154,6 @@ BINDABLE = {("body", "mass"): 1, ("body", "pos"): 3, ("body", "ipos"): 3, ("body
             ("joint", "stiffness"): 1, ("joint", "damping"): 1, ("joint", "springref"): 1, ("option", None): 3}
 
 # -- parameters ---------------------------------------------------------------------------------
-# A parameter's unit (params.<name>.unit) is any SI unit that pint reads ("N s/m", "kg m^2", "rad/s"),
-# coherent (no prefix, no factor: every value of a case is in SI), or "-" for a pure number.
-UNIT_REGISTRY = pint.UnitRegistry()
-DIMENSIONLESS = "-"
-UNIT_TEXT = re.compile(r"(?:1\s*/\s*)?[A-Za-z_ ]+(?:(?:\^|\*\*)-?[1-9])?(?:\s*[*/ ]\s*[A-Za-z_]+(?:(?:\^|\*\*)-?[1-9])?)*")
-# Quantities whose every value must be positive, in every case, by their dimension.  Whatever else a
-# parameter must satisfy depends on the case (a length may be a body's size, > 0, or a position, of any
-# sign): its bounds in [params] and the case's [[constraints]].
-POSITIVE_UNITS = {"kg": "a mass", "N/m": "a stiffness", "kg m^2": "a moment of inertia"}
-POSITIVE_DIMENSIONS = {UNIT_REGISTRY.Quantity(1.0, unit).dimensionality: what for unit, what in POSITIVE_UNITS.items()}
-
-
-@functools.cache  # pint parses a unit in ~0.1 ms, and every parameter set drawn checks every parameter's unit
-def si_dimension(unit):
-    """The dimension of `unit`, a coherent SI unit or "-"; ValueError saying why it is not one."""
-    if unit == DIMENSIONLESS:
-        return UNIT_REGISTRY.Quantity(1.0).dimensionality
-    if not unit.strip():
-        raise ValueError(f"is empty; write '{DIMENSIONLESS}' for a pure number")
-    if not UNIT_TEXT.fullmatch(unit):  # before pint's parser, which evaluates what it reads
-        raise ValueError(f"is not a unit: write SI units with letters, spaces, / and ^ or ** and small integer "
-                         f"powers, as in 'N s/m' or 'kg m^2', or '{DIMENSIONLESS}' for a pure number")
-    try:
-        base = UNIT_REGISTRY.Quantity(1.0, unit).to_base_units()
-    except Exception as error:  # pint's parser fails in many ways (its errors, tokenize's, Python's)
-        raise ValueError(f"is not a unit ({type(error).__name__}: {error}); write SI units as in 'N s/m' or "
-                         f"'kg m^2', or '{DIMENSIONLESS}' for a pure number") from None
-    if not math.isclose(base.magnitude, 1.0, rel_tol=1e-12):
-        raise ValueError(f"is not a coherent SI unit: 1 {unit} = {base.magnitude:g} {base.units:~}; every value of a "
-                         f"case is in SI, so give it in {base.units:~}")
-    return base.dimensionality
 # The bound keys of params.<name> (JSON Schema's words) and the relation each demands of the value.
 BOUNDS = {"minimum": ">=", "exclusive_minimum": ">", "maximum": "<=", "exclusive_maximum": "<"}
 RELATIONS = {">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt}
@@ -206,13 +175,13 @@ def validate(spec, file, folder=None):
     _cross_references(spec, file)
     if folder is not None:
         if spec["name"] != Path(folder).name:  # the command line finds a case by its folder, pages by its name
-            raise _error(file, "name", spec["name"], f"is not the name of the case's folder, '{Path(folder).name}'")
+            raise field_error(file, "name", spec["name"], f"is not the name of the case's folder, '{Path(folder).name}'")
         derivation_file(spec["derivation"], folder, file)
         module = spec.get("stability", {}).get("module")
         if isinstance(module, str):  # its own studies, loaded by dyncheck.studies.stability once the models are built
             path = own_file(folder, module, "stability.module", file)
             if not module.endswith(".py") or not path.is_file():  # refused by every command, `list` as `run`
-                raise _error(file, "stability.module", module, f"is not a Python file of the case's folder ({path})")
+                raise field_error(file, "stability.module", module, f"is not a Python file of the case's folder ({path})")
 
 
 def check_params(spec, params, overrides, file):
@@ -221,7 +190,7 @@ def check_params(spec, params, overrides, file):
     for p, x in params.items():
         for relation, bound, reason in demands(spec["params"][p], p):
             if not RELATIONS[relation](x, bound):
-                raise _error(file, field(p), x, f"must be {relation} {bound:g} ({reason})")
+                raise field_error(file, field(p), x, f"must be {relation} {bound:g} ({reason})")
     _check_constraints(spec.get("constraints", []), params, overrides, file)
 
 
@@ -233,15 +202,15 @@ def _check_constraints(constraints, params, overrides, file):
         try:
             x = evaluate(expression, names)
         except ValueError as error:
-            raise _error(file, f"{field}.expression", expression, f"cannot be evaluated: {error}") from None
+            raise field_error(file, f"{field}.expression", expression, f"cannot be evaluated: {error}") from None
         if isinstance(x, (bool, np.bool_)):  # a comparison would pass as 0 or 1, whatever it says
-            raise _error(file, f"{field}.expression", expression, "is a comparison; a constraint is an expression "
+            raise field_error(file, f"{field}.expression", expression, "is a comparison; a constraint is an expression "
                          "that must be >= 0 (> 0 with strict = true): write a >= b as a - b")
         strict = constraint.get("strict", False)
         if not (x > 0 if strict else x >= 0):  # also refuses a NaN
             involved = [p for p in dict.fromkeys(re.findall(r"[A-Za-z_]\w*", expression)) if p in params]
             values = ", ".join(f"{p} = {params[p]!r}" + (" (override)" if p in overrides else "") for p in involved)
-            raise _error(file, field, expression, f"is {x:.4g} at {values or 'any parameters'}, not "
+            raise field_error(file, field, expression, f"is {x:.4g} at {values or 'any parameters'}, not "
                          f"{'>' if strict else '>='} 0: {' '.join(constraint['why'].split())}"
                          + ("; set the others with the overrides (`dyncheck list` shows each case's constraints)"
                             if any(p in overrides for p in involved) else ""))
@@ -253,15 +222,15 @@ def check_values(spec, file, value):
     the first thing to say)."""
     for p, item in spec["params"].items():
         if "printed" in item and item["printed"] != without_zeros(item["value"]):
-            raise _error(file, f"params.{p}.printed", item["printed"], f"is not params.{p}.value = {item['value']!r} "
+            raise field_error(file, f"params.{p}.printed", item["printed"], f"is not params.{p}.value = {item['value']!r} "
                          f"as the book's text shows it, every digit 0 lost ('{without_zeros(item['value'])}')")
     values = {}
     for field, x, condition in _expressions(spec, SCHEMA, ""):
         values[field] = v = value(x, field)
         if not math.isfinite(v):
-            raise _error(file, field, x, f"is {v}, not a finite number")
+            raise field_error(file, field, x, f"is {v}, not a finite number")
         if condition and not CONDITIONS[condition][0](v):
-            raise _error(file, field, x, CONDITIONS[condition][1] + (f" (it is {v:g})" if isinstance(x, str) else ""))
+            raise field_error(file, field, x, CONDITIONS[condition][1] + (f" (it is {v:g})" if isinstance(x, str) else ""))
     _check_integration(spec, values, file)
     _check_sizes(spec, values, file)
     for i, runaway in enumerate(spec.get("runaway", [])):  # true or false, it must evaluate (its why: Case.prose)
@@ -274,12 +243,12 @@ def check_values(spec, file, value):
     for field, bounds in intervals.items():
         lo, hi = values[f"{field}[0]"], values[f"{field}[1]"]
         if lo > hi:
-            raise _error(file, field, bounds, f"is not an interval lo <= hi ({lo:g} > {hi:g})")
+            raise field_error(file, field, bounds, f"is not an interval lo <= hi ({lo:g} > {hi:g})")
     # The random parameter sets must be physical too: an interval is within bounds when both its ends are.
     for p, bounds in ranges.items():
         for relation, bound, reason in demands(spec["params"][p], p):
             if not all(RELATIONS[relation](values[f"sample.params.ranges.{p}[{i}]"], bound) for i in (0, 1)):
-                raise _error(file, f"sample.params.ranges.{p}", bounds,
+                raise field_error(file, f"sample.params.ranges.{p}", bounds,
                              f"leaves the physical values: {p} must be {relation} {bound:g} ({reason})")
 
 
@@ -290,22 +259,22 @@ def _check_integration(spec, values, file):
                          + (f" = {values['integration.' + key]:g}" if isinstance(setting[key], str) else ""))
     whole = lambda ratio: round(ratio) >= 1 and abs(ratio - round(ratio)) <= 1e-9 * ratio  # as simulate's grid
     if not whole(values["integration.output_step"] / values["integration.mujoco_step"]):
-        raise _error(file, "integration.output_step", setting["output_step"],
+        raise field_error(file, "integration.output_step", setting["output_step"],
                      f"is not a multiple of {shown('mujoco_step')}")
     if not whole(values["initial.t_end"] / values["integration.output_step"]):  # every run ends on an output
-        raise _error(file, "initial.t_end", spec["initial"]["t_end"],
+        raise field_error(file, "initial.t_end", spec["initial"]["t_end"],
                      f"is not a whole number of output steps ({shown('output_step')})")
     for key in ("rtol", "tight_rtol"):
         if values[f"integration.{key}"] < LEAST_RTOL:
-            raise _error(file, f"integration.{key}", setting[key],
+            raise field_error(file, f"integration.{key}", setting[key],
                          f"is below {LEAST_RTOL:.3g}, 100 machine epsilons: scipy's integrators raise a smaller rtol "
                          "to that, so the run would not be the one its rows say (dyncheck.common.ceilings.LEAST_RTOL)")
     if values["integration.rtol"] > ceilings.RUN:
-        raise _error(file, "integration.rtol", setting["rtol"],
+        raise field_error(file, "integration.rtol", setting["rtol"],
                      f"is above {ceilings.RUN:g}: a run's error, about rtol of each quantity, would be beyond the "
                      "ceiling where an error estimate means anything, and every row judged by one inconclusive")
     if values["integration.tight_rtol"] >= values["integration.rtol"]:
-        raise _error(file, "integration.tight_rtol", setting["tight_rtol"],
+        raise field_error(file, "integration.tight_rtol", setting["tight_rtol"],
                      f"is not below integration.rtol = {setting['rtol']!r}: the tight twin must be tighter")
 
 
@@ -331,7 +300,7 @@ def _check_sizes(spec, values, file):
                "MuJoCo steps per run (t_end / integration.mujoco_step)")]
     for field, x, amount, limit, what in limits:
         if amount > limit:
-            raise _error(file, field, x, f"asks for {amount:.3g} {what}, more than the {limit:.0e} a run allows")
+            raise field_error(file, field, x, f"asks for {amount:.3g} {what}, more than the {limit:.0e} a run allows")
 
 
 # -- the walk -----------------------------------------------------------------------------------
@@ -343,13 +312,13 @@ def _walk(x, kind, field, file):
     tag, *rest = kind
     if tag == "one of":
         if not any(type(x) is type(option) and x == option for option in rest):  # True is not 1
-            raise _error(file, field, x, "is not one of " + ", ".join(map(repr, rest)))
+            raise field_error(file, field, x, "is not one of " + ", ".join(map(repr, rest)))
         return
     sequence = tag in ("list", "pair")
     if not isinstance(x, list if sequence else dict):
-        raise _error(file, field, x, f"is {_type_name(x)}, not {kind_in_words(kind)}")
+        raise field_error(file, field, x, f"is {_type_name(x)}, not {kind_in_words(kind)}")
     if tag == "pair" and len(x) != 2:
-        raise _error(file, field, x, "is not a pair [lo, hi]")
+        raise field_error(file, field, x, "is not a pair [lo, hi]")
     if sequence:
         for i, item in enumerate(x):
             _walk(item, rest[0], f"{field}[{i}]", file)
@@ -360,7 +329,7 @@ def _walk(x, kind, field, file):
         keys = {key.rstrip("?"): key for key in rest[0]}
         for key, item in x.items():
             if key not in keys:  # a typo must not pass for an absent optional key
-                raise _error(file, joined(field, key), item, "is not a known key" + _hint(key, keys))
+                raise field_error(file, joined(field, key), item, "is not a known key" + hint(key, keys))
         for key, declared in keys.items():
             if key in x:
                 _walk(x[key], rest[0][declared], joined(field, key), file)
@@ -372,11 +341,11 @@ def _scalar(x, kind, field, file):
     base, _, condition = kind.partition(" ")
     types, expected = SCALARS[base]
     if not isinstance(x, types) or (type(x) is bool and base != "bool"):
-        raise _error(file, field, x, f"is {_type_name(x)}, not {expected}")
+        raise field_error(file, field, x, f"is {_type_name(x)}, not {expected}")
     if isinstance(x, float) and not math.isfinite(x):
-        raise _error(file, field, x, "is not finite")
+        raise field_error(file, field, x, "is not finite")
     if condition and base != "expr" and not CONDITIONS[condition][0](x):  # expressions: check_values
-        raise _error(file, field, x, CONDITIONS[condition][1])
+        raise field_error(file, field, x, CONDITIONS[condition][1])
 
 
 def _expressions(x, kind, field):
@@ -401,79 +370,79 @@ def _cross_references(spec, file):
     """What the types do not say: names that must refer to each other, lengths, units."""
     name, coords, params, scene = spec["name"], spec["coords"], spec["params"], spec["scene"]
     if not name.isidentifier():
-        raise _error(file, "name", name, "is not an identifier (letters, digits and _, not starting with a digit)")
+        raise field_error(file, "name", name, "is not an identifier (letters, digits and _, not starting with a digit)")
     if name in RESERVED_NAMES:
-        raise _error(file, "name", name, f"is the name of a page of the report ({', '.join(RESERVED_NAMES)}); choose another")
+        raise field_error(file, "name", name, f"is the name of a page of the report ({', '.join(RESERVED_NAMES)}); choose another")
     for key in ("coords", "reactions"):
         twice = [x for x in spec[key] if spec[key].count(x) > 1]
         if twice:
-            raise _error(file, key, spec[key], f"names '{twice[0]}' twice")
+            raise field_error(file, key, spec[key], f"names '{twice[0]}' twice")
     per_coordinate = {"coord_units": spec["coord_units"], "initial.q": spec["initial"]["q"],
                       "initial.v": spec["initial"]["v"], "sample.q": spec["sample"]["q"],
                       "sample.v": spec["sample"]["v"]}
     for field, values in per_coordinate.items():
         if len(values) != len(coords):
-            raise _error(file, field, values, f"has length {len(values)}, not {len(coords)} "
+            raise field_error(file, field, values, f"has length {len(values)}, not {len(coords)} "
                                               f"(one per coordinate: {', '.join(coords) or 'none'})")
     for p, item in params.items():
         try:
             si_dimension(item["unit"])
         except ValueError as why:
-            raise _error(file, f"params.{p}.unit", item["unit"], str(why)) from None
+            raise field_error(file, f"params.{p}.unit", item["unit"], str(why)) from None
         for key, relation in BOUNDS.items():  # overrides and ranges are checked later; the default here
             if key in item and not RELATIONS[relation](item["value"], item[key]):
-                raise _error(file, f"params.{p}.{key}", item[key], f"excludes the default params.{p}.value = "
+                raise field_error(file, f"params.{p}.{key}", item[key], f"excludes the default params.{p}.value = "
                              f"{item['value']!r}: {p} must be {relation} {item[key]:g}")
 
     euler = scene.get("euler", {}).get("coords", [])
     if "euler" in scene and len(euler) != 3:
-        raise _error(file, "scene.euler.coords", euler, "does not name 3 coordinates (a ball joint's Euler angles)")
+        raise field_error(file, "scene.euler.coords", euler, "does not name 3 coordinates (a ball joint's Euler angles)")
     if sorted([*scene["coords"], *euler]) != sorted(coords):
-        raise _error(file, "scene.coords", scene["coords"],
+        raise field_error(file, "scene.coords", scene["coords"],
                      f"(with scene.euler) does not give each of the coordinates ({', '.join(coords) or 'none'}) "
                      "exactly one joint")
     moments = [name for name, reaction in scene["reactions"].items() if reaction.get("quantity") == "moment"]
     if moments and "moment_scale" not in spec["tolerance"]["pointwise"]:
-        raise _error(file, "tolerance.pointwise", spec["tolerance"]["pointwise"],
+        raise field_error(file, "tolerance.pointwise", spec["tolerance"]["pointwise"],
                      f"has no moment_scale, which the moment reaction '{moments[0]}' is judged against at least")
     if sorted(scene["reactions"]) != sorted(spec["reactions"]):
-        raise _error(file, "scene.reactions", list(scene["reactions"]),
+        raise field_error(file, "scene.reactions", list(scene["reactions"]),
                      f"does not name the case's reactions ({', '.join(spec['reactions'])})")
     for p, locations in scene.get("bindings", {}).items():
         if p not in params:
-            raise _error(file, f"scene.bindings.{p}", locations, "binds no parameter" + _hint(p, params))
+            raise field_error(file, f"scene.bindings.{p}", locations, "binds no parameter" + hint(p, params))
     check_bindings(scene.get("bindings", {}), params, file)
     for p, bounds in spec["sample"].get("params", {}).get("ranges", {}).items():
         if p not in params:
-            raise _error(file, f"sample.params.ranges.{p}", bounds, "is not a parameter's range" + _hint(p, params))
+            raise field_error(file, f"sample.params.ranges.{p}", bounds, "is not a parameter's range" + hint(p, params))
     ids = [finding["id"] for finding in spec.get("findings", [])]
     for i, finding_id in enumerate(ids):
         if finding_id in ids[:i]:
-            raise _error(file, f"findings[{i}].id", finding_id, "is the id of an earlier finding")
+            raise field_error(file, f"findings[{i}].id", finding_id, "is the id of an earlier finding")
     for i, finding in enumerate(spec.get("findings", [])):
         for source in finding["sources"]:
             if not _of_the_book(source):
-                raise _error(file, f"findings[{i}].sources", source,
+                raise field_error(file, f"findings[{i}].sources", source,
                              "is not the book's: a finding is an error of the book, its program, its figures or its "
                              "data ('book', 'program', or a comparison with one of them), never of an engine or the "
                              "reference")
     for i, runaway in enumerate(spec.get("runaway", [])):
         if runaway["coordinate"] not in coords:
-            raise _error(file, f"runaway[{i}].coordinate", runaway["coordinate"], "is not a coordinate"
-                         + _hint(runaway["coordinate"], coords))
+            raise field_error(file, f"runaway[{i}].coordinate", runaway["coordinate"], "is not a coordinate"
+                         + hint(runaway["coordinate"], coords))
         try:
             comparison = isinstance(ast.parse(runaway["when"].strip(), mode="eval").body, ast.Compare)
         except SyntaxError as error:
-            raise _error(file, f"runaway[{i}].when", runaway["when"], f"cannot be parsed: {error.msg}") from None
+            raise field_error(file, f"runaway[{i}].when", runaway["when"], f"cannot be parsed: {error.msg}") from None
         if not comparison:  # a number would hold wherever it is not 0
-            raise _error(file, f"runaway[{i}].when", runaway["when"], "is not a comparison of the parameters, "
+            raise field_error(file, f"runaway[{i}].when", runaway["when"], "is not a comparison of the parameters, "
                          "such as k < m*Omega**2")
     _ceilings(spec, file)
     _course(spec, file)
     for key, figure in spec.get("program", {}).get("figures", {}).items():
         lo, hi = figure["range"]
         if not lo < hi:
-            raise _error(file, f"program.figures.{key}.range", figure["range"], "is not an interval lo < hi")
+            raise field_error(file, f"program.figures.{key}.range", figure["range"], "is not an interval lo < hi")
     # What dyncheck.checks.runs.program_output_checks evaluates: arrays (a division by zero is then inf, not an error).
     engine = {**expressions.of_parameters({p: item["value"] for p, item in params.items()}),
               **{f"{body}_{axis}": np.ones(1) for body in scene.get("paths", []) for axis in "xyz"},
@@ -482,7 +451,7 @@ def _cross_references(spec, file):
         try:
             evaluate(expression, engine)
         except ValueError as error:
-            raise _error(file, f"program.outputs.{key}", expression, f"cannot be evaluated from MuJoCo's values at "
+            raise field_error(file, f"program.outputs.{key}", expression, f"cannot be evaluated from MuJoCo's values at "
                          f"the program's states: {error}") from None
 
 
@@ -509,49 +478,16 @@ def _course(spec, file):
         for j, item in enumerate(step.get("show", [])):
             field = f"course.steps[{i}].show[{j}]"
             if "expression" not in item and "quantities" not in item:
-                raise _error(file, field, item, "shows nothing: give an expression, quantities that check it, or both")
+                raise field_error(file, field, item, "shows nothing: give an expression, quantities that check it, or both")
             if "expression" in item and "label" not in item:
-                raise _error(file, field, item, "has an expression but no label (its left side in LaTeX)")
+                raise field_error(file, field, item, "has an expression but no label (its left side in LaTeX)")
             for quantity in item.get("quantities", []):
                 if quantity not in known:
-                    raise _error(file, f"{field}.quantities", quantity, "is no quantity of this case"
-                                 + _hint(quantity, sorted(known)))
+                    raise field_error(file, f"{field}.quantities", quantity, "is no quantity of this case"
+                                 + hint(quantity, sorted(known)))
         if step.get("vibration") and "vibration" not in spec:
-            raise _error(file, f"course.steps[{i}].vibration", True, "shows vibration results, but the case has no "
+            raise field_error(file, f"course.steps[{i}].vibration", True, "shows vibration results, but the case has no "
                          "[vibration]")
-
-
-# The package's own derivations, the one place outside a case's folder that its `derivation` may name.
-REFERENCE = Path(__file__).resolve().parents[2] / "reference"
-
-
-def own_file(folder, name, field, file):
-    """The file `name` that the case file's `field` gives, as a path inside the case's `folder` (symbolic links
-    and .. resolved): a case file names only files of its own folder, so that reading a case runs no code
-    from elsewhere.  ValueError for a path that leaves it; whether the file is there is the caller's to say."""
-    path = (Path(folder) / name).resolve()
-    if not path.is_relative_to(Path(folder).resolve()):
-        raise _error(file, field, name, f"is not a file of the case's folder {folder} (it is {path}): a case file "
-                     "names only files of its own folder")
-    return path
-
-
-def derivation_file(derivation, folder, file):
-    """The file of the case's equations, checked before anything is imported: a .py file in the case's
-    `folder` (own_file), or `reference.<name>`, the package's own reference/<name>.py (never any other
-    module: finding one would import its parent packages, and loading it runs whatever is installed)."""
-    if derivation.endswith(".py"):
-        path = own_file(folder, derivation, "derivation", file)
-        where = "no file in the case folder"
-    else:
-        package, _, name = derivation.partition(".")
-        if package != REFERENCE.name or not name.isidentifier():
-            raise _error(file, "derivation", derivation, f"is neither a module of the package's {REFERENCE.name}/ "
-                         f"({REFERENCE.name}.<name>) nor a path ending in .py of the case's folder")
-        path, where = REFERENCE / f"{name}.py", f"no module of the package's {REFERENCE.name}/"
-    if not path.is_file():
-        raise _error(file, "derivation", derivation, f"names {where} (where the case's equations live)")
-    return path
 
 
 def _of_the_book(source):
@@ -563,15 +499,15 @@ def _ceilings(spec, file):
     """Tolerances that would make their checks vacuous (dyncheck.common.ceilings)."""
     tolerance = spec["tolerance"]
     if tolerance["pointwise"]["value"] > ceilings.POINTWISE:
-        raise _error(file, "tolerance.pointwise.value", tolerance["pointwise"]["value"],
+        raise field_error(file, "tolerance.pointwise.value", tolerance["pointwise"]["value"],
                      f"is above the ceiling {ceilings.POINTWISE:g} of a pointwise comparison, above which it proves nothing")
     for check in ("trajectory", "energy"):
         if tolerance[check]["safety"] > ceilings.SAFETY:
-            raise _error(file, f"tolerance.{check}.safety", tolerance[check]["safety"],
+            raise field_error(file, f"tolerance.{check}.safety", tolerance[check]["safety"],
                          f"is above {ceilings.SAFETY:g}: a check that trusts its error estimate this little proves nothing")
     for i, item in enumerate(spec.get("data", [])):
         if item["tolerance"] > ceilings.DATA:
-            raise _error(file, f"data[{i}].tolerance", item["tolerance"],
+            raise field_error(file, f"data[{i}].tolerance", item["tolerance"],
                          f"is above the ceiling {ceilings.DATA:g}: it could not tell a printing error from the printed rounding")
 
 
@@ -583,32 +519,32 @@ def check_bindings(bindings, params, file, elements=None):
     _walk(bindings, SCHEMA[1]["scene"][1]["bindings?"], "scene.bindings", file)
     for p, locations in bindings.items():
         if not locations:
-            raise _error(file, f"scene.bindings.{p}", locations, "binds the parameter to nothing: give its locations "
+            raise field_error(file, f"scene.bindings.{p}", locations, "binds the parameter to nothing: give its locations "
                          "in the scene, or leave it out")
         for i, location in enumerate(locations):
             field = f"scene.bindings.{p}[{i}]"
             _binding(location, field, params, file)
             names = (elements or {}).get(location["element"])
             if names is not None and location["name"] not in names:
-                raise _error(file, f"{field}.name", location["name"], f"is no {location['element']} of the scene"
-                             + _hint(location["name"], sorted(names)))
+                raise field_error(file, f"{field}.name", location["name"], f"is no {location['element']} of the scene"
+                             + hint(location["name"], sorted(names)))
 
 
 def _binding(location, field, params, file):
     element, attribute = location["element"], location.get("attribute")
     if (element, attribute) not in BINDABLE:
         bindable = [a for e, a in BINDABLE if e == element and a]
-        raise _error(file, f"{field}.attribute", attribute, f"is not a bindable attribute of a {element}"
+        raise field_error(file, f"{field}.attribute", attribute, f"is not a bindable attribute of a {element}"
                      + (f"; those are {', '.join(bindable)}" if bindable else "; a binding of the option has none"))
     if element == "option" and location["name"] != "gravity":
-        raise _error(file, f"{field}.name", location["name"], "is not 'gravity', the one option a binding sets")
+        raise field_error(file, f"{field}.name", location["name"], "is not 'gravity', the one option a binding sets")
     index, size = location.get("index", 0), BINDABLE[element, attribute]
     if not 0 <= index < size:
-        raise _error(file, f"{field}.index", index, f"is not within 0..{size - 1} ({element} {attribute or 'gravity'})")
+        raise field_error(file, f"{field}.index", index, f"is not within 0..{size - 1} ({element} {attribute or 'gravity'})")
     for depend in location.get("depends", []):
         if depend not in params:
-            raise _error(file, f"{field}.depends", location["depends"], f"names '{depend}', not a parameter"
-                         + _hint(depend, params))
+            raise field_error(file, f"{field}.depends", location["depends"], f"names '{depend}', not a parameter"
+                         + hint(depend, params))
 
 
 def demands(item, name):
@@ -621,15 +557,6 @@ def demands(item, name):
 
 
 # -- messages -----------------------------------------------------------------------------------
-
-def _error(file, field, value, problem):
-    text = repr(value)
-    return ValueError(f"{file}: {field} = {text if len(text) <= 80 else text[:77] + '...'} {problem}")
-
-
-def _hint(word, choices):
-    return suggest(word, choices) or f"; expected one of: {', '.join(choices)}"
-
 
 def joined(field, key):
     return f"{field}.{key}" if field else key

@@ -5,13 +5,13 @@ import math
 
 import numpy as np
 
+from dyncheck.case.schema import MAX_OUTPUTS
+from dyncheck.checks.linear import jacobian, scales_of
 from dyncheck.common import ceilings
 from dyncheck.common.ceilings import LEAST_RTOL, MAX_STEPS, ROUNDING_FLOOR
 from dyncheck.results.values import Status, no_number, row
-from dyncheck.case.schema import MAX_OUTPUTS
 from dyncheck.run.simulate import (FIXED_METHODS, METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable, fastest_frequency,
                                    simulate, state_columns)
-from dyncheck.checks.linear import jacobian, scales_of
 
 EXPECTED_ORDER = {name: method.order for name, method in METHODS.items() if method.order}  # the fixed steps
 SWEEP_METHODS = {"reference": SCIPY_METHODS + FIXED_METHODS, "pinocchio": SCIPY_METHODS, "mujoco": MUJOCO_METHODS}

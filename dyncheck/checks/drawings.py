@@ -15,11 +15,11 @@ def with_paths(case, run):
     centres of mass (<body>_x, _y, _z) as columns, for the case's figures and values
     (dyncheck.common.expressions.namespace): computed here, where the engines are, so that the report
     needs none."""
-    if not case.scene["paths"]:
+    if not case.scene.paths:
         return run
     positions = case.model("mujoco").paths_many(run.index.to_numpy(), run[list(case.coords)].to_numpy())  # (time, body, xyz)
     out = run.copy()
-    for b, body in enumerate(case.scene["paths"]):
+    for b, body in enumerate(case.scene.paths):
         for i, axis in enumerate("xyz"):
             out[f"{body}_{axis}"] = positions[:, b, i]
     out.attrs = dict(run.attrs)
@@ -36,7 +36,7 @@ def drawings(case, runs):
     tight = runs["reference"].twin
     _, origins, parents = model.points(0.0, tight[list(case.coords)].to_numpy()[0])
     return {"scene": {"origins": origins, "parents": parents,
-                      "path_origins": np.array([model.body_id(name) - 1 for name in case.scene["paths"]],
+                      "path_origins": np.array([model.body_id(name) - 1 for name in case.scene.paths],
                                                dtype=int)}}
 
 

@@ -9,8 +9,8 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from dyncheck.run.simulate import Unstable, attempt, describe
 from dyncheck.case.folder import settings_of
+from dyncheck.run.simulate import Unstable, attempt, describe
 
 
 def state_weights(case):

@@ -14,7 +14,6 @@ import ast
 import numpy as np
 
 
-
 def _additive_terms(node):
     """The operands of a chain of + and - (each with its sign), or None."""
     if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub)):

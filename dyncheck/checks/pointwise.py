@@ -6,13 +6,12 @@ import itertools
 
 import numpy as np
 
-
-from dyncheck.common import ceilings
 from dyncheck.case import schema
-from dyncheck.case.folder import PLACEHOLDER_INERTIA, PLACEHOLDER_MASS, SOURCES
+from dyncheck.case.folder import SOURCES
+from dyncheck.case.scene import PLACEHOLDER_INERTIA, PLACEHOLDER_MASS
+from dyncheck.common import ceilings
 from dyncheck.results.values import OWN_WORDS, Status, no_number, row
 from dyncheck.run.simulate import at_many_states, state_columns
-
 
 EPS = np.finfo(float).eps
 INTEGRATED = ("reference", "book", "pinocchio")  # sources driven by scipy's DOP853
@@ -55,15 +54,15 @@ def evaluate(case, source, states, model=None):
     values = {f"{c}_acc": acc[:, i] for i, c in enumerate(case.coords)}
     reactions = each("reactions", model.reactions)
     values.update({name: np.array([r[name] for r in reactions]) for name in case.reaction_names})
-    if case.scene["points"]:
+    if case.scene.points:
         points = each("point accelerations", model.point_accelerations)
-        for name in case.scene["points"]:
+        for name in case.scene.points:
             for axis, label in enumerate("xyz"):
                 values[f"{name}_{label}"] = np.array([p[name][axis] for p in points])
-    if case.scene.get("dependent") and hasattr(model, "dependent"):  # a closed loop's position and velocity solve
+    if case.scene.dependent and hasattr(model, "dependent"):  # a closed loop's position and velocity solve
         solved = each("dependent joints", lambda t, q, v: [(f"{joint}{rate} (dependent)", by_joint[joint])
                                                             for rate, by_joint in zip(("", "_rate"), model.dependent(t, q, v))
-                                                            for joint in case.scene["dependent"]])
+                                                            for joint in case.scene.dependent])
         for k, (quantity, _) in enumerate(solved[0]):
             values[quantity] = np.array([float(pairs[k][1]) for pairs in solved])
     if hasattr(model, "energy"):  # optional of a derivation: its rows are then not applicable (`pointwise`)
@@ -95,7 +94,7 @@ def quantity_scales(case, a, b):
     # an axis nothing loads, at constant rates) is not judged by rounding noise relative to zero.
     for quantity in ("force", "moment"):
         names = [name for name in case.reaction_names if name in a and name in b
-                 and case.scene["reactions"][name].get("quantity", "force") == quantity]
+                 and case.scene.reactions[name].quantity == quantity]
         if names:
             scale = max([case.least_reaction_scale(names[0])]
                         + [np.max(np.abs(s[name])) for s in (a, b) for name in names])
@@ -104,10 +103,10 @@ def quantity_scales(case, a, b):
         energy = max([np.max(np.abs(s["energy"])) for s in (a, b) if "energy" in s], default=0.0)
         scales["drive_power"] = max(np.max(np.abs(a["drive_power"])), np.max(np.abs(b["drive_power"])),
                                     energy / 1.0)  # J per 1 s
-    for name, spec in case.scene["points"].items():
+    for name, spec in case.scene.points.items():
         parts = [f"{name}_{axis}" for axis in "xyz"]
         scale = max(np.max(np.linalg.norm(np.column_stack([s[p] for p in parts]), axis=1)) for s in (a, b))
-        if spec.get("kind", "acceleration").endswith("acceleration") and "angular" not in spec.get("kind", ""):
+        if spec.kind.endswith("acceleration") and "angular" not in spec.kind:
             # a base at rest: judged against g
             scale = max(scale, case.params.get("g", 0.0))
         scales.update(dict.fromkeys(parts, scale))

@@ -6,19 +6,18 @@ import re
 
 import numpy as np
 
-
-from dyncheck.run import cache
+from dyncheck.checks.drawings import with_paths
+from dyncheck.checks.localise import localise, values_at
+from dyncheck.checks.pointwise import ENGINES, EPS, relative_error
 from dyncheck.common import ceilings
 from dyncheck.common.ceilings import ROUNDING_FLOOR
 from dyncheck.common.expressions import evaluate as evaluate_expression
 from dyncheck.common.expressions import namespace, of_parameters
-from dyncheck.checks.localise import localise, values_at
 from dyncheck.common.messages import suggest
 from dyncheck.results.values import Finding, Pair, Status, no_number, row
+from dyncheck.run import cache
 from dyncheck.run.simulate import (Unstable, energy_residual, fastest_frequency, richardson_factor, simulate,
                                    state_columns)
-from dyncheck.checks.drawings import with_paths
-from dyncheck.checks.pointwise import ENGINES, EPS, relative_error
 
 
 # -- the book's programs ------------------------------------------------------------
@@ -144,7 +143,7 @@ def program_output_checks(case, listing):
     points = [model.points(t, q) for t, q, _ in states]  # traced centres of mass, body origins
     paths = np.array([traced for traced, _, _ in points])  # (row, body, xyz)
     names.update({f"{body}_{axis}": paths[:, b, i]
-                  for b, body in enumerate(case.scene["paths"]) for i, axis in enumerate("xyz")})
+                  for b, body in enumerate(case.scene.paths) for i, axis in enumerate("xyz")})
     size = max(np.max(np.linalg.norm(np.vstack([traced, origins]), axis=1)) for traced, origins, _ in points)
     reactions = [model.reactions(t, q, v) for t, q, v in states]
     names.update({name: np.array([r[name] for r in reactions]) for name in case.reaction_names})

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dyncheck.common import ceilings
 from dyncheck.checks import terms
+from dyncheck.common import ceilings
 from dyncheck.results.values import Localisation, Status, no_number, row
 
 ENGINES = ("mujoco", "pinocchio")
@@ -271,8 +271,8 @@ def driven_units(case):
     that is a law of time and state: candidates of the fit as functions of time (dyncheck.checks.terms), the law
     in the case file's words, "(F0 * cos(Omega * t))"."""
     kinds = {body.joint: body.joint_type for body in case.model("mujoco").tree()}
-    return tuple((joint, "rad" if kinds[joint] == "hinge" else "m") for joint in case.scene["driven"]) + tuple(
-        (f"({law})", terms.FORCE) for force in case.scene["applied"].values() if not force.constant
+    return tuple((joint, "rad" if kinds[joint] == "hinge" else "m") for joint in case.scene.driven) + tuple(
+        (f"({law})", terms.FORCE) for force in case.scene.applied.values() if not force.constant
         for law in force.components)
 
 
@@ -280,9 +280,9 @@ def with_driven(case, t, q, v):
     """The states' coordinates q and, after them, the prescribed motions' positions at the states' times t
     and the varying applied forces' components there (driven_units): the terms of a scene on a driven base
     depend on its angle, alpha0 + alpha_rate t; a derivation may lack a push F0 cos(Omega t)."""
-    motions = [angle + rate * t + 0.5 * acc * t**2 for angle, rate, acc in case.scene["driven"].values()]
+    motions = [law.at(t) for law in case.scene.driven.values()]
     forces = [np.array([force(ti, qi, vi) for ti, qi, vi in zip(np.broadcast_to(t, len(q)), q, v)]).T
-              for force in case.scene["applied"].values() if not force.constant]
+              for force in case.scene.applied.values() if not force.constant]
     return np.column_stack([q, *motions, *[row for force in forces for row in force]]) if motions or forces else q
 
 

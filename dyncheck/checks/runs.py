@@ -6,19 +6,19 @@ from dataclasses import replace
 
 import numpy as np
 
-
-from dyncheck.run import cache
-from dyncheck.common import ceilings
 from dyncheck.checks import residuals, vibration
-from dyncheck.common.ceilings import ROUNDING_FLOOR
-from dyncheck.results.values import OWN_WORDS, CaseResult, Outcome, Status, no_number, row
-from dyncheck.run.simulate import (ERROR_EXPONENT, Escape, Unstable, energy_residual, fastest_frequency,
-                                   richardson_factor, simulate, state_columns)
-from dyncheck.checks.horizon import agreement_horizon
 from dyncheck.checks.convergence import NoFrequency, convergence
 from dyncheck.checks.drawings import drawings, frames, with_paths
-from dyncheck.checks.programs import findings_of, program_checks, right_sides
+from dyncheck.checks.horizon import agreement_horizon
 from dyncheck.checks.pointwise import INTEGRATED, along_run, not_defined, parameter_sets, pointwise, random_parameters
+from dyncheck.checks.programs import findings_of, program_checks, right_sides
+from dyncheck.common import ceilings
+from dyncheck.common.ceilings import ROUNDING_FLOOR
+from dyncheck.results.values import OWN_WORDS, CaseResult, Outcome, Status, no_number, row
+from dyncheck.run import cache
+from dyncheck.run.simulate import (ERROR_EXPONENT, Escape, Unstable, energy_residual, fastest_frequency,
+                                   richardson_factor, simulate, state_columns)
+
 
 # -- trajectories -----------------------------------------------------------------
 
@@ -151,7 +151,7 @@ def trajectory(case, runs):
                             + (f", the scene's approximations' effect {effect:.2g} allowed{soft_loops(case)}"
                                if outcome.approximations is not None else "")
                             + (f"; {why['sentence']}" if math.isfinite(horizon) else ""), ceiling=ceilings.RUN))
-    if runs["mujoco"].ok and case.scene["driven"]:
+    if runs["mujoco"].ok and case.scene.driven:
         # The armature holds the driven rates while MuJoCo steps: small enough a drift that its effect on the
         # motion, allowed in the rows above, is measured to first order (ceilings.DRIVEN_RATE).
         rows.append(row("trajectory", "driven rate", ("mujoco", "prescribed"),
@@ -163,7 +163,7 @@ def trajectory(case, runs):
 
 def soft_loops(case):
     """What a row's "the scene's approximations' effect" holds beyond placeholders and prescribed motions."""
-    return " (MuJoCo's soft loops among them: its run with their softness doubled)" if case.scene.get("dependent") else ""
+    return " (MuJoCo's soft loops among them: its run with their softness doubled)" if case.scene.dependent else ""
 
 
 def energy(case, runs):
@@ -189,7 +189,7 @@ def energy(case, runs):
                         safety * estimate / scale + effect / scale + ROUNDING_FLOOR,
                         f"max |E(t) - E(0) - W(t)| / max(|E|, |W|), {run.attrs['method']}"
                         + (f", the scene's approximations' effect {effect / scale:.2g} allowed{soft_loops(case)}"
-                           if approximated is not None and case.scene.get("dependent") else ""), ceiling=ceilings.RUN))
+                           if approximated is not None and case.scene.dependent else ""), ceiling=ceilings.RUN))
     return rows
 
 

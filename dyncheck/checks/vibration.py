@@ -31,15 +31,17 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 
-from dyncheck.common import ceilings
-from dyncheck.results import store
-from dyncheck.results.values import Status, no_number, row
-from dyncheck.checks.linear import (ENGINES, Equilibrium, MUJOCO_TWIN, MUJOCO_TWIN_FACTOR, NEWTON_TOLERANCE,
-                                    NoEquilibrium, SAFETY, derivation_linear, dop853_exponent_error, engine_linear,
+from dyncheck.checks.floquet import Floquet, floquet, floquet_settings, no_orbit
+from dyncheck.checks.linear import (ENGINES, MUJOCO_TWIN, MUJOCO_TWIN_FACTOR, NEWTON_TOLERANCE, SAFETY, Equilibrium,
+                                    NoEquilibrium, derivation_linear, dop853_exponent_error, engine_linear,
                                     equilibrium, first_order_change, full, linearised, match, modal, mode_run,
                                     rounding, settings, settled_amplitude, state_names, state_words, steady, step_cap,
                                     term_errors, unmeasured, verdict_row)
-from dyncheck.checks.floquet import Floquet, floquet, floquet_settings, no_orbit
+from dyncheck.common import ceilings
+from dyncheck.results import store
+from dyncheck.results.values import Status, no_number, row
+
+
 # -- the analysis ----------------------------------------------------------------------------------
 
 @store.register
@@ -56,8 +58,6 @@ class Vibration:
     rows: tuple
     failure: str = ""  # why there is no analysis (no equilibrium, a periodic one)
     floquet: "Floquet | None" = None  # about the periodic motion of [vibration.floquet]
-
-
 
 
 def analyse(case):
@@ -228,10 +228,6 @@ def mode_label(modes, i):
     return f"mode {modes.oscillating().index(i) + 1}"
 
 
-
-
-
-
 def motion_checks(case, scene, eq, modes, table):
     """Every oscillating mode of the reference run in each source at the case's amplitude (settled_amplitude): its
     runs (Motion), and per mode the nonlinear shift of lambda = growth + i frequency at the amplitude, estimated by
@@ -253,8 +249,6 @@ def motion_checks(case, scene, eq, modes, table):
                     twin, run("mujoco", "mujoco:RK4", amplitude, MUJOCO_TWIN * dt)]
         shift.append(mode_shift)
     return motions, shift
-
-
 
 
 def motion_rows(case, modes, motions, shift):

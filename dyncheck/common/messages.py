@@ -1,5 +1,6 @@
-"""The words every message shares: a suggestion for a misspelt name, a count with its noun, counts of
-statuses, the engines by name."""
+"""The words every message shares: the one line that refuses bad input, naming the file, the field and the
+value (`field_error`), a suggestion for a misspelt name, a count with its noun, counts of statuses, the engines by
+name."""
 
 import difflib
 
@@ -10,6 +11,17 @@ def suggest(word, choices):
     """" (did you mean 'x'?)" for the choice closest to a misspelt word, or ""."""
     close = difflib.get_close_matches(word, list(choices), n=1)
     return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def field_error(file, field, value, problem):
+    """The ValueError refusing `value` of `field` in `file`: "case.toml: integration.rtol = 0.5 is above ..."."""
+    text = repr(value)
+    return ValueError(f"{file}: {field} = {text if len(text) <= 80 else text[:77] + '...'} {problem}")
+
+
+def hint(word, choices):
+    """A suggestion for a misspelt `word`, or else the choices."""
+    return suggest(word, choices) or f"; expected one of: {', '.join(choices)}"
 
 
 def plural(n, noun):

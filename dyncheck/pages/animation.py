@@ -18,11 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
-from dyncheck.results import measured
-from dyncheck.common.expressions import evaluate, namespace
-from dyncheck.results.values import Frames, heading
-from dyncheck.common.style import MIN_FONT, check_text, embed, pyplot, wrapped
 from dyncheck.checks.drawings import FRAMES_PER_PERIOD, MAX_FRAMES, animated_runs, at_times, fastest_shown
+from dyncheck.common.expressions import evaluate, namespace
+from dyncheck.common.style import MIN_FONT, check_text, embed, pyplot, wrapped
+from dyncheck.results import measured
+from dyncheck.results.values import Frames, heading
 
 MIN_DELAY = 20  # ms a frame is shown at least: browsers show a GIF's 0 or 10 ms frames for 100 ms
 WIDTH = 400  # pixels of one 3-D panel; a frame is a panel wide per panel
@@ -65,7 +65,7 @@ def panels(result, case):
     if "program" in shown:
         runs["program"] = result.program["listing"]
     traced = lambda run: np.stack([run[[f"{body}_{axis}" for axis in "xyz"]].to_numpy()
-                                   for body in case.scene["paths"]], axis=1) if case.scene["paths"] else \
+                                   for body in case.scene.paths], axis=1) if case.scene.paths else \
         np.zeros((len(run), 0, 3))
     exact_title = "exact: the corrected equations, tightly solved" if "program" in shown else "the motion"
     program_title = (f"the book's program: {result.program.get('integrator')}, dt = {result.program.get('dt', 0):.2g} s"
@@ -313,7 +313,7 @@ def caption(result, case, count, interval):
              " dot per mass (its area grows with the mass)"
              + (", the green ring the rim of the uniform disk with the body's largest moment of inertia" if
                 any(f.rims.shape[1] for f in shown.values()) else "")
-             + (", in blue the path of " + ", ".join(case.scene["paths"]) if case.scene["paths"] else "") + "."]
+             + (", in blue the path of " + ", ".join(case.scene.paths) if case.scene.paths else "") + "."]
     if "program" in shown:
         where = "ghosted in red over the exact motion" if spec["program"] == "ghost" else "on the left, the exact motion on the right"
         parts.append(f"The book's program ({result.program['integrator']}, dt = {result.program['dt']:.2g} s) {where}.")

@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 
 from dyncheck.checks.pointwise import ENGINES
-from dyncheck.results.values import heading
 from dyncheck.common.style import embed, panels, save, title
+from dyncheck.results.values import heading
 
 AGREEING = {f"{a} vs {b}" for i, a in enumerate(ENGINES) for b in ENGINES[i + 1:]}  # must agree everywhere
 FAILED = ("fail", "inconclusive", "unstable")

@@ -8,19 +8,19 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck.pages import animation, student_page, vibration_page
-from dyncheck.common import expressions
-from dyncheck.results import measured
-from dyncheck.studies import stability, work_precision
 from dyncheck.case.folder import CASES_DIR
+from dyncheck.common import expressions
+from dyncheck.common.expressions import evaluate
 from dyncheck.common.messages import plural, statuses_in_words
+from dyncheck.common.style import embed
+from dyncheck.pages import animation, student_page, vibration_page
+from dyncheck.pages.figures import (departures, figure_energy, figure_extra, figure_pointwise, figure_program,
+                                    figure_scene, figure_series, named, quantity_label, reaction_unit,
+                                    report_namespaces, state_unit)
+from dyncheck.results import measured
 from dyncheck.results.values import OWN_WORDS, Status, consequences, format_rows, heading, inside_or_outside, reason
 from dyncheck.run.simulate import state_columns
-from dyncheck.common.style import embed
-from dyncheck.pages.figures import (named, departures, figure_energy, figure_extra, figure_pointwise, figure_program,
-                                    figure_scene, figure_series, quantity_label, reaction_unit, report_namespaces,
-                                    state_unit)
-from dyncheck.common.expressions import evaluate
+from dyncheck.studies import stability, work_precision
 
 ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
 CPU_TIME = ("A run's CPU time is the wall time it takes on an idle core: other processes' load on the machine,"
@@ -146,17 +146,17 @@ def not_checked(rows):
 def scene_table(case):
     """The joints of the engine models: what is free, what is prescribed, what is applied."""
     scene = case.scene
-    rows = [{"joint": joint, "role": f"prescribed: {law_of_time(*law)}"} for joint, law in scene["driven"].items()]
+    rows = [{"joint": joint, "role": f"prescribed: {law_of_time(law)}"} for joint, law in scene.driven.items()]
     whose = "the coordinate " if case.one_derivation else "the book's "
     rows += [{"joint": joint, "role": "free: " + whose + ", ".join(case.coords[i] for i in idx)
               + (" (ball joint, in Euler angles)" if kind == "euler" else "")}
-             for kind, joint, idx in scene["layout"]]
+             for kind, joint, idx in ((c.kind, c.joint, c.indices) for c in scene.layout)]
     rows += [{"joint": joint, "role": "dependent: each engine solves it from the coordinates, closing the loop"}
-             for joint in scene["dependent"]]
+             for joint in scene.dependent]
     written = lambda x: f"{case.value(x):g}" if not isinstance(x, str) or not {"t", *case.coords} & \
         {n.removesuffix("_rate") for n in expressions.names(x)} else x  # a number, or the law of t and the state
     rows += [{"joint": joint, "role": "applied generalized force (" + ", ".join(map(written, force.components))
-              + ") (joint frame)"} for joint, force in scene["applied"].items()]
+              + ") (joint frame)"} for joint, force in scene.applied.items()]
     return markdown_table(pd.DataFrame(rows))
 
 
@@ -522,7 +522,7 @@ def initial_conditions(case):
     prescribed motions put it, and the line gives their laws instead."""
     q0, v0, t_end = case.initial
     state = _state(case.coords, q0, v0) if case.coords else "none, every joint moves as prescribed: " + ", ".join(
-        f"{joint} = {law_of_time(*law)}" for joint, law in case.scene["driven"].items())
+        f"{joint} = {law_of_time(law)}" for joint, law in case.scene.driven.items())
     label = "Initial conditions" if case.one_derivation else "Initial conditions (the book's)"
     return f"{label}: {state}; horizon {t_end:g} s."
 
@@ -532,9 +532,10 @@ def _state(coords, q, v):
         ", ".join(f"{c}' = {x:.6g}" for c, x in zip(coords, v))
 
 
-def law_of_time(angle, rate, acc):
-    """A prescribed motion angle + rate t + acc t^2/2 with its zero terms left out: "0.8 + 0.3 t - 0.05 t^2"."""
-    terms = [f"{coefficient:.6g}{power}" for coefficient, power in ((angle, ""), (rate, " t"), (acc / 2, " t^2"))
+def law_of_time(law):
+    """A prescribed motion (engines.description.Driven) angle + rate t + acc t^2/2 with its zero terms left out:
+    "0.8 + 0.3 t - 0.05 t^2"."""
+    terms = [f"{coefficient:.6g}{power}" for coefficient, power in ((law.angle, ""), (law.rate, " t"), (law.acc / 2, " t^2"))
              if coefficient]
     return " + ".join(terms).replace("+ -", "- ") or "0"
 

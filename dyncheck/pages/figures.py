@@ -7,14 +7,14 @@ import textwrap
 
 import numpy as np
 
-from dyncheck.pages import typeset
 from dyncheck.common.expressions import evaluate, namespace
 from dyncheck.common.messages import ENGINE_NAMES
-from dyncheck.results.values import heading
-from dyncheck.run.simulate import energy_residual
-from dyncheck.common.style import SOURCE_STYLE as STYLE
 from dyncheck.common.style import (TEXT_HEIGHT, TEXT_WIDTH, along, legend_below, log_range, panels, pyplot, save,
                                    thin, title)
+from dyncheck.common.style import SOURCE_STYLE as STYLE
+from dyncheck.pages import typeset
+from dyncheck.results.values import heading
+from dyncheck.run.simulate import energy_residual
 
 
 # -- figures ------------------------------------------------------------------------
@@ -62,8 +62,8 @@ def figure_scene(result, case, path, *, words):
     tight = trajectories(result)["tight reference"]
     scene = result.drawings["scene"]
     origins, parents = scene["origins"], scene["parents"]
-    paths = np.array([tight[[f"{body}_{axis}" for axis in "xyz"]].to_numpy() for body in case.scene["paths"]])
-    paths = paths.reshape(len(case.scene["paths"]), len(tight), 3).transpose(1, 0, 2)  # (time, body, xyz)
+    paths = np.array([tight[[f"{body}_{axis}" for axis in "xyz"]].to_numpy() for body in case.scene.paths])
+    paths = paths.reshape(len(case.scene.paths), len(tight), 3).transpose(1, 0, 2)  # (time, body, xyz)
     paths = thin(paths)
     planar = np.ptp(np.concatenate([paths[..., 2].ravel(), origins[:, 2]])) < 1e-12
     fig = pyplot().figure(figsize=(TEXT_WIDTH, 4.6))
@@ -75,7 +75,7 @@ def figure_scene(result, case, path, *, words):
         ax.plot(*seg, color="0.3", lw=2)
     ax.scatter(*chain[:, :dims].T, color="0.3", s=12)
     lines = ("-", "--", ":", "-.")  # one per body's path: told apart in grey
-    for b, name in enumerate(case.scene["paths"]):
+    for b, name in enumerate(case.scene.paths):
         arm = np.vstack([origins[scene["path_origins"][b]], paths[0, b]])  # body origin to its point mass
         ax.plot(*arm[:, :dims].T, color="0.3", lw=2)
         ax.plot(*paths[:, b, :dims].T, lw=0.8, ls=lines[b % len(lines)], label=f"path of {name}")
@@ -89,7 +89,7 @@ def figure_scene(result, case, path, *, words):
     ax.set_title(titled(case, "the scene at t = 0 and the path in space"))
     legend_below(fig)
     save(fig, path)
-    moving = ", ".join(case.scene["paths"])
+    moving = ", ".join(case.scene.paths)
     return ("The bodies and joints at t = 0 (grey lines, the dots their origins)"
             + (f" and the path of {moving} over 0-{tight.index[-1]:g} s"
                f" ({named(words, 'tight reference')}); axes in metres, {'the plane of motion' if planar else 'in space'}."
@@ -187,7 +187,7 @@ def state_unit(case, column):
 
 
 def reaction_unit(case, name):
-    return "N m" if case.scene["reactions"][name].get("quantity") == "moment" else "N"
+    return "N m" if case.scene.reactions[name].quantity == "moment" else "N"
 
 
 POINT_SOURCES = ("book", "mujoco", "pinocchio")  # the sources whose deviation from the reference is drawn

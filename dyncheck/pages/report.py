@@ -21,15 +21,14 @@ from pathlib import Path
 
 import pandas as pd
 
-from dyncheck.pages import student_page, typeset, vibration_page
-from dyncheck.studies import work_precision
 from dyncheck.case.folder import Case
 from dyncheck.common.messages import plural, statuses_in_words
-from dyncheck.results.values import RESULTS_VERSION, case_json, load_result, save_results
 from dyncheck.common.style import embed
+from dyncheck.pages import student_page, typeset, vibration_page
 from dyncheck.pages.case_page import (CPU_TIES, CPU_TIME, SUMMARY_KEYS, markdown_table, random_tried, size,
                                       sweep_in_words, worst_engine_error, write_case_page, write_unfinished_page)
-
+from dyncheck.results.values import RESULTS_VERSION, case_json, load_result, save_results
+from dyncheck.studies import work_precision
 
 
 def write_reports(results, out, animations=True):

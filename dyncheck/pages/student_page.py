@@ -13,12 +13,12 @@ import math
 import re
 from dataclasses import dataclass
 
-from dyncheck.results import measured
 from dyncheck.common import style, words
-from dyncheck.pages import typeset
 from dyncheck.common.messages import ENGINE_NAMES
-from dyncheck.results.values import Status, heading
+from dyncheck.pages import typeset
 from dyncheck.pages.vibration_page import VERDICT_WORDS, equilibrium_value
+from dyncheck.results import measured
+from dyncheck.results.values import Status, heading
 
 SUBJECT_WORDS = {"book": "The book's version", "program": "The listing's version", "reference": "It",
                  "mujoco": "MuJoCo's run", "pinocchio": "Pinocchio's run"}

@@ -166,7 +166,6 @@ class Finding:
     measured: str = ""  # what this run measures of it: the case file's text, its `{~ ...}` written by the pages
 
 
-
 @store.register
 @dataclass(frozen=True)
 class Frames:

@@ -18,12 +18,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dyncheck.checks import runs as checks, residuals
-from dyncheck.studies import stability
-from dyncheck.run.cache import case_version, code_version
 from dyncheck.case.folder import Case, load_case
-from dyncheck.results.values import Status
 from dyncheck.checks import pointwise, programs
+from dyncheck.checks import runs as checks, residuals
+from dyncheck.results.values import Status
+from dyncheck.run.cache import case_version, code_version
+from dyncheck.studies import stability
 
 # The columns of a chunk's table besides the case's parameters (one per parameter, its value at the set) and the
 # state where a comparison of two sources differs most (state_t, state_<coordinate>, state_<coordinate>_rate).

@@ -13,10 +13,10 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import minimize_scalar
 
-from dyncheck.results import store
-from dyncheck.run.simulate import Unstable, simulate
 from dyncheck.checks.linear import (ENGINES, RUNS_PER_PERIOD, SAFETY, NoEquilibrium, along, derivation_linear,
                                     engine_linear, equilibrium, linearised, modal, settings, state_names)
+from dyncheck.results import store
+from dyncheck.run.simulate import Unstable, simulate
 
 
 @store.register

@@ -5,19 +5,20 @@ solution and returns tidy rows; `figure` draws them log-log, `cheapest` says whi
 each accuracy level first.  It reads the case file's [work_precision] table (dyncheck.checks.convergence.settings,
 which the convergence orders share).
 """
+
 import time
 from collections import Counter
 
 import numpy as np
 import pandas as pd
 
-from dyncheck.run import cache
+from dyncheck.checks.convergence import settings
 from dyncheck.common.ceilings import ROUNDING_FLOOR
 from dyncheck.common.messages import plural
-from dyncheck.results.values import heading
-from dyncheck.run.simulate import SCIPY_METHODS, Unstable, energy_residual, fastest_frequency, simulate, state_columns
 from dyncheck.common.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
-from dyncheck.checks.convergence import settings
+from dyncheck.results.values import heading
+from dyncheck.run import cache
+from dyncheck.run.simulate import SCIPY_METHODS, Unstable, energy_residual, fastest_frequency, simulate, state_columns
 
 COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_error", "cpu", "cpu_min", "cpu_max",
            "repeats", "evaluations", "steps", "status", "resolved", "detail"]

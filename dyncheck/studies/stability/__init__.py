@@ -18,13 +18,11 @@ integrators' error level can be expected to agree to a tolerance, from the finit
 perturbations along the book's initial conditions (cheap: five trajectories over the case's horizon).
 """
 
+from dyncheck.case import files
+from dyncheck.case.folder import load_file, settings_of
 from dyncheck.common import ceilings
-from dyncheck.case import schema
 from dyncheck.results.values import heading
-
-from dyncheck.case.folder import load_file
 from dyncheck.studies.stability.common import NotApplicable, Study, not_applicable
-from dyncheck.case.folder import settings_of
 from dyncheck.studies.stability.long_runs import energy_drift, figure_energy_drift, figure_lyapunov, lyapunov
 
 # The studies any case may name.
@@ -42,7 +40,7 @@ def case_module(case):
     module = case.spec.get("stability", {}).get("module")
     if module is None:
         return None
-    path = schema.own_file(case.folder, module, "stability.module", case.file)
+    path = files.own_file(case.folder, module, "stability.module", case.file)
     if not path.is_file():  # also when saved results are rendered after their case folder moved
         raise ValueError(f"{case.origin}: stability.module = {module!r}: no such Python file {path} (the case's "
                          "studies and the figures of their saved results need it)")

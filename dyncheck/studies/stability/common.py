@@ -28,11 +28,6 @@ EPS = np.finfo(float).eps
 # -- runs that may blow up --------------------------------------------------------------------
 
 
-
-
-
-
-
 class Guarded:
     """`model` whose accelerations raise Unstable once coordinate `index` leaves +-`bound` (or is not
     finite): a run that has left the physics stops there, with its time and step."""
@@ -125,7 +120,6 @@ def limit_step(method, omega, span, growth):
 
 
 # -- common -------------------------------------------------------------------------------------
-
 
 
 def fmt(x, spec=".3g", none="-"):

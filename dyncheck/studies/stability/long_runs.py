@@ -7,12 +7,10 @@ import time
 import numpy as np
 import pandas as pd
 
-from dyncheck.run.simulate import MUJOCO_METHODS, SCIPY_METHODS, fastest_frequency, simulate
-from dyncheck.studies.stability.common import EPS, fmt, study_result
-from dyncheck.run.simulate import attempt, describe
-from dyncheck.common.style import legend_below, method_style, panels, save, thin, title
 from dyncheck.checks.horizon import agreement_horizon, benettin
-
+from dyncheck.common.style import legend_below, method_style, panels, save, thin, title
+from dyncheck.run.simulate import MUJOCO_METHODS, SCIPY_METHODS, attempt, describe, fastest_frequency, simulate
+from dyncheck.studies.stability.common import EPS, fmt, study_result
 
 # A separation below this fraction of the state's size (its rates scaled) grows by the linearised equations to
 # within about as much of itself: the nonlinear terms are of the order of the separation squared.
