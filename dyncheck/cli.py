@@ -177,8 +177,10 @@ def exit_code(results):
 
 
 def error_exit(error):
-    # on one line: the engines' parse errors span several
+    # on one line (the engines' parse errors span several), and then what it gives to paste (messages.WithBlock)
     print(f"dyncheck: error: {' '.join(str(error).split())}", file=sys.stderr)
+    if getattr(error, "block", None):
+        print(error.block, file=sys.stderr)
     return 2
 
 

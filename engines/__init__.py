@@ -1,7 +1,9 @@
-"""Engine adapters: MuJoCo (MJCF) and Pinocchio (URDF) behind the model interface (docs/model-interface.md).
+"""Engine adapters: MuJoCo (MJCF), Pinocchio (URDF or MJCF) and, where the optional extra is installed, Drake (MJCF
+or URDF, drake_adapter: docs/drake.md) behind the model interface (docs/model-interface.md).
 
-The only importers of `mujoco` and `pinocchio`: what the rest of dyncheck needs of an engine is an adapter
-method (mujoco_adapter, pinocchio_adapter) or a bare-engine loop for timing (bench).  euler holds the book's
+The only importers of `mujoco`, `pinocchio` and `pydrake`: what the rest of dyncheck needs of an engine is an adapter
+method (mujoco_adapter, pinocchio_adapter, drake_adapter) or a bare-engine loop for timing (bench).  mjcf_joints
+reads the MJCF joint values that Pinocchio's and Drake's parsers drop.  euler holds the book's
 Euler angles of a ball joint; scene, what a scene file may hold; render, the bodies' positions at an animation's
 frames and MuJoCo's renderer for them.
 """

@@ -1,5 +1,6 @@
-"""Bare-engine loops for `dyncheck bench`: the work a user of MuJoCo or Pinocchio alone does for a case's
-scene, to time the harness against (see dyncheck/bench.py)."""
+"""Bare-engine loops for `dyncheck bench`: the work a user of MuJoCo, Pinocchio or Drake alone does for a case's
+scene, to time the harness against (see dyncheck/bench.py).  Drake is optional: `drake_steps` takes a DrakeModel,
+and this module imports no pydrake."""
 
 import mujoco
 import mujoco.rollout
@@ -82,3 +83,13 @@ def pinocchio_rhs(model, q0, v0, work):
         return out
 
     return rhs, np.concatenate([q0, v0, [0.0]])
+
+
+def drake_steps(model, engine_states):
+    """Drake's engine step (`DrakeModel.engine_dynamics`: its mass matrix and inverse dynamics, the free block solved)
+    at each of `engine_states`, (positions, velocities) pairs already in Drake's own coordinates
+    (`DrakeModel.engine_state`)."""
+    if model.varying:  # a bare loop has no law of the state to evaluate (as MujocoLoops)
+        raise ValueError(f"{model.path}: the bare Drake step takes constant applied forces; this scene's depend on the "
+                         "state")
+    return [model.engine_dynamics(positions, velocities, model.applied) for positions, velocities in engine_states]

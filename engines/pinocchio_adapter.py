@@ -19,6 +19,7 @@ import pinocchio as pin
 from engines import euler, scene as scene_rules
 from engines.linalg import linear_solution
 from engines.loops import PinocchioLoops
+from engines.mjcf_joints import joint_values
 from engines.scene import Body
 
 ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
@@ -147,7 +148,7 @@ class PinocchioModel:
         option = document.find("option")
         gravity = option.get("gravity", DEFAULT_GRAVITY) if option is not None else DEFAULT_GRAVITY
         self.m.gravity.linear[:] = [float(x) for x in gravity.split()]
-        self.joint_values = _joint_values(document, self.path)
+        self.joint_values = joint_values(document, self.path)
         for joint in scene.driven:
             self.m.armature[self._joint(joint).idx_v] = 0.0
         for j in range(1, self.m.njoints):
@@ -510,9 +511,11 @@ class PinocchioModel:
         # RNEA's rounding is of RNEA's own entries: a stiff spring's -k, added here in one rounding, would make it
         # 1e3 eps of k on every entry (k = 4929 N/m on a spring pendulum's length row put 2e-6 on its angle's row,
         # whose entries are about 10, and its mode rows were inconclusive); or, where its entries are far below the
-        # terms they sum, its noise as measured (`_rounding_noise`)
+        # terms they sum, its noise as measured (engines.scene.rounding_noise)
         error = max(ROUNDING * max(np.max(np.abs(dtau_dq)), np.max(np.abs(dtau_dv))),
-                    NOISE_MARGIN * self._rounding_noise(derivatives, config, velocity, (dtau_dq, dtau_dv)))
+                    NOISE_MARGIN * scene_rules.rounding_noise(
+                        lambda step_q, step_v: derivatives(pin.integrate(self.m, config, step_q), velocity + step_v),
+                        (dtau_dq, dtau_dv), velocity))
         force_q, force_v = -dtau_dq, -dtau_dv
         mass = pin.crba(self.m, self.d, config)[self._whole]  # `mass_matrix`'s to the bit (RNEA's rounds otherwise)
         for _, iv, k, _, damping in self.passive:
@@ -524,23 +527,6 @@ class PinocchioModel:
         return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
                                               mass, force_q, force_v, error,
                                               "Pinocchio computeRNEADerivatives (analytic)")
-
-    def _rounding_noise(self, derivatives, config, velocity, at):
-        """The largest second difference of RNEA's derivatives (`derivatives(config, velocity)`, which are `at` here)
-        over 1 to 3 ulps of each dof's position and velocity, in which their slope cancels: their rounding as
-        measured.  At a degenerate equilibrium (a pendulum on a turning disk under g = 0, at psi = -pi/2) the
-        entries are 4e-11 of the terms they sum, 1e3 eps of them 8e-24, and the measured noise 1.4e-17, against
-        an error of 4e-17 (Pinocchio's A beside the derivation's and MuJoCo's)."""
-        noise = 0.0
-        for k in (1, 2, 3):
-            for j in range(self.m.nv):
-                step = np.zeros(self.m.nv)
-                step[j] = k * EPS
-                for moved in ((lambda d: (pin.integrate(self.m, config, d), velocity)),
-                              (lambda d: (config, velocity + d * max(1.0, abs(velocity[j]))))):
-                    plus, minus = derivatives(*moved(step)), derivatives(*moved(-step))
-                    noise = max(noise, *(float(np.max(np.abs((p + m) / 2 - a))) for p, m, a in zip(plus, minus, at)))
-        return noise
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state (`engine_state`)."""
@@ -653,7 +639,7 @@ def _equalities(path):
 # MuJoCo's own rounding (tests/test_engine_linearisation.py).
 EPS = np.finfo(float).eps
 ROUNDING = 1e3 * EPS
-# The rounding noise measured over a few ulps (`_rounding_noise`) samples the rounding of one evaluation: the error
+# The rounding noise measured over a few ulps (engines.scene.rounding_noise) samples the rounding of one evaluation: the error
 # of Pinocchio's A at the degenerate equilibrium there was 3 times it; 10 times allows for a sample that misses.
 NOISE_MARGIN = 10.0
 
@@ -688,52 +674,6 @@ def _misread(document):
         if element.tag == "include":
             yield (f'<include file="{element.get("file")}">: Pinocchio\'s MJCF parser skips included files; '
                    "write their elements into the scene")
-
-
-JOINT_VALUES = {"stiffness": "spring", "springref": "spring's rest position", "damping": "damper"}
-JOINT_DEFAULTS = {**dict.fromkeys(JOINT_VALUES, "0"), "type": "hinge"}  # MuJoCo's, where no class sets them
-
-
-def _joint_values(document, path):
-    """{attribute: {joint: value}} of an MJCF's named joints for each of JOINT_VALUES, where not 0, as MuJoCo's
-    compiler resolves it: the joint's own attribute, else the joint default of its class (its `class`, else the
-    `childclass` of the nearest element around it that has one, else "main"), else of the classes around that
-    one; a hinge's springref in rad, from the file's degrees under <compiler angle="degree"> (MJCF's default).
-    ValueError for a polynomial spring or damper ("a b c"): this adapter's are linear."""
-    defaults = {}
-
-    def collect(default, inherited):
-        joint = default.find("joint")
-        own = {a: joint.get(a, inherited[a]) for a in JOINT_DEFAULTS} if joint is not None else inherited
-        defaults[default.get("class", "main")] = own
-        for child in default.findall("default"):
-            collect(child, own)
-
-    for default in document.findall("default"):
-        collect(default, JOINT_DEFAULTS)
-    degrees = all(compiler.get("angle", "degree") == "degree" for compiler in document.iter("compiler"))
-    values = {attribute: {} for attribute in JOINT_VALUES}
-
-    def walk(element, childclass):
-        childclass = element.get("childclass", childclass)
-        for child in element:
-            if child.tag == "joint" and child.get("name"):  # an unnamed joint: the case cannot move it (refused)
-                inherited = defaults.get(child.get("class", childclass), JOINT_DEFAULTS)
-                for attribute, what in JOINT_VALUES.items():
-                    text = child.get(attribute, inherited[attribute])
-                    a, *higher = [float(x) for x in text.split()]
-                    if any(higher):
-                        raise ValueError(f'{path}: joint \'{child.get("name")}\' {attribute}="{text}": a polynomial '
-                                         f"{what}, which the Pinocchio side does not model; give the linear term only")
-                    if attribute == "springref" and degrees and child.get("type", inherited["type"]) == "hinge":
-                        a = math.radians(a)
-                    if a:
-                        values[attribute][child.get("name")] = a
-            else:
-                walk(child, childclass)
-
-    walk(document.find("worldbody"), "main")
-    return values
 
 
 # URDF cannot write an unlimited revolute or prismatic joint (urdfdom requires <limit> and refuses inf):

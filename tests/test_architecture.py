@@ -116,7 +116,7 @@ def test_no_module_of_the_harness_is_over_max_lines():
     assert not long, f"modules over {MAX_LINES} lines (split them by job): {long}"
 
 
-@pytest.mark.parametrize("engine", ["mujoco", "pinocchio"])
+@pytest.mark.parametrize("engine", ["mujoco", "pinocchio", "pydrake"])
 def test_only_engines_import_the_engines(engine):
     importers = []
     for folder in ("dyncheck", "reference", "cases"):

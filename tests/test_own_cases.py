@@ -3,15 +3,20 @@ work (exit 2, one line naming the file and what is wrong) or becomes a row that 
 silently and none is a traceback."""
 
 import json
+import re
 import shutil
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from dyncheck.case import folder as folder_module
 from dyncheck.case.folder import Case
 from dyncheck.cli import main
 from test_architecture import doc_example
+
+EPS = np.finfo(float).eps
 
 ACC = '-self.p["k"] / self.p["m"] * q[0]'
 
@@ -48,7 +53,8 @@ def run(tmp_path, capsys, *args):
     ("equations.py", 'coords, reaction_names = ("x",), ()', 'coords, reaction_names = ("x",), ("R",)',
      "Reference.reaction_names is ('R',)"),
     ("equations.py", f"np.array([{ACC}])", f"np.array([{ACC}, 5.0])",
-     "Reference.accelerations gives shape (2,) at the initial state, not (1,)"),
+     "Reference.accelerations at the initial state: ValueError: accelerations(t, q, v) returned array([-2.5, 5. ]) "
+     "(numpy dtype float64, shape (2,)), not real numbers of shape (1,)"),
     ("case.toml", 'derivation = "equations.py"', 'derivation = "os"', "derivation = 'os' is neither a module of the package's reference/"),
 ])
 def test_a_broken_derivation_is_refused_before_any_work(tmp_path, capsys, file, old, new, message):
@@ -236,3 +242,141 @@ def test_a_scene_number_that_is_not_its_parameter_names_the_file_that_gives_it(t
                                         + params + "\n")
     assert main(["run", "--cases", str(tutorial.parent)]) == 2
     assert f"scene.xml of case 'cart_pendulum': body 'cart' mass[0] is 1.0, but {given_by}" in capsys.readouterr().err
+
+
+def test_a_case_of_two_files_takes_more_states_where_its_equations_are_cheap(tutorial):
+    """[sample] budget (0.25 s for a case of two files): the tutorial's equations, at about 30 us a call (under
+    0.24 ms on any load this machine sees), get the most states, 1024."""
+    case = Case(tutorial)
+    assert case.spec["sample"]["budget"] == 0.25 and case.sample_count == 1024, case.derivation.cost
+    assert len(case.sample_states()) == 1024
+
+
+@pytest.mark.parametrize("cost, expected", [(1e-5, 1024), (2.4e-4, 1024), (2.5e-4, 512), (4.8e-4, 512), (5e-4, 256), (1e-3, 256),
+                                            (2.0, 256)])
+def test_the_states_are_the_power_of_two_whose_calls_fit_the_budget(tutorial, monkeypatch, cost, expected):
+    """The count from a measured cost (Case.call_cost fixed here): 0.25 s of calls, a power of two within
+    256..1024; the states are the first of one sequence, whatever their number."""
+    monkeypatch.setattr(folder_module, "call_cost", lambda call, first: cost)
+    case = Case(tutorial)
+    assert case.sample_count == expected
+    states, first = case.sample_states(), Case(tutorial).sample_states(256)
+    assert len(states) == expected
+    assert all(a[0] == b[0] and (a[1] == b[1]).all() and (a[2] == b[2]).all() for a, b in zip(states, first))
+
+
+def test_without_a_budget_a_case_takes_its_count(tutorial):
+    case = Case(tutorial)
+    spec = {**case.spec, "sample": {k: v for k, v in case.spec["sample"].items() if k != "budget"}}
+    assert Case(tutorial, spec=spec).sample_count == 256
+
+
+INVERSE_DYNAMICS = '''
+def inverse_dynamics(t, q, v, a, p):
+    """tau = M(q) a - f(t, q, q'), as generated code gives it."""
+    x, theta = q
+    x_rate, theta_rate = v
+    x_acc, theta_acc = a
+    M, m, l, k, g = p["M"], p["m"], p["l"], p["k"], p["g"]
+    return np.array([(M + m) * x_acc + m * l * np.cos(theta) * theta_acc - m * l * np.sin(theta) * theta_rate**2 + k * x,
+                     m * l * np.cos(theta) * x_acc + m * l**2 * theta_acc + m * g * l * np.sin(theta)])
+
+
+'''
+
+
+def as_inverse_dynamics(tutorial, wrong=None):
+    """The tutorial's equations given as inverse dynamics alone (no accelerations, M or f), `wrong` (old, new)
+    replaced in it."""
+    equations = tutorial / "equations.py"
+    text = equations.read_text()
+    form = INVERSE_DYNAMICS if wrong is None else INVERSE_DYNAMICS.replace(*wrong)
+    start = text.index("def inverse_dynamics" if "def inverse_dynamics" in text else "def mass_matrix")
+    equations.write_text(text[:start] + form.lstrip("\n") + text[text.index("def energy"):])
+    return equations
+
+
+@pytest.mark.parametrize("k", [20.0, 1e9])
+def test_m_and_f_from_inverse_dynamics_are_the_derivation_s_own(tutorial, k):
+    """M's columns tau(e_j) + f, f = -tau(0): the tutorial's M and f to a few eps of |M| and |f|, also under a spring
+    of 1e9 N/m, whose f outweighs M 1e9 times (the unit accelerations are scaled up, or M would keep 7 digits)."""
+    from dyncheck.case import derived
+    original = Case(tutorial, {"k": k}).model("reference")
+    as_inverse_dynamics(tutorial)
+    case = Case(tutorial, {"k": k})
+    model = case.model("reference")
+    for t, q, v in case.sample_states(64):
+        mass, f = model.mass_matrix(t, q, v), model.forces(t, q, v)
+        np.testing.assert_allclose(mass, original.mass_matrix(t, q, v), rtol=0, atol=8 * EPS * np.abs(mass).max())
+        np.testing.assert_allclose(f, original.forces(t, q, v), rtol=0, atol=8 * EPS * np.abs(f).max())
+        np.testing.assert_allclose(model.accelerations(t, q, v), original.accelerations(t, q, v), rtol=1e-12)
+    assert derived.by_inverse_dynamics(case.derivation)
+
+
+@pytest.mark.full
+def test_a_derivation_given_as_inverse_dynamics_passes_and_its_error_is_named(tutorial, capsys):
+    """Generated code's form: the tutorial as inverse dynamics runs green; half of theta's gravity term missing
+    from it, the run fails and names that term in theta's equation."""
+    as_inverse_dynamics(tutorial)
+    assert main(["run", "--cases", str(tutorial.parent)]) == 0, capsys.readouterr().out
+    capsys.readouterr()
+    as_inverse_dynamics(tutorial, (" + m * g * l * np.sin(theta)])", " + 0.5 * m * g * l * np.sin(theta)])"))
+    assert main(["run", "--cases", str(tutorial.parent)]) == 1
+    out = capsys.readouterr().out
+    assert "the derivation's equation theta: add - m l g / 2 sin(theta) to its force side f" in out, out
+
+
+def coinciding(tutorial):
+    """The tutorial with the bob's mass equal to the rod's length (0.5), and a parameter J found nowhere in the
+    scene."""
+    equations, scene = tutorial / "equations.py", tutorial / "scene.xml"
+    old = '"m": 0.3, "l": 0.5, "k": 20.0, "g": 9.81}'
+    assert old in equations.read_text() and 'mass="0.3"' in scene.read_text()
+    equations.write_text(equations.read_text().replace(old, '"m": 0.5, "l": 0.5, "k": 20.0, "g": 9.81, "J": 0.0025}'))
+    scene.write_text(scene.read_text().replace('mass="0.3"', 'mass="0.5"'))
+    return equations
+
+
+def test_every_parameter_that_does_not_bind_is_named_at_once_with_a_table_to_paste(tutorial, capsys):
+    """m and l both 0.5 (the bob's mass and minus its centre's z), J in no number of the scene: one refusal names
+    all three with their candidates, and gives a [scene.bindings] table; pasted with the right choices (and J's
+    line written), the case loads."""
+    equations = coinciding(tutorial)
+    status, out, err = run(tutorial.parent.parent, capsys)
+    first, *block = err.splitlines()
+    assert status == 2 and first.startswith(f"dyncheck: error: {equations}: 3 of PARAMS' values do not each bind"), err
+    assert "PARAMS['m'] = 0.5 matches 2 numbers: body 'bob' mass (kg), body 'bob' ipos[2] x -1 (m)" in first
+    assert "PARAMS['l'] = 0.5 matches 2 numbers" in first and "PARAMS['J'] = 0.0025 is no number" in first
+    assert block[0] == "[scene.bindings]" and [line.split(" =")[0] for line in block[1:]] == ["m", "l", "# J"], block
+    table = "\n".join(block).replace('l = [{ element = "body", name = "bob", attribute = "mass" }]',
+                                     'l = [{ element = "body", name = "bob", attribute = "ipos", index = 2, scale = -1.0 }]')
+    table = table.replace('# J = [{ element = "body", name = "...", attribute = "mass" }]',
+                          'J = [{ element = "joint", name = "theta", attribute = "damping" }]')
+    (tutorial / "case.toml").write_text(table)
+    # J now binds to the hinge's damping, which is 0, not 0.0025: the case says so (the binding itself was taken)
+    with pytest.raises(ValueError, match=r"joint 'theta' damping\[0\] is 0.0, but .* gives J = 0.0025"):
+        Case(tutorial).model("mujoco")
+
+
+def test_a_module_s_units_tell_a_mass_from_a_length(tutorial):
+    equations = coinciding(tutorial)
+    equations.write_text(equations.read_text().replace(', "J": 0.0025}', '}') + '\nUNITS = {"m": "kg", "l": "m"}\n')
+    bindings = Case(tutorial).spec["scene"]["bindings"]
+    assert bindings["m"] == [{"element": "body", "name": "bob", "attribute": "mass"}]
+    assert bindings["l"] == [{"element": "body", "name": "bob", "attribute": "ipos", "index": 2, "scale": -1.0}]
+
+
+@pytest.mark.parametrize("units, message", [('["kg"]', "is not a dict"), ('{"q": "kg"}', "UNITS['q'] names no parameter"),
+                                            ('{"m": "pounds"}', "UNITS['m'] = 'pounds' is not a unit of a scene number")])
+def test_units_that_name_nothing_are_refused(tutorial, units, message):
+    equations = tutorial / "equations.py"
+    equations.write_text(equations.read_text() + f"\nUNITS = {units}\n")
+    with pytest.raises(ValueError, match=re.escape(message)):
+        Case(tutorial)
+
+
+def test_one_scene_number_bound_by_two_parameters_is_refused(tutorial):
+    (tutorial / "case.toml").write_text('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "mass" }]\n'
+                                        'l = [{ element = "body", name = "bob", attribute = "mass" }]\n')
+    with pytest.raises(ValueError, match=r"scene.bindings.l\[0\] = .* is also bound by m"):
+        Case(tutorial)

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from dyncheck.common import expressions
-from dyncheck.common.messages import suggest
+from dyncheck.common.messages import WithBlock, suggest
 
 EQUATIONS = "equations.py"
 SCENE = "scene.xml"
@@ -28,16 +28,27 @@ ABOUT = {"mass": "mass of body '{name}'", "pos": "position of body '{name}' in i
          "stiffness": "stiffness of joint '{name}'", "damping": "viscous damping of joint '{name}'",
          "springref": "rest position of joint '{name}''s spring"}
 AXES = "xyz"
-DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)  # of an output step into MuJoCo's steps: 1-2-5 steps
 # States of the pointwise check: a region of 5 % of the state space holds about 13 of 256 evenly spread states
 # (Case.sample_states), where a derivation wrong only there must fail; 256 evaluations of the slowest
 # derivations known (a generated 7-dof inverse dynamics, 2-6 ms each) take about a second.
-SAMPLE_COUNT = 256  # of an output step into MuJoCo's steps: 1-2-5 steps
+SAMPLE_COUNT = 256
+# and more where the derivation is cheap (Case.sample_count): as many as its calls make in a quarter of a second, a
+# fraction of the run's own few seconds (the most, 1024, at the tutorial's 30 us a call; 256 at 1 ms)
+SAMPLE_BUDGET = 0.25  # s
 
 
 def is_plain(module):
-    """Whether a derivation is a plain module (COORDS, PARAMS, accelerations) rather than classes."""
-    return hasattr(module, "COORDS") and callable(getattr(module, "accelerations", None))
+    """Whether a derivation is a plain module (COORDS, PARAMS, accelerations or inverse_dynamics) rather than
+    classes."""
+    return hasattr(module, "COORDS") and (callable(getattr(module, "accelerations", None)) or by_inverse_dynamics(module))
+
+
+def by_inverse_dynamics(module):
+    """Whether a plain module gives its equations as inverse dynamics, inverse_dynamics(t, q, v, a, p): the
+    generalised forces tau = M a - f that the accelerations a need (the form generated code comes in), and no
+    accelerations of its own."""
+    return callable(getattr(module, "inverse_dynamics", None)) and not callable(getattr(module, "accelerations", None))
 
 
 # numpy's kinds of real numbers: float, signed and unsigned integer.  Not bool, nor complex (numpy would drop the
@@ -71,9 +82,32 @@ class Equations:
         for name in OPTIONAL:
             if callable(getattr(module, name, None)):
                 setattr(self, name, getattr(self, "_" + name))
+        if by_inverse_dynamics(module):  # q'' = M^-1 f, M and f from it (where the module gives no M or f of its own)
+            self.accelerations = lambda t, q, v: np.linalg.solve(*self._by_inverse_dynamics(t, q, v))
+            if not hasattr(self, "mass_matrix"):
+                self.mass_matrix = lambda t, q, v: self._by_inverse_dynamics(t, q, v)[0]
+            if not hasattr(self, "forces"):
+                self.forces = lambda t, q, v: self._by_inverse_dynamics(t, q, v)[1]
 
     def accelerations(self, t, q, v):
         return real(self._module.accelerations(t, q, v, self._p), self._vector, "accelerations(t, q, v, p)")
+
+    def _inverse_dynamics(self, t, q, v, a):
+        return real(self._module.inverse_dynamics(t, q, v, a, self._p), self._vector, "inverse_dynamics(t, q, v, a, p)")
+
+    def _by_inverse_dynamics(self, t, q, v):
+        """(M, f) of M q'' = f from the module's inverse dynamics tau(a) = M a - f, which is linear in a: f = -tau(0),
+        and M's column j = (tau(s e_j) + f) / s, with s a power of two that makes |M s| at least |f|, so that the
+        difference keeps M's digits (a stiff spring's f is 1e9 times M): M to a few eps of |M|, in n + 1 calls (2n + 1
+        where f outweighs M)."""
+        n = len(self.coords)
+        f = -self._inverse_dynamics(t, q, v, np.zeros(n))
+        columns = lambda s: np.column_stack([(self._inverse_dynamics(t, q, v, s * e) + f) / s for e in np.eye(n)])
+        mass = columns(1.0)
+        ratio = np.max(np.abs(f)) / np.max(np.abs(mass)) if np.max(np.abs(mass)) > 0 else 0.0
+        if np.isfinite(ratio) and ratio > 1:
+            mass = columns(2.0 ** math.ceil(math.log2(ratio)))
+        return mass, f
 
     def reactions(self, t, q, v):
         if not self.reaction_names:
@@ -142,10 +176,27 @@ def module_values(module, file):
     for name, value in params.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ValueError(f"{file}: PARAMS['{name}'] = {value!r} is not a finite number (SI units)")
-    for name in OPTIONAL + ("accelerations", "reactions"):
+    for name in OPTIONAL + ("accelerations", "inverse_dynamics", "reactions"):
         if hasattr(module, name) and not callable(getattr(module, name)):
             raise ValueError(f"{file}: {name} is not a function")
     return tuple(coords), {name: float(value) for name, value in params.items()}
+
+
+def declared_units(module, params, file):
+    """The module's UNITS, {parameter: unit}: optional, the units of some parameters, which tell a mass from a length
+    of the same value; ValueError naming the file and the entry where it names no parameter or no unit of a scene
+    number."""
+    declared = getattr(module, "UNITS", {})
+    known = sorted(set(UNITS.values()))
+    if not isinstance(declared, dict):
+        raise ValueError(f"{file}: UNITS = {declared!r:.80} is not a dict of parameter names to units")
+    for name, unit in declared.items():
+        if name not in params:
+            raise ValueError(f"{file}: UNITS[{name!r}] names no parameter of PARAMS")
+        if unit not in known:
+            raise ValueError(f"{file}: UNITS[{name!r}] = {unit!r:.40} is not a unit of a scene number: one of "
+                             + ", ".join(known))
+    return dict(declared)
 
 
 def coordinate_joints(coords, scene, file):
@@ -191,36 +242,61 @@ def applied_parameters(params, given, file):
     return used & set(params)
 
 
-def bindings(params, scene, joints_kind, file, given):
+def bindings(params, scene, joints_kind, file, given, declared=None):
     """{parameter: [location]} and {parameter: unit}: each parameter bound where `given` (a case.toml's
-    [scene.bindings]) says, or else to the one scene number equal to it (or to minus it for a position
-    or gravity); no match or several is refused, naming them."""
-    found, units = {}, {}
+    [scene.bindings]) says, or else to the one scene number equal to it (or to minus it for a position or gravity)
+    whose unit is the one `declared` ({parameter: unit}, the module's UNITS, where it gives one).  Every parameter
+    that matches no number or several is refused in one message, with a [scene.bindings] block to complete."""
+    found, units, unbound, ambiguous = {}, {}, [], {}
     unit = lambda location: UNITS[(location.get("attribute"), joints_kind.get(location["name"]))
                                   if location.get("attribute") in JOINT_ATTRIBUTES else location.get("attribute")]
+    declared = declared or {}
     for name, value in params.items():
         if name in given:
             found[name] = given[name]
             units[name] = unit(given[name][0])
             continue
-        matches = [(v, scale) for v in scene.values for scale in ((1.0, -1.0) if v.location.get("attribute") in SIGNED
-                                                                   else (1.0,))
-                   if value != 0 and abs(v.value - scale * value) <= MATCH_RTOL * abs(value)]
-        if not matches:
-            raise ValueError(f"{file}: PARAMS['{name}'] = {value!r} is no number of {scene.path} (a body's mass, "
-                             "position or centre of mass, a joint's stiffness, damping or spring rest position, gravity), so the "
-                             "engines cannot follow "
-                             "it; bind it in a case.toml [scene.bindings] (docs/own-case.md) or make it equal to the "
-                             "scene's number")
-        if len(matches) > 1:
-            where = "; ".join(f"{v.where}" + (" (x -1)" if scale < 0 else "") for v, scale in matches)
-            raise ValueError(f"{file}: PARAMS['{name}'] = {value!r} matches {len(matches)} numbers of {scene.path} "
-                             f"({where}): bind it in a case.toml [scene.bindings] (docs/own-case.md), or give the "
-                             "scene numbers that tell them apart")
-        v, scale = matches[0]
-        found[name] = [{**v.location, **({"scale": scale} if scale != 1.0 else {})}]
-        units[name] = unit(v.location)
+        matches = [{**v.location, **({"scale": scale} if scale != 1.0 else {})}
+                   for v in scene.values for scale in ((1.0, -1.0) if v.location.get("attribute") in SIGNED else (1.0,))
+                   if value != 0 and abs(v.value - scale * value) <= MATCH_RTOL * abs(value)
+                   and declared.get(name, unit(v.location)) == unit(v.location)]
+        if len(matches) == 1:
+            found[name], units[name] = matches, unit(matches[0])
+        elif matches:
+            ambiguous[name] = matches
+        else:
+            unbound.append(name)
+    if unbound or ambiguous:
+        raise binding_refusal(file, scene, params, unbound, ambiguous, unit, declared)
     return found, units
+
+
+def binding_refusal(file, scene, params, unbound, ambiguous, unit, declared):
+    """The refusal of the parameters that bind to no scene number or to several: each named on one line, and a
+    [scene.bindings] block for a case.toml beside the module, a line a parameter (the first of several candidates,
+    the others in its comment; where there is none, a commented template)."""
+    where = lambda location: (f"{location['element']} '{location['name']}' {location.get('attribute', '')}"
+                              + (f"[{location['index']}]" if "index" in location else "")
+                              + (" x -1" if location.get("scale", 1.0) < 0 else "")
+                              + f" ({unit(location)})").replace("  ", " ")
+    as_toml = lambda location: "{ " + ", ".join(f"{k} = {_toml(x)}" for k, x in location.items()) + " }"
+    unit_of = lambda name: f" in {declared[name]}" if name in declared else ""
+    problems = [f"PARAMS['{name}'] = {params[name]!r} matches {len(found)} numbers{unit_of(name)}: "
+                + ", ".join(where(location) for location in found) for name, found in ambiguous.items()]
+    problems += [f"PARAMS['{name}'] = {params[name]!r} is no number{unit_of(name)} of the scene (a body's mass, "
+                 "position or centre of mass, a joint's stiffness, damping or spring rest position, gravity)"
+                 for name in unbound]
+    verb = "does not bind" if len(problems) == 1 else "do not each bind"
+    message = (f"{file}: {len(problems)} of PARAMS' values {verb} to one number of {scene.path}, so the "
+               f"engines cannot follow them: {'; '.join(problems)}.  Write a case.toml beside it with the table below "
+               "(docs/own-case.md), keeping the location each parameter means (the others are in its comment); or "
+               "give the scene numbers that tell them apart, or the module a UNITS = {name: unit}")
+    block = ["[scene.bindings]"]
+    block += [f"{name} = [{as_toml(found[0])}]  # or: " + "; ".join(as_toml(location) for location in found[1:])
+              for name, found in ambiguous.items()]
+    block += [f'# {name} = [{{ element = "body", name = "...", attribute = "mass" }}]  # no number of the scene is '
+              f"{params[name]!r}: write where it goes" for name in unbound]
+    return WithBlock(message, "\n".join(block))
 
 
 def nice(x):
@@ -234,11 +310,11 @@ def frequency(module, coords, params, q0, v0):
     the square root of the largest |eigenvalue| of d q''/d q (central differences); at least 1 rad/s, so
     that a scene with no restoring force (a free slide) still gets a horizon of seconds."""
     h, n = 1e-6, len(coords)
+    equations = Equations(module, params, ())
     jacobian = np.empty((n, n))
     for j in range(n):
         step = np.eye(n)[j] * h
-        plus, minus = (real(module.accelerations(0.0, q, v0, params), (n,), "accelerations(t, q, v, p)")
-                       for q in (q0 + step, q0 - step))
+        plus, minus = (equations.accelerations(0.0, q, v0) for q in (q0 + step, q0 - step))
         jacobian[:, j] = (plus - minus) / (2 * h)
     largest = float(np.max(np.abs(np.linalg.eigvals(jacobian)))) if np.all(np.isfinite(jacobian)) else 1.0
     return max(math.sqrt(largest), 1.0)
@@ -280,7 +356,7 @@ def case_file(folder, module, scene, given, overrides=None):
     given_bindings = given.get("scene", {}).get("bindings", {})
     forcing = applied_parameters(params, given, file) - set(given_bindings)
     bound, param_units = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds, file,
-                                  given_bindings)
+                                  given_bindings, declared_units(module, params, file))
     for p in forcing:
         param_units[p] = given["params"][p]["unit"]
     length = max(scene.length, 0.1)
@@ -332,7 +408,7 @@ def case_file(folder, module, scene, given, overrides=None):
                            name=bound[p][0]["name"], index=AXES[bound[p][0].get("index", 0)])}
                    for p, value in params.items()},  # every other parameter is bound (bindings refuses the rest)
         "initial": {"q": q0.tolist(), "v": v0.tolist(), "t_end": t_end},
-        "sample": {"count": SAMPLE_COUNT, "seed": 1, "t": [0.0, 4 * t_end],
+        "sample": {"count": SAMPLE_COUNT, "budget": SAMPLE_BUDGET, "seed": 1, "t": [0.0, 4 * t_end],
                    "q": [span(c, u) for c, u in zip(coords, units)], "v": [[-rate(u), rate(u)] for u in units],
                    "params": {"sets": 8, "states": 20, "seed": 2,
                               "ranges": {p: sorted([0.5 * v, 2.0 * v]) for p, v in params.items()}}},

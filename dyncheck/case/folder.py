@@ -1,12 +1,10 @@
 """Cases: one folder per scene with case.toml, scene.xml (MJCF) and scene.urdf; the case file names
 where its equations (its derivation) live."""
 
-import hashlib
 import importlib
 import importlib.util
 import math
 import re
-import sys
 import time
 import tomllib
 from dataclasses import dataclass
@@ -18,6 +16,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from dyncheck.case import derived, files, isolation, scene, schema
+from dyncheck.case.isolation import guarded, load_file
 from dyncheck.case.scene import PLACEHOLDER_INERTIA, PLACEHOLDER_MASS, compare_scenes
 from dyncheck.common import expressions, words
 from dyncheck.common.messages import suggest
@@ -88,40 +87,6 @@ def prose_fields(spec, path=""):
             yield from prose_fields(value, f"{path}[{i}]")
     elif isinstance(spec, str) and PROSE_NUMBER.search(spec):
         yield path, spec
-
-
-def load_file(path, what):
-    """The Python file at `path` as a module, loaded once per content of the file (an edited file is
-    loaded again: a researcher fixing a derivation between two runs in one process gets the fix);
-    `what` names it in the ValueError of a file that cannot be loaded."""
-    path = Path(path).resolve()
-    try:
-        code = path.read_bytes()
-    except OSError as error:
-        raise ValueError(f"{what}: cannot read {path}: {error.strerror or error}") from None
-    name = f"dyncheck_file_{hashlib.sha256(code).hexdigest()[:16]}_{abs(hash(str(path))):x}"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        try:  # foreign code: bounded in time, its exit an error (isolation)
-            guarded(what, lambda: isolation.guarded_call(str(path), "import", isolation.IMPORT_BUDGET,
-                                                         spec.loader.exec_module, module))
-        except BaseException:
-            del sys.modules[name]
-            raise
-    return sys.modules[name]
-
-
-def guarded(what, call):
-    """call(), with whatever a case's own code raises (or its sys.exit) as a ValueError naming `what`:
-    bad input, exit 2, never a traceback or a silent exit."""
-    try:
-        return call()
-    except (ValueError, isolation.DerivationError) as error:
-        raise ValueError(f"{what}: {error}") from None
-    except (Exception, SystemExit) as error:
-        raise ValueError(f"{what}: {type(error).__name__}: {error}") from None
 
 
 def case_names(cases_dir=CASES_DIR):
@@ -272,7 +237,7 @@ class Case:
                 return derived.case_file(self.folder, module, mjcf, given, overrides)
         if not given:
             raise ValueError(f"{self.file}: no such file, and {self.folder / derived.EQUATIONS} defines no COORDS and "
-                             "accelerations(t, q, v, p) (docs/own-case.md)")
+                             "accelerations(t, q, v, p) or inverse_dynamics(t, q, v, a, p) (docs/own-case.md)")
         return given
 
     def _toml(self):
@@ -332,11 +297,26 @@ class Case:
         s = self.spec["sample"]
         bounds = lambda ranges: np.array([[self.value(lo), self.value(hi)] for lo, hi in ranges]).reshape(-1, 2)
         box = np.vstack([[[self.value(s["t"][0]), self.value(s["t"][1])]], bounds(s["q"]), bounds(s["v"])])
-        count = s["count"] if count is None else min(count, s["count"])
+        count = self.sample_count if count is None else min(count, s["count"])
         halton = qmc.Halton(len(box), scramble=True, seed=np.random.default_rng([s["seed"], stream]))
         points = box[:, 0] + halton.random(count) * (box[:, 1] - box[:, 0])
         n = len(self.coords)
         return [(float(x[0]), x[1:1 + n], x[1 + n:]) for x in points]
+
+    @cached_property
+    def sample_count(self):
+        """How many random states the pointwise check takes: [sample] count, or, where [sample] budget is given (a
+        case of two files has it), more where the case's own derivation is cheap: the power of two of its calls
+        that fits the budget, from count up to schema.MAX_ADAPTIVE_STATES.  A power of two: a cost measured a few
+        per cent off moves the count only across a boundary, and every count's states are the first of the same
+        sequence."""
+        s = self.spec["sample"]
+        if "budget" not in s or not self.foreign:
+            return s["count"]
+        self.model("reference")  # measures the cost of a call of the case's own code
+        cost = self.derivation.cost
+        fits = 2 ** math.floor(math.log2(s["budget"] / cost)) if cost > 0 else schema.MAX_ADAPTIVE_STATES
+        return int(min(schema.MAX_ADAPTIVE_STATES, max(s["count"], fits)))
 
     @property
     def integration(self):
@@ -528,7 +508,7 @@ class Case:
                     start = time.perf_counter()
                     answers[function] = getattr(model, function)(0.0, q0, v0)
                     if own is not None and name == "Reference" and function == "accelerations":
-                        own.cost = time.perf_counter() - start  # its calls' budget follows from their cost
+                        own.cost = call_cost(lambda: model.accelerations(0.0, q0, v0), time.perf_counter() - start)
                         own.budget = self.spec.get("budget", {}).get(
                             "call", max(isolation.CALL_FLOOR, isolation.CALLS_PER_BUDGET * own.cost))
             except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
@@ -565,6 +545,25 @@ class Case:
 
     def __repr__(self):
         return f"Case({self.name!r}, overrides={self.overrides})"
+
+
+def call_cost(call, first):
+    """The cost of a call, s: the least of up to COST_CALLS more calls, within COST_TIME, after the first (which
+    took `first` s and pays for numpy's first use of each function it calls)."""
+    least, spent = first, first
+    for _ in range(COST_CALLS):
+        if spent > COST_TIME:
+            break
+        start = time.perf_counter()
+        call()
+        took = time.perf_counter() - start
+        least, spent = min(least, took), spent + took
+    return least
+
+
+# The calls that measure a derivation's cost: the least of 10 is within a few per cent of its steady cost, and 0.05 s
+# bounds what a slow derivation (a generated 7-dof arm, 2-6 ms a call) spends on it.
+COST_CALLS, COST_TIME = 10, 0.05
 
 
 class ProgramUpTo:

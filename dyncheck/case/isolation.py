@@ -9,7 +9,9 @@ docs/isolation.md says what a user sees."""
 
 import ctypes
 import faulthandler
+import hashlib
 import hmac
+import importlib.util
 import mmap
 import os
 import pickle
@@ -21,6 +23,7 @@ import threading
 import time
 from dataclasses import dataclass
 from multiprocessing import connection, get_context
+from pathlib import Path
 
 import numpy as np
 
@@ -424,3 +427,39 @@ def _main_child(main, record, token, parent):
     sys.stderr.flush()
     record.done(code, token)
     os._exit(code)
+
+
+# -- a case's own Python file ------------------------------------------------------------------------
+
+def load_file(path, what):
+    """The Python file at `path` as a module, loaded once per content of the file (an edited file is
+    loaded again: a researcher fixing a derivation between two runs in one process gets the fix);
+    `what` names it in the ValueError of a file that cannot be loaded."""
+    path = Path(path).resolve()
+    try:
+        code = path.read_bytes()
+    except OSError as error:
+        raise ValueError(f"{what}: cannot read {path}: {error.strerror or error}") from None
+    name = f"dyncheck_file_{hashlib.sha256(code).hexdigest()[:16]}_{abs(hash(str(path))):x}"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        try:  # foreign code: bounded in time, its exit an error (isolation)
+            guarded(what, lambda: guarded_call(str(path), "import", IMPORT_BUDGET,
+                                                         spec.loader.exec_module, module))
+        except BaseException:
+            del sys.modules[name]
+            raise
+    return sys.modules[name]
+
+
+def guarded(what, call):
+    """call(), with whatever a case's own code raises (or its sys.exit) as a ValueError naming `what`:
+    bad input, exit 2, never a traceback or a silent exit."""
+    try:
+        return call()
+    except (ValueError, DerivationError) as error:
+        raise ValueError(f"{what}: {error}") from None
+    except (Exception, SystemExit) as error:
+        raise ValueError(f"{what}: {type(error).__name__}: {error}") from None

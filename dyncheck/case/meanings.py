@@ -2,7 +2,8 @@
 generated from them and the schema: docs/case-file.md is `markdown()`; a test demands one meaning per key of
 dyncheck.case.schema.SCHEMA, and no other."""
 
-from dyncheck.case.schema import BINDABLE, BOUNDS, MAX_SETS, MAX_STATES, SCHEMA, joined, kind_in_words
+from dyncheck.case.schema import (BINDABLE, BOUNDS, MAX_ADAPTIVE_STATES, MAX_SETS, MAX_STATES, SCHEMA, joined,
+                                  kind_in_words)
 from dyncheck.case.units import DIMENSIONLESS, POSITIVE_UNITS
 from dyncheck.common import ceilings, expressions, words
 
@@ -58,6 +59,10 @@ MEANINGS = {
                       "parameters.",
     "sample": "The random states of the pointwise check, at which every source is evaluated.",
     "sample.count": f"How many random states (at most {MAX_STATES}).",
+    "sample.budget": "Seconds that the derivation's calls at the random states may take, for a case whose derivation "
+                     "is a file of its folder: more states where its calls are cheap, the power of two of them that "
+                     f"fits, from `count` up to {MAX_ADAPTIVE_STATES} (the cost of a call measured at the initial state). A case of "
+                     "two files has 0.25 s. Without it: `count` states.",
     "sample.seed": "The seed of their random generator: two runs draw the same states.",
     "sample.t": "The interval of the random times.",
     "sample.q": "The interval of each coordinate's random values, one per coordinate.",

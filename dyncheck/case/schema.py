@@ -58,7 +58,7 @@ SCHEMA = ("table", {
     # physical limits past which a coordinate grows without bound (dyncheck/checks.py, runaway)
     "runaway?": ("list", ("table", {"when": "str", "coordinate": "str", "escape": "expr > 0", "why": "str"})),
     "sample": ("table", {
-        "count": "int > 0", "seed": "int >= 0", "t": ("pair", "expr"),
+        "count": "int > 0", "budget?": "number > 0", "seed": "int >= 0", "t": ("pair", "expr"),
         "q": ("list", ("pair", "expr")), "v": ("list", ("pair", "expr")),
         # random parameter sets of the "random parameters" check (dyncheck/checks.py)
         "params?": ("table", {"sets": "int > 0", "states": "int > 0", "seed": "int >= 0",
@@ -280,6 +280,11 @@ def _check_integration(spec, values, file):
 
 # How much work one case file may ask for, so that a run ends in minutes (dyncheck.run.simulate bounds
 # each integration as it runs; these bound what is asked before anything runs).
+# The most random states a [sample] budget gives (Case.sample_count): 4 times a case of two files' 256, so that a
+# region of 5 % of the state space holds about 50 of them.  Each state costs the checks about 0.45 ms besides the
+# derivation's calls (the engines' accelerations, reactions, energy and mass matrices, and the calls' isolation:
+# measured on docs/own-case.md's tutorial, whose run 4096 states made 2 s longer and 1024 states 0.1-0.4 s).
+MAX_ADAPTIVE_STATES = 1024
 MAX_STATES = 10_000  # random states of the pointwise check, and sets x states of the random parameters:
 #                      four sources at ~0.25 ms each per state, 10 s
 MAX_SETS = 1_000  # random parameter sets: each builds both engines' models, ~20 ms
@@ -528,6 +533,15 @@ def check_bindings(bindings, params, file, elements=None):
             if names is not None and location["name"] not in names:
                 raise field_error(file, f"{field}.name", location["name"], f"is no {location['element']} of the scene"
                              + hint(location["name"], sorted(names)))
+    # one scene number set by two parameters would follow whichever is written last: an override of one moves both
+    seen = {}
+    for p, locations in bindings.items():
+        for i, location in enumerate(locations):
+            key = (location["element"], location.get("name"), location.get("attribute"), location.get("index", 0))
+            if key in seen and seen[key] != p:
+                raise field_error(file, f"scene.bindings.{p}[{i}]", location, f"is also bound by {seen[key]}: one scene "
+                                  "number can follow one parameter")
+            seen[key] = p
 
 
 def _binding(location, field, params, file):

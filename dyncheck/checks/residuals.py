@@ -15,7 +15,7 @@ that fails while the equations hold is fitted the same way.  The book's printed 
 are checked here too, each with MuJoCo's accelerations and reactions put in (printed_rows).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -50,6 +50,11 @@ class Residuals:
     derived_acc: np.ndarray
     given_mass: np.ndarray | None
     given_forces: np.ndarray | None
+
+    def first(self, count):
+        """These residuals at the first `count` states only."""
+        cut = lambda array: None if array is None else array[:count]
+        return Residuals(*(cut(getattr(self, field.name)) for field in fields(self)))
 
     @property
     def engine_forces(self):
@@ -202,10 +207,12 @@ def _localised(case, failing, found, drawn):
     driven = driven_units(case)
     out = []
     for source in sorted({s for s, _ in failing}):
-        samples = [(dict(case.params), case, found[source, "mujoco"])]
+        fitted = case.spec["sample"]["count"]  # the states a term search is sized for (terms.MEMORY), not all
+        samples = [(dict(case.params), case, found[source, "mujoco"].first(fitted))]
         for other in others[1:]:
             try:
-                samples.append((dict(other.params), other, residuals(other, source, "mujoco", other.sample_states())))
+                samples.append((dict(other.params), other, residuals(other, source, "mujoco",
+                                                                    other.sample_states(fitted))))
             except Exception:  # a set where a source fails: the random-parameters rows say so
                 continue
         named = {name: place for name, place, _ in places(case, samples[0][2])}
@@ -352,10 +359,12 @@ def localise_values(case, rows, sample, drawn, wrong_equations):
             (lambda model, t, q, v: model.reactions(t, q, v)[name])
         samples, scale = [], None
         for other in others:
+            fitted = case.spec["sample"]["count"]  # the states a term search is sized for (terms.MEMORY), not all
             if other is case:  # the pointwise check has them
-                states, mine, theirs = sample["states"], sample["values"][source][name], sample["values"]["mujoco"][name]
+                states, mine, theirs = (sample["states"][:fitted], sample["values"][source][name][:fitted],
+                                        sample["values"]["mujoco"][name][:fitted])
             else:
-                states = other.sample_states()
+                states = other.sample_states(fitted)
                 try:
                     with np.errstate(all="ignore"):
                         mine, theirs = (np.array([value(other.model(s), t, q, v) for t, q, v in states])

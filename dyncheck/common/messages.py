@@ -36,3 +36,12 @@ def statuses_in_words(counts):
     """{status: n} in words, those with none left out: "58 pass, 16 findings, 1 fail"."""
     return ", ".join(plural(n, status) if status in NOUN_STATUSES else f"{n} {status}"
                      for status, n in counts.items() if n)
+
+
+class WithBlock(ValueError):
+    """A refusal of bad input whose message is one line, and `block`: lines to paste (a case.toml table) that the
+    command prints after it as they are."""
+
+    def __init__(self, message, block):
+        super().__init__(message)
+        self.block = block

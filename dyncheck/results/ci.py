@@ -76,7 +76,8 @@ def states_covered(result):
     spans = [("t", sample["t"], "s")] + list(zip(spec["coords"], sample["q"], spec["coord_units"])) + \
         [(f"{c}'", span, f"{unit}/s") for c, span, unit in zip(spec["coords"], sample["v"], spec["coord_units"])]
     sets = sample.get("params")
-    return (f"{result.name}: {plural(sample['count'], 'random state')} over "
+    count = len(result.sample["states"]) if result.sample else sample["count"]  # [sample] budget may give more
+    return (f"{result.name}: {plural(count, 'random state')} over "
             + ", ".join(f"{name} [{value(lo):.3g}, {value(hi):.3g}] {unit}" for name, (lo, hi), unit in spans)
             + (f"; {plural(sets['sets'], 'random parameter set')}, {sets['states']} states of its own each"
                if sets else ""))

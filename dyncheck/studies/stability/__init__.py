@@ -19,7 +19,8 @@ perturbations along the book's initial conditions (cheap: five trajectories over
 """
 
 from dyncheck.case import files
-from dyncheck.case.folder import load_file, settings_of
+from dyncheck.case.folder import settings_of
+from dyncheck.case.isolation import load_file
 from dyncheck.common import ceilings
 from dyncheck.results.values import heading
 from dyncheck.studies.stability.common import NotApplicable, Study, not_applicable

@@ -1,0 +1,51 @@
+"""The joint values of an MJCF that an engine's own MJCF reader drops or reads otherwise than MuJoCo's compiler
+(springs, their rest positions, dampers, rotor inertia), resolved from the file's text as MuJoCo's compiler resolves
+them: Pinocchio's and Drake's adapters read them here, with no engine of their own."""
+
+import math
+
+JOINT_VALUES = {"stiffness": "spring", "springref": "spring's rest position", "damping": "damper",
+                "armature": "rotor inertia"}
+JOINT_DEFAULTS = {**dict.fromkeys(JOINT_VALUES, "0"), "type": "hinge"}  # MuJoCo's, where no class sets them
+
+
+def joint_values(document, path):
+    """{attribute: {joint: value}} of an MJCF's named joints for each of JOINT_VALUES, where not 0, as MuJoCo's
+    compiler resolves it: the joint's own attribute, else the joint default of its class (its `class`, else the
+    `childclass` of the nearest element around it that has one, else "main"), else of the classes around that
+    one; a hinge's springref in rad, from the file's degrees under <compiler angle="degree"> (MJCF's default).
+    ValueError for a polynomial spring or damper ("a b c"): the adapters' are linear."""
+    defaults = {}
+
+    def collect(default, inherited):
+        joint = default.find("joint")
+        own = {a: joint.get(a, inherited[a]) for a in JOINT_DEFAULTS} if joint is not None else inherited
+        defaults[default.get("class", "main")] = own
+        for child in default.findall("default"):
+            collect(child, own)
+
+    for default in document.findall("default"):
+        collect(default, JOINT_DEFAULTS)
+    degrees = all(compiler.get("angle", "degree") == "degree" for compiler in document.iter("compiler"))
+    values = {attribute: {} for attribute in JOINT_VALUES}
+
+    def walk(element, childclass):
+        childclass = element.get("childclass", childclass)
+        for child in element:
+            if child.tag == "joint" and child.get("name"):  # an unnamed joint: the case cannot move it (refused)
+                inherited = defaults.get(child.get("class", childclass), JOINT_DEFAULTS)
+                for attribute, what in JOINT_VALUES.items():
+                    text = child.get(attribute, inherited[attribute])
+                    a, *higher = [float(x) for x in text.split()]
+                    if any(higher):
+                        raise ValueError(f'{path}: joint \'{child.get("name")}\' {attribute}="{text}": a polynomial '
+                                         f"{what}, which the Pinocchio and Drake sides do not model; give the linear term only")
+                    if attribute == "springref" and degrees and child.get("type", inherited["type"]) == "hinge":
+                        a = math.radians(a)
+                    if a:
+                        values[attribute][child.get("name")] = a
+            else:
+                walk(child, childclass)
+
+    walk(document.find("worldbody"), "main")
+    return values
