@@ -1,7 +1,9 @@
 """Stage 2, the case: reading a case folder and evaluating its numbers at the parameters (folder: `Case`,
-`load_case`), what a case file may hold (schema), a case derived from a scene and a plain equations.py (derived), the
-case's own code bounded in time and memory (isolation).  Imports dyncheck.common, dyncheck.results and engines/
-(which read the scene files)."""
+`load_case`), what a case file may hold (schema; its keys' meanings and docs/case-file.md in meanings, the
+parameters' units in units, the files it may name in files), the scene it hands the engines (scene: an
+engines.description.Scene), a case derived from a scene.xml and a plain equations.py (derived), the case's own
+code loaded and bounded in time and memory (isolation).  Imports dyncheck.common, dyncheck.results and engines/
+(which read the scene files and build the models)."""
 
 __all__ = ["CASES_DIR", "Case", "case_names", "load_case"]
 

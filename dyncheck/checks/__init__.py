@@ -1,7 +1,9 @@
-"""Stage 4, the checks of a case: `run_case` and its rows (runs), the equations one by one (residuals) and their
-fit by terms (terms), the localisation of a finding (localise), the vibration analysis about an equilibrium
-(vibration).  Imports the earlier stages (dyncheck.common, dyncheck.results, dyncheck.case, dyncheck.run) and
-engines/ (which the checks run)."""
+"""Stage 4, the checks of a case, each yielding rows: `run_case` and the trajectories, energy and runaway
+(runs), the pointwise comparisons and random parameter sets (pointwise), the book's programs and the findings'
+localisation (programs, localise), the equations one by one (residuals) and their fit by terms (terms), the
+convergence orders (convergence), the agreement horizon (horizon), the vibration analysis (vibration; its pieces
+in linear, about a periodic motion in floquet), what the figures draw along the runs (drawings).  Imports the
+earlier stages and engines/ (which the checks run)."""
 
 PUBLIC = {"run_case": "runs", "unfinished": "runs", "parameter_sets": "pointwise", "validate_placeholders": "pointwise",
           "ENGINES": "pointwise"}  # name: its module

@@ -37,6 +37,10 @@ NUMERIC_KINDS = "biufc"  # bool, int, unsigned, float, complex: what a .npy entr
 ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # zip's earliest date, instead of the time of saving
 
 _registry = {}  # class name -> class
+# The modules that saved classes lived in before the layout of a package per stage (issue 36), as results saved
+# then name them: the module that now defines (or, for dyncheck.vibration's, imports) them.
+MOVED = {"dyncheck.results": "dyncheck.results.values", "dyncheck.simulate": "dyncheck.run.simulate",
+         "dyncheck.vibration": "dyncheck.checks.vibration", "dyncheck.campbell": "dyncheck.studies.campbell"}
 
 
 def register(cls):
@@ -169,6 +173,7 @@ def _registered(node, path):
     result loads in a process that imported only this module's caller.  Only the project's own modules are
     imported: a results folder is data, and must not name code to run."""
     name, module = node["class"], node.get("module", "")
+    module = MOVED.get(module, module)
     if name not in _registry and module.partition(".")[0] == __name__.partition(".")[0]:
         try:
             importlib.import_module(module)
