@@ -1,4 +1,4 @@
-"""Animations (dyncheck/animation.py, engines/render.py): the frames are the engine's kinematics of the run,
+"""Animations (dyncheck/pages/animation.py, engines/render.py): the frames are the engine's kinematics of the run,
 the GIF is the same bytes when made again, both renderers give the same frames' times and size, and
 `report --no-animations` makes none."""
 

@@ -1,4 +1,4 @@
-"""The cache of tight solutions (dyncheck/cache.py): what it returns is what simulate computes, bit for bit,
+"""The cache of tight solutions (dyncheck/run/cache.py): what it returns is what simulate computes, bit for bit,
 and a change in anything the solution depends on is a new key, never the old entry."""
 
 import importlib

@@ -1,4 +1,4 @@
-"""The Campbell diagram and the stability boundaries (dyncheck/campbell.py) follow the parameters: the sweep and the
+"""The Campbell diagram and the stability boundaries (dyncheck/studies/campbell.py) follow the parameters: the sweep and the
 brackets are multiples of their scale, the boundary is found inside its bracket, two modes' closest approach is
 found and judged, and where there is nothing to show the page says so in a sentence.  At `--set k=500` the spring
 pendulum's sweep once ran 0-100 rad/s past sqrt(k/m) = 50 rad/s (an l axis to 1e7 m, no boundary line), its bracket

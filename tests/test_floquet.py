@@ -1,4 +1,4 @@
-"""Floquet analysis about the book's periodic motions (dyncheck/vibration.py, `floquet`): with the arm and the disk
+"""Floquet analysis about the book's periodic motions (dyncheck/checks/vibration.py, `floquet`): with the arm and the disk
 both turning, the 1.8.1 and 1.8.3 equations are periodic in t; the periodic orbit, each source's monodromy matrix
 and multipliers agree, Liouville's formula holds, the arm at rest gives back the equilibrium's exp(lambda T), and a
 bad table is refused naming its field."""

@@ -115,7 +115,7 @@ BAD_CASE_FILES = [
      "not valid TOML: Expected ']' at the end of a table declaration"),
     ("double_pendulum", "m1 = [0.05, 2.0]", "m1 = [0.0, 2.0]",
      "sample.params.ranges.m1 = [0.0, 2.0] leaves the physical values: m1 must be > 0 (m1 is a mass, in kg)"),
-    # settings that would make a check vacuous (dyncheck/ceilings.py)
+    # settings that would make a check vacuous (dyncheck/common/ceilings.py)
     ("spring_pendulum", 'sources = ["book"]', 'sources = ["mujoco"]',
      "findings[0].sources = 'mujoco' is not the book's: a finding is an error of the book"),
     ("spring_pendulum", 'sources = ["book"]', 'sources = ["reference vs mujoco"]',

@@ -1,4 +1,4 @@
-"""Stability studies (dyncheck/stability/, and the cases' own studies.py): theory, the measured limits against it, blow-ups as data.
+"""Stability studies (dyncheck/studies/stability/, and the cases' own studies.py): theory, the measured limits against it, blow-ups as data.
 
 Fast by default (a few seconds each): each test runs one study on a reduced set of its numbers.
 `pytest -m slow` runs every study of every case as the report does and draws the figures.

@@ -1,4 +1,4 @@
-"""The student's pages (dyncheck/student_page.py): every book example has one, every step that shows an
+"""The student's pages (dyncheck/pages/student_page.py): every book example has one, every step that shows an
 expression has it typeset and checked, the words are a student's, and a [course] that names what the case does not
 have is refused."""
 

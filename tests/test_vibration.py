@@ -1,4 +1,4 @@
-"""Vibration analysis (dyncheck/vibration.py, the book's step 16): equilibria by Newton-Raphson, the
+"""Vibration analysis (dyncheck/checks/vibration.py, the book's step 16): equilibria by Newton-Raphson, the
 linearisation of the derivation and of both engines, frequencies against closed forms and against runs,
 the stability boundaries against their formulas and runs either side; a wrong term fails, a bad table is
 refused naming its field."""

@@ -80,7 +80,7 @@ MEANINGS = {
                       "fastest frequency as an expression of the parameters, sets each method's step and horizon; "
                       "an optional `convergence.method_omega` table gives a method that integrates other "
                       "coordinates its own; where the motion outruns it, four times over, the horizon ends "
-                      "before, and the row says where); validated by dyncheck/work_precision.py.",
+                      "before, and the row says where); validated by dyncheck/studies/work_precision.py.",
     "budget": "How long a derivation of the case folder (code dyncheck does not control) may run, and in how much "
               "memory: a call, a run or a memory use past its budget is a failing row that says which function, at "
               "which state, after how long (docs/isolation.md).  The book's derivations in the package's own "
@@ -232,7 +232,7 @@ MEANINGS = {
     "findings[i].measured": "What this run measures of it, in sentences whose numbers are measured in the results "
                             "(see Measured numbers in prose): shown on the case page and in the errata as this run's, "
                             "never marked as the book's numbers.",
-    "measured": "Numbers measured in the saved results, by name, for the pages' prose (dyncheck/measured.py; see "
+    "measured": "Numbers measured in the saved results, by name, for the pages' prose (dyncheck/results/measured.py; see "
                 "Measured numbers in prose).",
     "measured.<name>.kind": "What is measured: `span` (max - min of `of` along `run`), `rms` (its root mean square "
                             "about its mean), `start`, `end`, `change` (its value at the run's first output, last, "
@@ -266,11 +266,11 @@ MEANINGS = {
     "data[i].relation": "equal: printed = formula; at most: printed <= formula.  Absent: equal.",
     "stability": "The stability studies of `dyncheck report`, each in a sub-table named after it; `module` names "
                  "a .py file in the case's folder (not outside it) with the case's own studies.  Validated by dyncheck/stability.",
-    "vibration": "Vibration analysis (dyncheck/vibration.py): an equilibrium found by Newton-Raphson, the equations "
+    "vibration": "Vibration analysis (dyncheck/checks/vibration.py): an equilibrium found by Newton-Raphson, the equations "
                  "linearised about it by the derivation and by both engines, their frequencies, modes and stability, "
                  "each frequency checked in a run.  Rows with check `vibration`; the page's section \"Vibration "
                  "analysis\".",
-    "course": "The student's page, `<case>_student.md` beside the case page (dyncheck/student_page.py, "
+    "course": "The student's page, `<case>_student.md` beside the case page (dyncheck/pages/student_page.py, "
               "[student-pages.md](student-pages.md)): the book's procedure step by step in plain words, each result "
               "typeset from the expression the code evaluates and checked against the engines by the run's rows.",
     "course.intro": "The page's opening paragraph: what the example is and what it finds (Markdown, `$` maths).",
@@ -476,7 +476,7 @@ def markdown():
               "## Measured numbers in prose", "",
               "A number measured in the results, not computed from the parameters, is named in `[measured]` and "
               "written `{~ expression}` or `{~ expression :format}`: an expression of those names and the "
-              "parameters, with a number's format spec (default `.3g`) or the name of a rule of `dyncheck/words.py` "
+              "parameters, with a number's format spec (default `.3g`) or the name of a rule of `dyncheck/common/words.py` "
               "that chooses the words from the number, such as " + "; ".join(
                   f"`{name}`: " + ", ".join(f"{x:g} \"{rule(x)}\"" for x in words.EXAMPLES[name])
                   for name, rule in words.WORDS.items())

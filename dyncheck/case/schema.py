@@ -55,17 +55,17 @@ SCHEMA = ("table", {
                                  "exclusive_maximum?": "number"})),
     "constraints?": ("list", ("table", {"expression": "str", "strict?": "bool", "why": "str"})),
     "initial": ("table", {"q": ("list", "expr"), "v": ("list", "expr"), "t_end": "expr > 0"}),
-    # physical limits past which a coordinate grows without bound (dyncheck/checks.py, runaway)
+    # physical limits past which a coordinate grows without bound (dyncheck/checks/, runaway)
     "runaway?": ("list", ("table", {"when": "str", "coordinate": "str", "escape": "expr > 0", "why": "str"})),
     "sample": ("table", {
         "count": "int > 0", "budget?": "number > 0", "seed": "int >= 0", "t": ("pair", "expr"),
         "q": ("list", ("pair", "expr")), "v": ("list", ("pair", "expr")),
-        # random parameter sets of the "random parameters" check (dyncheck/checks.py)
+        # random parameter sets of the "random parameters" check (dyncheck/checks/)
         "params?": ("table", {"sets": "int > 0", "states": "int > 0", "seed": "int >= 0",
                               "ranges": ("map", ("pair", "expr"))}),
     }),
-    "work_precision?": FREE,  # validated by dyncheck/work_precision.py
-    # how long the case's own code may run, and in how much memory (dyncheck/isolation.py)
+    "work_precision?": FREE,  # validated by dyncheck/studies/work_precision.py
+    # how long the case's own code may run, and in how much memory (dyncheck/case/isolation.py)
     "budget?": ("table", {"call?": "number > 0", "case?": "number > 0", "memory?": "number > 0"}),
     "integration": ("table", {"output_step": "expr > 0", "rtol": "expr > 0", "tight_rtol": "expr > 0",
                               "mujoco_step": "expr > 0"}),
@@ -79,7 +79,7 @@ SCHEMA = ("table", {
         "figures?": ("map", ("table", {"x": "str", "y": "str", "title": "str", "xlabel": "str", "ylabel": "str",
                                        "caption?": "str", "xlim?": RANGE, "ylim?": RANGE, "equal?": "bool"})),
     }),
-    # what the case page's animation shows beside the motion (dyncheck/animation.py)
+    # what the case page's animation shows beside the motion (dyncheck/pages/animation.py)
     "animation?": ("table", {"program?": ("one of", "beside", "ghost"),
                              "arrow?": ("table", {"force": ("list", "str"), "at": ("list", "str"), "about": "str"}),
                              "graph?": ("table", {"y": "str", "title": "str", "ylabel": "str", "ylim?": RANGE}),
@@ -110,7 +110,7 @@ SCHEMA = ("table", {
     "findings?": ("list", ("table", {"id": "str", "title": "str", "where": "str", "effect?": "str",
                                      "sources": ("list", "str"), "quantities": ("list", "str"),
                                      "explanation": "str", "measured?": "str", "right?": ("map", "str")})),
-    # numbers measured in the results, for the pages' prose (dyncheck/measured.py checks each kind's keys)
+    # numbers measured in the results, for the pages' prose (dyncheck/results/measured.py checks each kind's keys)
     "measured?": ("map", ("table", {"kind": ("one of", *measured.KINDS), "of?": "str",
                                     "run?": ("one of", *measured.RUNS), "against?": ("one of", *measured.RUNS),
                                     "mode?": "int > 0", "source?": ("one of", "reference", "mujoco", "pinocchio"),
@@ -118,8 +118,8 @@ SCHEMA = ("table", {
     # data_checks divides by the formula's value
     "data?": ("list", ("table", {"name": "str", "printed": "expr", "formula": "expr != 0", "where": "str",
                                  "tolerance": "number >= 0", "relation?": ("one of", "equal", "at most")})),
-    "stability?": FREE,  # validated by dyncheck/stability.py
-    # cross-references validated by dyncheck/vibration.py
+    "stability?": FREE,  # validated by dyncheck/studies/stability/
+    # cross-references validated by dyncheck/checks/vibration.py
     "vibration?": ("table", {"why": "str", "overrides?": ("map", "expr"), "q": ("list", "expr"),
                              "v": ("list", "expr"), "solve": ("list", "str"), "amplitude": "number > 0",
                              "periods": "int > 0",
@@ -131,7 +131,7 @@ SCHEMA = ("table", {
                              "floquet?": ("table", {"why": "str", "period": "str", "q": ("list", "expr"),
                                                     "v": ("list", "expr"), "periods": "int > 0",
                                                     "amplitude": "number > 0"})}),
-    # the student's page (dyncheck/student_page.py, which checks the expressions against the derivation)
+    # the student's page (dyncheck/pages/student_page.py, which checks the expressions against the derivation)
     "course?": ("table", {"intro": "str", "steps": ("list", ("table", {
         "title": "str", "text": "str",
         "show?": ("list", ("table", {"expression?": "str", "label?": "str", "quantities?": ("list", "str"),

@@ -74,7 +74,7 @@ def row(check, quantity, sources, error, tolerance, detail="", *, ceiling):
     if tolerance > ceiling:
         status = Status.INCONCLUSIVE
         detail = (f"tolerance {tolerance:.2e} is above the ceiling {ceiling:.0e} of this comparison, so it "
-                  f"proves nothing (dyncheck/ceilings.py); " + detail)
+                  f"proves nothing (dyncheck/common/ceilings.py); " + detail)
     else:
         status = Status.PASS if error <= tolerance else Status.FAIL
     return Row(check, quantity, sources, float(error), float(tolerance), float(ceiling), status, None, detail)
