@@ -37,7 +37,7 @@ CLOSURES = 4096
 
 
 class MujocoModel:
-    """scene (from the case, an engines.description.Scene): `layout` (the joints the book's coordinates move: a
+    """scene (from the case, a dyncheck.case.scene.Scene, read by attribute): `layout` (the joints the book's coordinates move: a
     hinge or slide, or a ball joint in the book's Euler angles), `driven` (joint -> its prescribed motion),
     `applied` (joint -> its generalized force in the joint's frame, a function force(t, q, v) of the case's state
     with an attribute `constant`), `dependent` (the joints that close the scene's loops, engines.loops: no

@@ -25,7 +25,7 @@ pytest.importorskip("pydrake", reason="Drake is an optional extra: pip install -
 
 import dyncheck  # noqa: E402
 from dyncheck.checks import linear  # noqa: E402
-from engines.description import Coordinates, Driven, Reaction, Scene  # noqa: E402
+from dyncheck.case.scene import Coordinates, Driven, Reaction, Scene  # noqa: E402
 from engines.drake_adapter import DrakeModel, Refused  # noqa: E402
 from engines.mujoco_adapter import MujocoModel  # noqa: E402
 from engines.pinocchio_adapter import PinocchioModel  # noqa: E402

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.case.scene import compare_scenes
+from dyncheck.case.scene import Coordinates, Driven, Scene, compare_scenes
 from dyncheck.checks.pointwise import compare, evaluate
-from engines.description import Coordinates, Driven, Scene
 from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
 

@@ -85,7 +85,7 @@ def test_a_wrong_period_fails_and_stops_the_analysis():
     case.spec["vibration"]["floquet"]["period"] = "pi/abs(beta_rate)"
     analysis = floquet.floquet(case)
     assert [r.status for r in analysis.rows] == [Status.FAIL] and analysis.rows[0].quantity.startswith("period T = 4 s")
-    assert "is not a period of the equations" in simulate.failure and not analysis.monodromy
+    assert "is not a period of the equations" in analysis.failure and not analysis.monodromy
 
 
 def test_a_disk_at_rest_has_no_period_and_is_not_applicable():
@@ -94,11 +94,11 @@ def test_a_disk_at_rest_has_no_period_and_is_not_applicable():
 
 
 @pytest.mark.parametrize("edit, message", [
-    (("q = [0.06]", "q = [0.06, 0.0]"), "floquet.floquet.q has 2 entries"),
-    (("v = [0.0]\nperiods = 1", "v = []\nperiods = 1"), "floquet.floquet.v has 0 entries"),
+    (("q = [0.06]", "q = [0.06, 0.0]"), "vibration.floquet.q has 2 entries"),
+    (("v = [0.0]\nperiods = 1", "v = []\nperiods = 1"), "vibration.floquet.v has 0 entries"),
     (('period = "2*pi/abs(beta_rate)"', 'period = "2*pi/abs(beta_rat)"'),
-     "floquet.floquet.period = '2*pi/abs(beta_rat)' names beta_rat, not a parameter"),
-    (('period = "2*pi/abs(beta_rate)"', 'period = "2*pi/"'), "floquet.floquet.period = '2*pi/' is not an expression"),
+     "vibration.floquet.period = '2*pi/abs(beta_rat)' names beta_rat, not a parameter"),
+    (('period = "2*pi/abs(beta_rate)"', 'period = "2*pi/"'), "vibration.floquet.period = '2*pi/' is not an expression"),
 ])
 def test_a_bad_floquet_table_is_refused_naming_its_field(tmp_path, edit, message):
     with pytest.raises(ValueError, match=re.escape(message)):
@@ -106,8 +106,8 @@ def test_a_bad_floquet_table_is_refused_naming_its_field(tmp_path, edit, message
 
 
 @pytest.mark.parametrize("edit, message", [
-    (("periods = 1", "periods = 0"), "floquet.floquet.periods"),
-    (("amplitude = 2e-4", "amplitude = -2e-4"), "floquet.floquet.amplitude"),
+    (("periods = 1", "periods = 0"), "vibration.floquet.periods"),
+    (("amplitude = 2e-4", "amplitude = -2e-4"), "vibration.floquet.amplitude"),
 ])
 def test_a_bad_floquet_number_is_refused_on_load(tmp_path, edit, message):
     with pytest.raises(ValueError, match=message):

@@ -8,10 +8,10 @@ import re
 import pandas as pd
 import pytest
 
+from dyncheck.case.scene import Driven
 from dyncheck.case.units import UNIT_REGISTRY
 from dyncheck.common.messages import statuses_in_words
 from dyncheck.pages.case_page import law_of_time, markdown_table
-from engines.description import Driven
 
 # The nouns the pages count, singular and plural, for "1 cases" and "16 finding".
 NOUNS = "case|row|finding|check|state|set|parameter|run|edit|quantity|source|method|figure|runaway|step|mode"

@@ -334,8 +334,6 @@ def test_a_read_only_mapping_comes_back_a_dict(tmp_path):
     assert store.load(tmp_path / "s") == {"params": {"k": 2000.0}}
 
 
-
-
 @pytest.mark.parametrize("name, module", [("Vibration", "dyncheck.vibration"), ("Floquet", "dyncheck.vibration"),
                                           ("Sweep", "dyncheck.campbell"), ("Escape", "dyncheck.simulate"),
                                           ("Row", "dyncheck.results")])

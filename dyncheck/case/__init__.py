@@ -1,7 +1,7 @@
 """Stage 2, the case: reading a case folder and evaluating its numbers at the parameters (folder: `Case`,
 `load_case`), what a case file may hold (schema; its keys' meanings and docs/case-file.md in meanings, the
 parameters' units in units, the files it may name in files), the scene it hands the engines (scene: an
-engines.description.Scene), a case derived from a scene.xml and a plain equations.py (derived), the case's own
+dyncheck.case.scene.Scene), a case derived from a scene.xml and a plain equations.py (derived), the case's own
 code loaded and bounded in time and memory (isolation).  Imports dyncheck.common, dyncheck.results and engines/
 (which read the scene files and build the models)."""
 

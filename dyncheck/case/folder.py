@@ -329,7 +329,7 @@ class Case:
     # -- the scene as the engines see it ---------------------------------------
     @cached_property
     def scene(self):
-        """The scene as the engine adapters take it (engines.description.Scene)."""
+        """The scene as the engine adapters take it (dyncheck.case.scene.Scene)."""
         return scene.describe(self)
 
     def least_reaction_scale(self, name):

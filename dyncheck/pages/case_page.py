@@ -533,7 +533,7 @@ def _state(coords, q, v):
 
 
 def law_of_time(law):
-    """A prescribed motion (engines.description.Driven) angle + rate t + acc t^2/2 with its zero terms left out:
+    """A prescribed motion (dyncheck.case.scene.Driven) angle + rate t + acc t^2/2 with its zero terms left out:
     "0.8 + 0.3 t - 0.05 t^2"."""
     terms = [f"{coefficient:.6g}{power}" for coefficient, power in ((law.angle, ""), (law.rate, " t"), (law.acc / 2, " t^2"))
              if coefficient]
