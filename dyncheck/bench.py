@@ -39,7 +39,7 @@ Pinocchio:
     joints' positions and rates, made a configuration by `pin.integrate` from the neutral one, or
     the top's quaternion and angular velocity (q' = q (w, 0) / 2).  This is the overhead that
     matters for a run.  The harness integrates the top in the same state (its `native`
-    coordinates, dyncheck.simulate) and converts to the Euler angles at the outputs only, so both
+    coordinates, dyncheck.run.simulate) and converts to the Euler angles at the outputs only, so both
     take the same steps.
 Reference and book: the accelerations state by state; and where a source's accelerations, as
 written, take many states as columns (closed forms in numpy), one call over 10000 states against
@@ -58,9 +58,9 @@ import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
-from dyncheck import cache
-from dyncheck.checks import run_case
-from dyncheck.simulate import simulate
+from dyncheck.checks.runs import run_case
+from dyncheck.run import cache
+from dyncheck.run.simulate import simulate
 from engines.bench import MujocoLoops, pinocchio_rhs, pinocchio_steps
 
 BOUND = 1.5  # the most a harness row may cost per item over its bare loop (issue 17): "EXCEEDED" beyond

@@ -1,7 +1,7 @@
 """Command line: `dyncheck list | run | report | bench | campaign | new`.  Exit codes: 0 all pass, 1 a check failed,
 2 bad input, 130 interrupted (Ctrl-C) (docs/statuses.md).
 
-`run` and the studies produce results (dyncheck.results); `report` saves them beside the pages and
+`run` and the studies produce results (dyncheck.results.values); `report` saves them beside the pages and
 renders the pages from what it saved, so `report --from` renders the same pages from saved results
 alone, without the engines."""
 
@@ -10,7 +10,6 @@ import contextlib
 import json
 import multiprocessing
 import os
-import signal
 import sys
 import tempfile
 import textwrap
@@ -21,18 +20,21 @@ from pathlib import Path
 
 import pandas as pd
 
-from dyncheck import cache, ci, isolation
-from dyncheck.case import CASES_DIR, SOURCES, case_names, load_case
-from dyncheck.checks import run_case, unfinished, validate_placeholders
-from dyncheck.simulate import fastest_frequency
-from dyncheck.messages import suggest
-from dyncheck.progress import Progress
-from dyncheck.results import format_rows, heading, load_results, save_results, to_json
+from dyncheck.case import isolation
+from dyncheck.case.folder import CASES_DIR, SOURCES, case_names, load_case
+from dyncheck.checks.pointwise import validate_placeholders
+from dyncheck.checks.runs import run_case, unfinished
+from dyncheck.common.messages import suggest
+from dyncheck.common.progress import Progress
+from dyncheck.results import ci
+from dyncheck.results.values import format_rows, heading, load_results, save_results, to_json
+from dyncheck.run import cache
+from dyncheck.run.simulate import fastest_frequency
 
 
 def entry():
     """The console command: main() in a process of its own, so that a case's own code cannot end dyncheck with an
-    exit code of its choosing (dyncheck.isolation.supervised)."""
+    exit code of its choosing (dyncheck.case.isolation.supervised)."""
     sys.exit(isolation.supervised(main))
 
 
@@ -186,7 +188,7 @@ def run_cases(cases, localise=True, workers=None):
     """The results of the cases, in their order, and the name of the first case that did not finish because of
     Ctrl-C (None if all did).  Each case runs in a forked process of its own (it inherits its Case, whose engine
     models cannot be pickled), one per core, the longest first (expected_cost) so that no long case starts last;
-    a process that dies or overruns its budget gives its case one failing row saying so (dyncheck.isolation)."""
+    a process that dies or overruns its budget gives its case one failing row saying so (dyncheck.case.isolation)."""
     workers = min(len(cases), workers or os.cpu_count() or 1)
     finished = {}  # index -> result
     try:
@@ -223,9 +225,9 @@ def expected_cost(case):
 def make_report(results, cases, out, no_studies, animations=True):
     """The studies of each case added to its results, and the pages written (with `animations`, their GIFs);
     the results."""
-    from dyncheck.report import write_reports
+    from dyncheck.pages.report import write_reports
     start = time.perf_counter()
-    # a case whose checks did not finish (no runs: dyncheck.checks.unfinished) has no studies either
+    # a case whose checks did not finish (no runs: dyncheck.checks.runs.unfinished) has no studies either
     results = [result if no_studies or not result.runs else result.with_studies(study_case(case))
                for result, case in zip(results, cases)]
     written = write_pages(results, out, animations)
@@ -235,8 +237,8 @@ def make_report(results, cases, out, no_studies, animations=True):
 
 
 def write_pages(results, out, animations):
-    """dyncheck.report.write_reports, as a stage with its progress (a minute or more, with the animations)."""
-    from dyncheck.report import write_reports
+    """dyncheck.pages.report.write_reports, as a stage with its progress (a minute or more, with the animations)."""
+    from dyncheck.pages.report import write_reports
     with Progress(f"pages to {out}/"):
         return write_reports(results, out, animations)
 
@@ -268,7 +270,7 @@ def close(results, junit, start):
 def study_case(case):
     """The case's work-precision sweep, stability studies and Campbell diagram, with their progress (they take
     minutes)."""
-    from dyncheck import campbell, stability, work_precision
+    from dyncheck.studies import campbell, stability, work_precision
     with Progress(f"studies of {case.name}") as bar:
         bar.note("work-precision sweep")
         sweep = work_precision.sweep(case, bar.step)
@@ -281,7 +283,8 @@ def study_case(case):
 
 def campaign_command(args):
     """`dyncheck campaign`: its input checked before any cluster starts (ValueError: exit 2), then the campaign."""
-    from dyncheck import campaign
+    from dyncheck.pages import campaign_page
+    from dyncheck.studies import campaign
     sets, states, chunk, grid = (whole_number(option, value, least) for option, value, least in
                                  (("--sets", args.sets, 1), ("--states", args.states, 1), ("--chunk", args.chunk, 1),
                                   ("--grid", args.grid, 0)))
@@ -292,11 +295,16 @@ def campaign_command(args):
         raise ValueError(f"{case.origin}: no [sample.params]: the case draws no random parameter sets")
     plan = campaign.plan(case, sets, states, chunk, args.out)
     try:
-        return campaign.command(case, plan, grid, workers, args.scheduler)
+        table, drawn, wall, workers, computed = campaign.command(case, plan, grid, workers, args.scheduler)
     except KeyboardInterrupt:
         print(f"dyncheck: interrupted; the finished chunks are in {plan.folder}/, a restart computes the others",
               file=sys.stderr)
         return 130
+    page, timing = campaign_page.write(case, plan, table, drawn, wall, workers, computed)
+    failed = table["status"].isin(campaign_page.FAILED)
+    print(f"campaign {case.name}: {table['set'].nunique()} sets, {int(failed.sum())} failing rows; "
+          f"{page}, {timing}; chunks in {plan.folder}/")
+    return 1 if failed.any() else 0
 
 
 def whole_number(option, text, least):
@@ -340,7 +348,7 @@ def list_cases(names, cases_dir):
 def new_case(name, scene, cases_dir):
     """`dyncheck new`: the folder cases_dir/name with the scene copied and equations.py and case.toml to fill in."""
     from engines.mjcf import describe
-    from dyncheck.derived import EQUATIONS, SCENE, scaffold
+    from dyncheck.case.derived import EQUATIONS, SCENE, scaffold
     if not name.isidentifier():
         raise ValueError(f"new {name}: a case's name is an identifier (letters, digits and _, not starting with a digit)")
     folder = cases_dir / name
@@ -387,7 +395,8 @@ def parse_overrides(pairs):
 
 
 def select_cases(names, set_pairs, cases_dir=CASES_DIR):
-    from dyncheck import stability, vibration, work_precision
+    from dyncheck.studies import stability, work_precision
+    from dyncheck.checks import linear
     names = list(dict.fromkeys(names)) or case_names(cases_dir)  # a case named twice runs once
     defaults = {name: load_case(name, cases_dir).defaults for name in names}  # an unknown case name is named here
     overrides = parse_overrides(set_pairs)
@@ -402,7 +411,7 @@ def select_cases(names, set_pairs, cases_dir=CASES_DIR):
         for source in SOURCES:  # or a setting that is vacuous or runs away, is bad input
             case.model(source)
         stability.validate(case)
-        vibration.validate(case)
+        linear.validate(case)
         validate_placeholders(case)
         work_precision.settings(case)
     return cases

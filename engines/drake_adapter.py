@@ -125,7 +125,7 @@ class DrakeModel:
         else:  # URDF: no springs (the bindings set them), Drake's gravity default -9.81 z (the binding sets it)
             self.joint_values = {"stiffness": {}, "springref": {}, "damping": {}, "armature": {}}
             self.plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
-            self._hang_urdf_root(scene.get("urdf_root_joint"))
+            self._hang_urdf_root(scene.urdf_root_joint)
         for constraint in self.plant.GetConstraintIds():  # a <connect>: solved here (DrakeLoops)
             self.plant.RemoveConstraint(constraint)
         self.plant.Finalize()
@@ -148,16 +148,16 @@ class DrakeModel:
                                             for name, joint in self._joints().items()
                                             if joint.num_velocities() == 1 and joint.GetDampingVector(self.context)[0]}
         self._check_damping()
-        self.coords = tuple(scene["coords"])
-        self.reaction_names = tuple(scene["reactions"])
-        self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
+        self.coords = tuple(scene.coords)
+        self.reaction_names = tuple(scene.reactions)
+        self.layout = [(c.kind, self._joint(c.joint), list(c.indices)) for c in scene.layout]
         for kind, joint, _ in self.layout:
             if (kind == "euler") != isinstance(joint, BallRpyJoint) or not isinstance(joint, (*SCALAR_JOINTS,
                                                                                               BallRpyJoint)):
                 raise ValueError(f"{self.path}: joint '{joint.name()}' is a Drake {joint.type_name()} joint, but the "
                                  f"case maps it as {'Euler angles' if kind == 'euler' else 'one coordinate'}")
-        self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
-        self.dependent_joints = [(j, self._joint(j)) for j in scene.get("dependent", [])]
+        self.driven = [(self._joint(j), (law.angle, law.rate, law.acc)) for j, law in scene.driven.items()]
+        self.dependent_joints = [(j, self._joint(j)) for j in scene.dependent]
         moved = scene_rules.named_joints(scene)
         for name in self._joints():
             if name not in moved:
@@ -168,7 +168,7 @@ class DrakeModel:
         self._driven_acc = np.zeros(self.nv)
         for joint, (_, _, acc) in self.driven:
             self._driven_acc[joint.velocity_start()] = acc
-        self.forces = [(self._joint(joint).velocity_start(), force) for joint, force in scene["applied"].items()]
+        self.forces = [(self._joint(joint).velocity_start(), force) for joint, force in scene.applied.items()]
         self.varying = not all(force.constant for _, force in self.forces)
         n = len(self.coords)
         self.applied = None if self.varying else self._applied_at(0.0, np.zeros(n), np.zeros(n))
@@ -192,9 +192,9 @@ class DrakeModel:
         self._closed = None  # the last closed configuration, where the next closing starts
         self._balls = [(joint.position_start(), joint.velocity_start()) for kind, joint, _ in self.layout
                        if kind == "euler"]
-        self.reaction_specs = {name: self._reaction_spec(name, spec) for name, spec in scene["reactions"].items()}
-        self.point_specs = {name: (self._body(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
-                            for name, spec in scene["points"].items()}
+        self.reaction_specs = {name: self._reaction_spec(name, spec) for name, spec in scene.reactions.items()}
+        self.point_specs = {name: (self._body(spec.body), spec.frame, spec.kind)
+                            for name, spec in scene.points.items()}
 
     # -- reading ----------------------------------------------------------
     def _hang_urdf_root(self, root):
@@ -202,14 +202,14 @@ class DrakeModel:
         world at the link's origin; without one Drake would make it a free body (refused after Finalize)."""
         if not root:
             return
-        if root["type"] != "spherical":
-            raise Refused(f"{self.path}: urdf_root_joint type '{root['type']}': this adapter hangs a URDF's root link on "
+        if root.type != "spherical":
+            raise Refused(f"{self.path}: urdf_root_joint type '{root.type}': this adapter hangs a URDF's root link on "
                           "a spherical joint only")
         children = {int(self.plant.get_joint(j).child_body().index()) for j in self.plant.GetJointIndices()}
         orphans = [body for body in _bodies(self.plant)[1:] if int(body.index()) not in children]
         if len(orphans) != 1:
             raise Refused(f"{self.path}: {len(orphans)} root links; a urdf_root_joint hangs one")
-        self.plant.AddJoint(BallRpyJoint(root["name"], self.plant.world_frame(), orphans[0].body_frame()))
+        self.plant.AddJoint(BallRpyJoint(root.name, self.plant.world_frame(), orphans[0].body_frame()))
 
     def _refuse_free_bodies(self):
         for j in self.plant.GetJointIndices():
@@ -259,9 +259,9 @@ class DrakeModel:
     def _reaction_spec(self, name, spec):
         """(body, axis, frame, quantity) of a reaction: the cut force of the body's joint; a loop's force where the
         sensor names a <connect>."""
-        if spec["sensor"] in self.loops.names:
-            return "loop", (self.loops.names.index(spec["sensor"]), spec["axis"]), "world", "force"
-        return self._body(spec["body"]), spec["axis"], spec["frame"], spec.get("quantity", "force")
+        if spec.sensor in self.loops.names:
+            return "loop", (self.loops.names.index(spec.sensor), spec.axis), "world", "force"
+        return self._body(spec.body), spec.axis, spec.frame, spec.quantity
 
     # -- the scene's values: bindings ----------------------------------------
     def _write(self, location, value):

@@ -1,6 +1,6 @@
 """What an MJCF scene holds, read once by MuJoCo's compiler: its joints, its force and torque sensors and the
 numbers a case's parameter may be bound to.  A case without a case file (a researcher's scene.xml and
-equations.py) gets its coordinates, bindings and time scales from this (dyncheck.derived), and
+equations.py) gets its coordinates, bindings and time scales from this (dyncheck.case.derived), and
 `dyncheck new` its scaffold."""
 
 from dataclasses import dataclass

@@ -37,13 +37,12 @@ CLOSURES = 4096
 
 
 class MujocoModel:
-    """scene (from the case): `layout` (book coordinates -> joints: ("scalar", joint, [i]) for a hinge
-    or slide, ("euler", joint, [i, j, k]) for a ball joint in the book's Euler angles), `driven`
-    (joint -> (q0, rate, acc)), `applied` (joint -> its generalized force in the joint's frame, a function
-    force(t, q, v) of the case's state with an attribute `constant`), `dependent` (the joints that close the
-    scene's loops, engines.loops: no coordinate of their own),
-    `reactions` (name -> {sensor, axis, frame}: a loop's force where `sensor` names a <connect>),
-    `points` (name -> {body, frame}), `paths` (bodies).
+    """scene (from the case, a dyncheck.case.scene.Scene, read by attribute): `layout` (the joints the book's coordinates move: a
+    hinge or slide, or a ball joint in the book's Euler angles), `driven` (joint -> its prescribed motion),
+    `applied` (joint -> its generalized force in the joint's frame, a function force(t, q, v) of the case's state
+    with an attribute `constant`), `dependent` (the joints that close the scene's loops, engines.loops: no
+    coordinate of their own), `reactions` (name -> its sensor, axis and frame: a loop's force where `sensor` names a
+    <connect>), `points` (name -> its body and frame), `paths` (bodies).
 
     A scene with loops is evaluated on its closed states: the independent joints at the case's coordinates, the
     dependent ones solved (MujocoLoops.close), the accelerations and loop forces MuJoCo's rigid ones
@@ -69,11 +68,11 @@ class MujocoModel:
         self.loops = MujocoLoops(self.m, self.path)  # refuses an equality that is not a loop's <connect>
         self.armature = self.m.dof_armature.copy()
         self.d = mujoco.MjData(self.m)
-        self.coords = tuple(scene["coords"])
-        self.reaction_names = tuple(scene["reactions"])
-        self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
+        self.coords = tuple(scene.coords)
+        self.reaction_names = tuple(scene.reactions)
+        self.layout = [(c.kind, self._joint(c.joint), list(c.indices)) for c in scene.layout]
         self.free = np.array([dof for _, (_, dof), idx in self.layout for dof in range(dof, dof + len(idx))], dtype=int)
-        self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
+        self.driven = [(self._joint(j), (law.angle, law.rate, law.acc)) for j, law in scene.driven.items()]
         # after the case's joints are found: a renamed joint is missing before it is extra
         unmodelled = next(_unmodelled(self.m, scene), None)
         if unmodelled:
@@ -89,7 +88,7 @@ class MujocoModel:
             self.m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
         for (_, dof), _ in self.driven:  # the evaluation model imposes these exactly: no armature
             self.m.dof_armature[dof] = 0.0
-        self.forces = [(self._joint(joint)[1], force) for joint, force in scene["applied"].items()]
+        self.forces = [(self._joint(joint)[1], force) for joint, force in scene.applied.items()]
         # Constant applied forces are evaluated once (`applied`); laws of the state at every evaluation.
         self.varying = not all(force.constant for _, force in self.forces)
         self.applied = None if self.varying else self._applied_at(0.0, np.zeros(len(self.coords)),
@@ -99,15 +98,15 @@ class MujocoModel:
         self._driven_qacc = np.zeros(self.m.nv)
         self._driven_qacc[self._driven_dofs] = self._driven_motion[2]
         self.loop_names = [loop.name for loop in self.loops.loops]
-        self.reaction_specs = {name: (self._reaction_sensor(name, spec) if spec["sensor"] not in self.loop_names
-                                      else ("loop", self.loop_names.index(spec["sensor"])), spec["axis"], spec["frame"])
-                               for name, spec in scene["reactions"].items()}
-        self.independent = [(joint, self._joint(joint)) for kind, joint, _ in scene["layout"] if kind == "scalar"]
+        self.reaction_specs = {name: (self._reaction_sensor(name, spec) if spec.sensor not in self.loop_names
+                                      else ("loop", self.loop_names.index(spec.sensor)), spec.axis, spec.frame)
+                               for name, spec in scene.reactions.items()}
+        self.independent = [(c.joint, self._joint(c.joint)) for c in scene.layout if c.kind == "scalar"]
         self._closures = {}  # `_assembled`'s
-        self.dependent_joints = [(joint, self._joint(joint)) for joint in scene.get("dependent", [])]
-        self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
-                            for name, spec in scene["points"].items()}
-        self.paths = [self.body_id(b) for b in scene["paths"]]
+        self.dependent_joints = [(joint, self._joint(joint)) for joint in scene.dependent]
+        self.point_specs = {name: (self.body_id(spec.body), spec.frame, spec.kind)
+                            for name, spec in scene.points.items()}
+        self.paths = [self.body_id(b) for b in scene.paths]
 
     def _refuse_unclosable(self, scene):
         """ValueError for a loop scene that dyncheck cannot evaluate: prescribed motions or a ball joint (not yet
@@ -147,29 +146,29 @@ class MujocoModel:
         on a site of the case's body, with the body's axes (the Pinocchio side reads the force or moment on that
         body's joint, in its frame, about its origin), its reading neither clamped nor delayed.  Its sensordata
         address and site."""
-        i = self._id(mujoco.mjtObj.mjOBJ_SENSOR, spec["sensor"])
+        i = self._id(mujoco.mjtObj.mjOBJ_SENSOR, spec.sensor)
         site = int(self.m.sensor_objid[i])
         kind = mujoco.mjtSensor(self.m.sensor_type[i]).name[7:].lower()
-        where = f"{self.path}: sensor '{spec['sensor']}' of reaction '{reaction}'"
-        quantity = spec.get("quantity", "force")
+        where = f"{self.path}: sensor '{spec.sensor}' of reaction '{reaction}'"
+        quantity = spec.quantity
         expected = {"force": "force", "moment": "torque"}[quantity]
         if kind != expected:
             raise ValueError(f"{where} is a <{kind}> sensor: a {quantity} reaction reads a <{expected}> sensor")
         if quantity == "moment" and not np.max(np.abs(self.m.site_pos[site])) <= 0.0:  # NaN too
-            raise scene_rules.refusal(self.path, "MJCF", "body-site", "pos", f"site of sensor '{spec['sensor']}'",
+            raise scene_rules.refusal(self.path, "MJCF", "body-site", "pos", f"site of sensor '{spec.sensor}'",
                                       _text(self.m.site_pos[site]))
         body = mujoco.mj_id2name(self.m, mujoco.mjtObj.mjOBJ_BODY, self.m.site_bodyid[site])
-        if body != spec["body"]:
-            raise ValueError(f"{where} is on body '{body}', but case.toml's reaction is on body '{spec['body']}'")
+        if body != spec.body:
+            raise ValueError(f"{where} is on body '{body}', but case.toml's reaction is on body '{spec.body}'")
         # A site's quat is normalised from decimal text: identity to a few ulps when it is one.
         if not np.max(np.abs(self.m.site_quat[site] - [1, 0, 0, 0])) <= 4 * np.finfo(float).eps:  # NaN too
-            raise scene_rules.refusal(self.path, "MJCF", "body-site", "quat", f"site of sensor '{spec['sensor']}'",
+            raise scene_rules.refusal(self.path, "MJCF", "body-site", "quat", f"site of sensor '{spec.sensor}'",
                                       _text(self.m.site_quat[site]))
         if self.m.sensor_cutoff[i] > 0:
-            raise scene_rules.refusal(self.path, "MJCF", f"sensor-{kind}", "cutoff", f"sensor '{spec['sensor']}'",
+            raise scene_rules.refusal(self.path, "MJCF", f"sensor-{kind}", "cutoff", f"sensor '{spec.sensor}'",
                                       _text(self.m.sensor_cutoff[i]))
         if self.m.sensor_history[i][0] > 0:
-            raise scene_rules.refusal(self.path, "MJCF", f"sensor-{kind}", "nsample", f"sensor '{spec['sensor']}'",
+            raise scene_rules.refusal(self.path, "MJCF", f"sensor-{kind}", "nsample", f"sensor '{spec.sensor}'",
                                       int(self.m.sensor_history[i][0]))
         return int(self.m.sensor_adr[i]), site
 
@@ -770,7 +769,7 @@ def _unmodelled(m, scene):
                 yield "body-geom", "contype", named(obj.mjOBJ_GEOM, g1), _text(m.geom_contype[g1])
             if m.geom_contype[g2] & m.geom_conaffinity[g1]:
                 yield "body-geom", "conaffinity", named(obj.mjOBJ_GEOM, g1), _text(m.geom_conaffinity[g1])
-    moved, driven = scene_rules.named_joints(scene), set(scene["driven"])
+    moved, driven = scene_rules.named_joints(scene), set(scene.driven)
     for j in range(m.njnt):
         name, kind = _name(m, obj.mjOBJ_JOINT, j), mujoco.mjtJoint(m.jnt_type[j])
         dof, qadr = m.jnt_dofadr[j], m.jnt_qposadr[j]

@@ -37,15 +37,15 @@ class PinocchioModel:
 
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
-        root = scene.get("urdf_root_joint")
-        constraints = []  # the loops' (a URDF closes none: refused against the MJCF's, dyncheck.case)
+        root = scene.urdf_root_joint
+        constraints = []  # the loops' (a URDF closes none: refused against the MJCF's, dyncheck.case.folder)
         try:
             if _is_mjcf(self.path) and _equalities(self.path):
                 self.m, constraints = pin.buildModelAndLegacyConstraintsFromMJCF(self.path)
             elif _is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
                 self.m = pin.buildModelFromMJCF(self.path)
             elif root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
-                self.m = pin.buildModelFromUrdf(self.path, ROOT_JOINTS[root["type"]](), root["name"])
+                self.m = pin.buildModelFromUrdf(self.path, ROOT_JOINTS[root.type](), root.name)
             else:
                 self.m = pin.buildModelFromUrdf(self.path)
         except (ValueError, RuntimeError) as error:
@@ -69,30 +69,30 @@ class PinocchioModel:
             constraint.name = element.get("name", "")
         self.loops = PinocchioLoops(self.m, constraints, self.path)  # after the model is complete
         self._closed = None  # the last closed configuration, where the next closing starts (`engine_state`)
-        self.point_specs = {name: (self._point_frame(spec), spec["frame"], spec.get("kind", "acceleration"))
-                            for name, spec in scene["points"].items()}
+        self.point_specs = {name: (self._point_frame(spec), spec.frame, spec.kind)
+                            for name, spec in scene.points.items()}
         self.d = self.m.createData()  # after the frames the points add
-        self.coords = tuple(scene["coords"])
-        self.reaction_names = tuple(scene["reactions"])
-        self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
+        self.coords = tuple(scene.coords)
+        self.reaction_names = tuple(scene.reactions)
+        self.layout = [(c.kind, self._joint(c.joint), list(c.indices)) for c in scene.layout]
         self.free = np.array([i for _, joint, idx in self.layout for i in range(joint.idx_v, joint.idx_v + len(idx))],
                              dtype=int)
-        self.driven = [(self._joint(j), motion) for j, motion in scene["driven"].items()]
+        self.driven = [(self._joint(j), (law.angle, law.rate, law.acc)) for j, law in scene.driven.items()]
         # after the case's joints are found: a renamed joint is missing before it is extra.  An MJCF's
         # are refused by MuJoCo's adapter, on the same file.
         unmodelled = None if _is_mjcf(self.path) else next(_unmodelled(document, scene), None)
         if unmodelled:
             raise scene_rules.refusal(self.path, "URDF", *unmodelled)
-        self.forces = [(self._joint(joint).idx_v, force) for joint, force in scene["applied"].items()]
+        self.forces = [(self._joint(joint).idx_v, force) for joint, force in scene.applied.items()]
         # Constant applied forces are evaluated once (`applied`); laws of the state at every evaluation.
         self.varying = not all(force.constant for _, force in self.forces)
         self.applied = None if self.varying else self._applied_at(0.0, np.zeros(len(self.coords)),
                                                                    np.zeros(len(self.coords)))
         loop_names = [loop.name for loop in self.loops.loops]
-        self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"],
-                                      spec.get("quantity", "force")) if spec["sensor"] not in loop_names
-                               else ("loop", (loop_names.index(spec["sensor"]), spec["axis"]), "world", "force")
-                               for name, spec in scene["reactions"].items()}
+        self.reaction_specs = {name: (self._body_joint(spec.body), spec.axis, spec.frame,
+                                      spec.quantity) if spec.sensor not in loop_names
+                               else ("loop", (loop_names.index(spec.sensor), spec.axis), "world", "force")
+                               for name, spec in scene.reactions.items()}
         # (idx_q, idx_v, stiffness, rest position, damping) of each joint with a spring or a damper
         passive = set(self.joint_values["stiffness"]) | set(self.joint_values["damping"])
         self.passive = [(self._joint(j).idx_q, self._joint(j).idx_v, self.joint_values["stiffness"].get(j, 0.0),
@@ -106,8 +106,8 @@ class PinocchioModel:
         # (nq, idx_q, idx_v) of the joints, read once: each of Pinocchio's attributes is a call.
         self._coord_joints = [(kind, (joint.nq, joint.idx_q, joint.idx_v), idx) for kind, joint, idx in self.layout]
         self._driven_joints = [((joint.nq, joint.idx_q, joint.idx_v), motion) for joint, motion in self.driven]
-        self._independent = [(kind, self.m.getJointId(j), idx) for kind, j, idx in scene["layout"] if kind == "scalar"]
-        self.dependent_joints = [(j, self._joint(j)) for j in scene.get("dependent", [])]
+        self._independent = [(c.kind, self.m.getJointId(c.joint), list(c.indices)) for c in scene.layout if c.kind == "scalar"]
+        self.dependent_joints = [(j, self._joint(j)) for j in scene.dependent]
         self._driven_acc = np.zeros(self.m.nv)
         for (_, _, iv), (_, _, acc) in self._driven_joints:
             self._driven_acc[iv] = acc
@@ -122,7 +122,7 @@ class PinocchioModel:
         for nq, iq, iv, i in self._scalars:
             self._coord_dofs[i] = iv
         self._last = None, None  # the last state asked and its engine pass (`_dynamics`)
-        # A lone ball joint under constant forces is integrated in Pinocchio's own coordinates (dyncheck.simulate)
+        # A lone ball joint under constant forces is integrated in Pinocchio's own coordinates (dyncheck.run.simulate)
         lone_ball = [kind for kind, _, _ in self.layout] == ["euler"] and not self.driven
         self.native = BallJointCoordinates(self) if lone_ball and not self.varying else None
         # CRBA fills the upper triangle of M: M[i, j] for i > j is read at [j, i].
@@ -149,7 +149,7 @@ class PinocchioModel:
         gravity = option.get("gravity", DEFAULT_GRAVITY) if option is not None else DEFAULT_GRAVITY
         self.m.gravity.linear[:] = [float(x) for x in gravity.split()]
         self.joint_values = joint_values(document, self.path)
-        for joint in scene["driven"]:
+        for joint in scene.driven:
             self.m.armature[self._joint(joint).idx_v] = 0.0
         for j in range(1, self.m.njoints):
             joint = self.m.joints[j]
@@ -173,13 +173,13 @@ class PinocchioModel:
 
     def _point_frame(self, spec):
         """The frame whose kinematics a point reads: the link's own, or one added at its centre of mass."""
-        frame_id = self._body_frame(spec["body"])
-        if spec.get("kind") != "com acceleration":
+        frame_id = self._body_frame(spec.body)
+        if spec.kind != "com acceleration":
             return frame_id
         frame = self.m.frames[frame_id]
         lever = self.m.inertias[frame.parentJoint].lever  # in the joint's frame
         at_com = pin.SE3(frame.placement.rotation, lever)  # the link's axes, at its centre of mass
-        return self.m.addFrame(pin.Frame(spec["body"] + "_com", frame.parentJoint, frame_id, at_com,
+        return self.m.addFrame(pin.Frame(spec.body + "_com", frame.parentJoint, frame_id, at_com,
                                          pin.FrameType.OP_FRAME))
 
     def _body_joint(self, body):
@@ -572,7 +572,7 @@ class PinocchioModel:
 
 
 class BallJointCoordinates:
-    """A lone ball joint's state in Pinocchio's own coordinates, for an integrator (dyncheck.simulate's
+    """A lone ball joint's state in Pinocchio's own coordinates, for an integrator (dyncheck.run.simulate's
     `native`): its quaternion (x, y, z, w) and the body's angular velocity w.  The rates q' = q (w, 0) / 2
     and ABA's w' take no Euler angle: no conversion at each evaluation, and no singularity at zero
     nutation; the book's Euler angles and rates come back at the outputs only (`book`)."""
@@ -646,7 +646,7 @@ NOISE_MARGIN = 10.0
 DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>
 
 # A unit axis written in decimals has a norm within an ulp or two of 1; Pinocchio's rotation is off
-# by about |axis| - 1, which the scene comparison would find beyond 16 eps (dyncheck.case.SCENE_RTOL).
+# by about |axis| - 1, which the scene comparison would find beyond 16 eps (dyncheck.case.folder.SCENE_RTOL).
 UNIT_AXIS_RTOL = 4 * np.finfo(float).eps
 
 

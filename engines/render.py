@@ -5,7 +5,7 @@ The scenes carry no geoms (their bodies are masses and inertias on joints), so w
 made from the bodies: a line from each body's origin to what hangs on it (its children's origins, its
 centre of mass, the anchors of its loops), a dot at each massive body's centre of mass, and for a body with
 a full inertia (a rigid body, not a point mass or a rod) the rim of the uniform disk that has its largest
-principal moment, about that axis.  Both renderers draw this skeleton: matplotlib (dyncheck.animation)
+principal moment, about that axis.  Both renderers draw this skeleton: matplotlib (dyncheck.pages.animation)
 from the arrays saved in the results, MuJoCo's renderer (`MujocoPainter`) with its own shading.
 """
 

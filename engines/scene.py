@@ -242,8 +242,8 @@ def applied_forces(forces, nv, t, q, v):
 
 # Joint names the case's [scene] moves or its loops close; any other joint would sit locked at its reference position.
 def named_joints(scene):
-    return ({joint for _, joint, _ in scene["layout"]} | set(scene["driven"]) | set(scene.get("dependent", ()))
-            | ({scene["urdf_root_joint"]["name"]} if scene.get("urdf_root_joint") else set()))
+    return ({c.joint for c in scene.layout} | set(scene.driven) | set(scene.dependent)
+            | ({scene.urdf_root_joint.name} if scene.urdf_root_joint else set()))
 
 
 PINOCCHIO_IGNORES = "Pinocchio's dynamics ignore it"
@@ -311,7 +311,7 @@ RULES = [
          " explicitly, unlike the Euler runs that body-joint damping describes (measured: 2.5e-5 of the tutorial's"
          " cart-pendulum's Euler run with a damper)"),
     Rule("MJCF", "option-flag", "autoreset", NO_EFFECT, "a run's blow-up is found from its state and MuJoCo's"
-         " warnings, which it counts with or without the reset (dyncheck.simulate)"),
+         " warnings, which it counts with or without the reset (dyncheck.run.simulate)"),
     Rule("MJCF", "option-flag", "energy", NO_EFFECT, "fills mjData.energy in mj_forward; the harness computes the"
          " energy itself (mj_energyPos, mj_energyVel)"),
     Rule("MJCF", "option-flag", "fwdinv", NO_EFFECT, "a diagnostic (mjData.solver_fwdinv) that the harness does not"
@@ -508,7 +508,7 @@ def markdown():
              " `<connect>`, without effect in one without.",
              "MJCF elements are the anchors of MuJoCo's XML reference (`body-joint` is `<joint>` in a `<body>`); a"
              " rule for an element covers the elements below it, `*` every attribute not listed.",
-             "The comparison's tolerances are in `dyncheck/case.py` (`compare_scenes`).", "",
+             "The comparison's tolerances are in `dyncheck/case/folder.py` (`compare_scenes`).", "",
              "| file | element | attribute | status | why |", "|---|---|---|---|---|"]
     lines += [f"| {r.file} | {r.element} | {r.attribute} | {r.status}{' with a loop' * r.with_loops} | {r.why} |"
               for r in RULES]

@@ -90,7 +90,7 @@ class Reference:
                "a_B": "array([l1*dd1, l1*d1**2, 0.0])",
                "a_A": "array([l1*(dd1*cos(t2) + d1**2*sin(t2)) + l2*(dd1 + dd2),"
                       " l1*(-dd1*sin(t2) + d1**2*cos(t2)) + l2*(d1 + d2)**2, 0.0])"}
-    # The printed symbols' LaTeX (dyncheck.typeset), where its defaults do not know them.
+    # The printed symbols' LaTeX (dyncheck.pages.typeset), where its defaults do not know them.
     LATEX = {"t2": r"\theta_2", "d1": r"\dot{\theta}_1", "d2": r"\dot{\theta}_2", "dd1": r"\ddot{\theta}_1",
              "dd2": r"\ddot{\theta}_2"}
 

@@ -157,7 +157,7 @@ class Book:
         # force), `a` the acceleration of `_reaction_route`
         "F": "m*a + array([0.0, 0.0, m*g])",
     }
-    # The printed symbols' LaTeX (dyncheck.typeset), where its defaults do not know them.
+    # The printed symbols' LaTeX (dyncheck.pages.typeset), where its defaults do not know them.
     LATEX = {"th": r"\theta", "w": r"\dot{\theta}", "wd": r"\ddot{\theta}", "Ld": r"\dot{L}", "Ldd": r"\ddot{L}"}
 
     def symbols(self, t, q=(), v=()):

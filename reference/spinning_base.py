@@ -40,7 +40,7 @@ def book_height(p, psi, length):
 
 
 # The book's transformation matrices (1.8 (a)) as expressions of the angle `a`: T_z and T_x evaluate them, and the
-# student's page typesets them (dyncheck/student_page.py, `frames:T_z`).
+# student's page typesets them (dyncheck/pages/student_page.py, `frames:T_z`).
 FRAMES = {"T_z": "array([[cos(a), sin(a), 0.0], [-sin(a), cos(a), 0.0], [0.0, 0.0, 1.0]])",
           "T_x": "array([[1.0, 0.0, 0.0], [0.0, cos(a), sin(a)], [0.0, -sin(a), cos(a)]])"}
 

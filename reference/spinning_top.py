@@ -170,7 +170,7 @@ not the book's varphi, which is the precession.
   Mz/Izz = -11.07 cancel to 0.395 rad/s^2.
 - Integrator.  Per step: t := t + deltat; the three accelerations; Dpsi, Dphi, Dteta :=
   old + deltat * DD; psi, phi, teta := old + deltat * the new rates; hx, hy, hz from the new
-  angles; write; stop test.  That is the semi-implicit Euler of `dyncheck.simulate`
+  angles; write; stop test.  That is the semi-implicit Euler of `dyncheck.run.simulate`
   ("semi-implicit Euler"): along case (a) the listing and Reference's
   accelerations in that scheme at the same step differ by at most 1.6e-13 rad (spin) and 5.4e-13
   rad/s over all 7151 steps.  The accelerations depend on the rates (gyroscopic terms), so the
@@ -300,7 +300,7 @@ class Book:
                     "m*dn*h*(dp*cos(n) + ds) + m*h*(ddp*sin(n) + dp*dn*cos(n)),"
                     " m*g*sin(n) + m*dp*h*sin(n)*(dp*cos(n) + ds) - m*h*ddn,"
                     " m*g*cos(n) - m*h*(dn**2 + dp**2*sin(n)**2)])"}
-    # The printed symbols' LaTeX (dyncheck.typeset): the book's varphi, theta, phi; {} takes the argument.
+    # The printed symbols' LaTeX (dyncheck.pages.typeset): the book's varphi, theta, phi; {} takes the argument.
     LATEX = {"p": r"\varphi", "n": r"\theta", "dp": r"\dot{\varphi}", "dn": r"\dot{\theta}", "ds": r"\dot{\phi}",
              "ddp": r"\ddot{\varphi}", "ddn": r"\ddot{\theta}", "dds": r"\ddot{\phi}", "TxT": "T_x({})^T",
              "TzT": "T_z({})^T", "CM_Ixx": "I^{CM}_{xx}", "CM_Iyy": "I^{CM}_{yy}", "CM_Izz": "I^{CM}_{zz}",

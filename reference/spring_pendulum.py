@@ -315,7 +315,7 @@ class Program:
                  " + (lo+l)*(psid**2+(alfad+betad)**2*sin(psi)**2)",
         "R": "m*(b*alfad**2*sin(beta) + (lo+l)*psid*(alfad+betad)*cos(psi) - 2*ld*(alfad+betad)*sin(psi))",
     }
-    # The listing's symbols' LaTeX (dyncheck.typeset), where its defaults do not know them.
+    # The listing's symbols' LaTeX (dyncheck.pages.typeset), where its defaults do not know them.
     LATEX = {"alfad": r"\dot{\alpha}", "betad": r"\dot{\beta}", "psid": r"\dot{\psi}", "ld": r"\dot{l}"}
 
     def symbols(self, t, q, v):

@@ -5,7 +5,7 @@ import pytest
 
 import dyncheck
 from dyncheck.cli import run_cases
-from dyncheck.report import write_reports
+from dyncheck.pages.report import write_reports
 
 ROOT = Path(__file__).resolve().parent.parent
 WHOLE_RUNS = {"results", "example_results", "rendered"}  # the session fixtures that run every case
@@ -43,7 +43,7 @@ def rendered(results, example_results, tmp_path_factory):
     """Both report trees as `dyncheck report` lays them out (reports/ and reports/examples/, beside a copy of
     docs/ so that the pages' links resolve), written once from this session's runs: every page, figure and
     animation the code under test draws.  The studies (`dyncheck report` runs them, `dyncheck run` does not)
-    are not among them; their figures pass dyncheck.style.save's checks whenever they are drawn."""
+    are not among them; their figures pass dyncheck.common.style.save's checks whenever they are drawn."""
     root = tmp_path_factory.mktemp("rendered")
     shutil.copytree(ROOT / "docs", root / "docs")
     write_reports(list(results.values()), root / "reports")  # first: it replaces the folder the examples go into

@@ -1,4 +1,4 @@
-"""Animations (dyncheck/animation.py, engines/render.py): the frames are the engine's kinematics of the run,
+"""Animations (dyncheck/pages/animation.py, engines/render.py): the frames are the engine's kinematics of the run,
 the GIF is the same bytes when made again, both renderers give the same frames' times and size, and
 `report --no-animations` makes none."""
 
@@ -12,12 +12,14 @@ import pytest
 from PIL import Image
 
 import dyncheck
-from dyncheck import animation, style
-from dyncheck.case import Case
-from dyncheck.checks import run_case
-from dyncheck.results import save_results
-from dyncheck.report import write_reports
-from dyncheck.style import check_text
+from dyncheck.case.folder import Case
+from dyncheck.checks import drawings
+from dyncheck.checks.runs import run_case
+from dyncheck.common import style
+from dyncheck.common.style import check_text
+from dyncheck.pages import animation
+from dyncheck.pages.report import write_reports
+from dyncheck.results.values import save_results
 
 
 @pytest.fixture(scope="module")
@@ -36,9 +38,9 @@ def test_frames_are_the_engines_kinematics(piston):
     case, frames = case_of(piston), piston.drawings["animation"]["exact"]
     run = piston.runs["reference"].twin
     model = case.model("mujoco")
-    rows = animation.at_times(run, frames.times)
+    rows = drawings.at_times(run, frames.times)
     # no fastest frequency, no angle among its (prescribed) coordinates: a slow motion's frames
-    assert 10 < len(frames.times) <= animation.SLOW_FRAMES and np.all(np.diff(frames.times) >= animation.MIN_INTERVAL - 1e-9)
+    assert 10 < len(frames.times) <= drawings.SLOW_FRAMES and np.all(np.diff(frames.times) >= drawings.MIN_INTERVAL - 1e-9)
     for i in (0, len(rows) // 2, len(rows) - 1):
         t, q = run.index[rows[i]], run[list(case.coords)].to_numpy()[rows[i]]
         centres, origins, _ = model.points(t, q)
@@ -66,13 +68,13 @@ def test_frames_follow_the_fastest_motion_shown():
     that gives them; a slow motion at most SLOW_FRAMES, MIN_INTERVAL apart; never more than MAX_FRAMES."""
     run = pd.DataFrame({"x": 0.0}, index=np.arange(3001) * 1e-3)  # 3 s at 1 ms, as the spring pendulum's
     gap = lambda rows: run.index[rows[1]] - run.index[rows[0]]
-    rows = animation.frame_rows(run, 103.9)  # its spring's fastest frequency
-    assert gap(rows) <= 2 * np.pi / (animation.FRAMES_PER_PERIOD * 103.9) < gap(rows) + 1e-3
+    rows = drawings.frame_rows(run, 103.9)  # its spring's fastest frequency
+    assert gap(rows) <= 2 * np.pi / (drawings.FRAMES_PER_PERIOD * 103.9) < gap(rows) + 1e-3
     assert len(rows) == 429 and run.index[rows[-1]] > 3.0 - gap(rows)  # the whole run
-    slow = animation.frame_rows(run, 0.0)
-    assert len(slow) <= animation.SLOW_FRAMES and gap(slow) >= animation.MIN_INTERVAL
-    assert np.array_equal(animation.frame_rows(run, 1.0), slow)  # a slow motion needs no more
-    assert len(animation.frame_rows(run, 400.0)) == animation.MAX_FRAMES  # the first 0.5 s only
+    slow = drawings.frame_rows(run, 0.0)
+    assert len(slow) <= drawings.SLOW_FRAMES and gap(slow) >= drawings.MIN_INTERVAL
+    assert np.array_equal(drawings.frame_rows(run, 1.0), slow)  # a slow motion needs no more
+    assert len(drawings.frame_rows(run, 400.0)) == drawings.MAX_FRAMES  # the first 0.5 s only
     # Browsers show a GIF's 0 or 10 ms frames for 100 ms: a faster motion plays slowed down.
     times = run.index[rows].to_numpy()
     assert animation.delay(times) == animation.MIN_DELAY
@@ -83,9 +85,9 @@ def test_frames_follow_the_fastest_motion_shown():
 def test_the_fastest_motion_shown_is_the_faster_of_the_frequency_and_a_turn():
     case = dyncheck.load_case("spring_pendulum")  # fastest frequency 104 rad/s; psi an angle, l a length
     still = pd.DataFrame({"psi_rate": [0.0, 1.0], "l_rate": [0.0, 500.0]})
-    assert animation.fastest_shown(case, {"exact": still}) == pytest.approx(103.92, abs=0.01)
+    assert drawings.fastest_shown(case, {"exact": still}) == pytest.approx(103.92, abs=0.01)
     turning = pd.DataFrame({"psi_rate": [0.0, -150.0], "l_rate": [0.0, 0.0]})
-    assert animation.fastest_shown(case, {"exact": still, "program": turning}) == 150.0
+    assert drawings.fastest_shown(case, {"exact": still, "program": turning}) == 150.0
 
 
 def test_a_long_heading_is_wrapped_inside_the_frame(piston):
@@ -106,11 +108,11 @@ def test_every_case_animation_follows_its_fastest_motion(results, example_result
     more (the output step allowing), or are a slow motion's."""
     for result in [*results.values(), *example_results.values()]:
         case, frames = case_of(result), result.drawings["animation"]["exact"]
-        omega = animation.fastest_shown(case, animation.animated_runs(case, result.runs, result.program))
+        omega = drawings.fastest_shown(case, drawings.animated_runs(case, result.runs, result.program))
         gap, step = np.diff(frames.times[:2])[0], np.diff(result.runs["reference"].twin.index[:2])[0]
         if omega:
-            assert gap <= max(2 * np.pi / (animation.FRAMES_PER_PERIOD * omega), step) + 1e-9, case.name
-        assert len(frames.times) <= animation.MAX_FRAMES
+            assert gap <= max(2 * np.pi / (drawings.FRAMES_PER_PERIOD * omega), step) + 1e-9, case.name
+        assert len(frames.times) <= drawings.MAX_FRAMES
 
 
 @pytest.mark.full
@@ -128,9 +130,10 @@ RENDER_BOTH = """
 import sys
 from pathlib import Path
 import numpy as np
-from dyncheck import animation, style
-from dyncheck.case import Case
-from dyncheck.results import load_result
+from dyncheck.pages import animation
+from dyncheck.common import style
+from dyncheck.case.folder import Case
+from dyncheck.results.values import load_result
 result = load_result(Path(sys.argv[1]))
 case = Case(result.folder, result.overrides, result.spec)
 gl = animation.painter(animation.WIDTH, animation.HEIGHT)

@@ -1,6 +1,7 @@
 """The architecture's rules, checked on the source (docs/architecture.md): no import cycle among the
-project's modules, only engines/ imports the engines, the harness names no case, and a mechanism
-added from a folder outside the tree runs without a change to dyncheck/ or engines/."""
+project's modules, a stage of dyncheck/ imports only earlier stages, no module of dyncheck/ is over MAX_LINES
+lines, only engines/ imports the engines, the harness names no case, and a mechanism added from a folder outside
+the tree runs without a change to dyncheck/ or engines/."""
 
 import ast
 import re
@@ -11,7 +12,7 @@ from pathlib import Path
 import pytest
 
 import dyncheck
-from dyncheck.case import Case
+from dyncheck.case.folder import Case
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("dyncheck", "engines", "reference")
@@ -74,6 +75,47 @@ def test_the_walk_sees_a_cycle(tmp_path):
     assert imports(known["a"], "a", known) == {"b"} and imports(known["b"], "b", known) == {"a"}
 
 
+# The stages of dyncheck/, one package each, in the order of the data flow (docs/architecture.md); the modules at
+# the top of dyncheck/ (the command line, `bench`) come after them all.  engines/ and reference/ are outside the order.
+STAGES = ("common", "results", "case", "run", "checks", "studies", "pages")
+MAX_LINES = 600
+
+
+def stage(name):
+    """The index of module `name`'s stage in STAGES (len(STAGES) for the commands), None outside dyncheck/."""
+    parts = name.split(".")
+    if parts[0] != "dyncheck":
+        return None
+    return STAGES.index(parts[1]) if len(parts) > 1 and parts[1] in STAGES else len(STAGES)
+
+
+def upward(known):
+    """(module, module it imports) where the second is of a later stage than the first."""
+    return [(name, other) for name, path in sorted(known.items()) if stage(name) is not None
+            for other in sorted(imports(path, name, known)) if stage(other) is not None and stage(other) > stage(name)]
+
+
+def test_a_stage_imports_only_earlier_stages():
+    known = modules()
+    assert {name.split(".")[1] for name in known if name.count(".") == 1 and (ROOT / name.replace(".", "/")).is_dir()} \
+        == set(STAGES), "a package of dyncheck/ that is no stage, or a stage that is no package"
+    assert not upward(known), "imports of a later stage: " + "; ".join(f"{a} -> {b}" for a, b in upward(known))
+
+
+def test_the_stage_order_sees_an_upward_import(tmp_path):
+    """The test above can fail: a check importing a page, inside a function."""
+    (tmp_path / "checks.py").write_text("def f():\n    from dyncheck.pages import report\n")
+    (tmp_path / "report.py").write_text("from dyncheck.checks import runs\n")  # downward: allowed
+    known = {"dyncheck.checks.runs": tmp_path / "checks.py", "dyncheck.pages.report": tmp_path / "report.py"}
+    assert upward(known) == [("dyncheck.checks.runs", "dyncheck.pages.report")]
+
+
+def test_no_module_of_the_harness_is_over_max_lines():
+    long = {str(path.relative_to(ROOT)): n for path in sorted((ROOT / "dyncheck").rglob("*.py"))
+            if (n := len(path.read_text().splitlines())) > MAX_LINES}
+    assert not long, f"modules over {MAX_LINES} lines (split them by job): {long}"
+
+
 @pytest.mark.parametrize("engine", ["mujoco", "pinocchio", "pydrake"])
 def test_only_engines_import_the_engines(engine):
     importers = []
@@ -99,7 +141,7 @@ def test_rendering_saved_results_needs_no_engine(results, tmp_path):
     """`report --from` in a process where importing MuJoCo or Pinocchio fails renders the same pages,
     byte for byte, as the report that saved the results (its figures included)."""
     full = tmp_path / "full"
-    from dyncheck.report import write_reports
+    from dyncheck.pages.report import write_reports
     write_reports([results["rotating_particle"], results["spring_pendulum"]], full)
     again = tmp_path / "again"
     code = ("import sys; sys.modules['mujoco'] = sys.modules['pinocchio'] = None\n"
@@ -118,10 +160,10 @@ def test_rendering_saved_results_needs_no_engine(results, tmp_path):
 def test_loading_the_cases_for_a_run_imports_no_matplotlib():
     """What `dyncheck run` does before its checks start (the command line and the checks imported, every case
     of cases/ and examples/ loaded with its models, studies and own study module) imports no matplotlib: only
-    figures need it (dyncheck.style.pyplot), and it would be a quarter of a second of the run's start-up."""
+    figures need it (dyncheck.common.style.pyplot), and it would be a quarter of a second of the run's start-up."""
     code = ("import sys\nfrom pathlib import Path\n"
             "from dyncheck.cli import select_cases\n"
-            "import dyncheck.checks\n"
+            "import dyncheck.checks.runs\n"
             f"for folder in {[str(ROOT / 'cases'), str(ROOT / 'examples')]!r}:\n"
             "    select_cases([], [], Path(folder))\n"
             "print(sorted(m for m in sys.modules if m.partition('.')[0] == 'matplotlib'))\n")
@@ -139,7 +181,7 @@ def test_a_whole_run_imports_no_matplotlib(tmp_path):
                           cwd=tmp_path)
     assert done.returncode == 0, done.stdout[-2000:]
     imported = [line.rpartition("|")[2].strip() for line in done.stderr.splitlines() if line.startswith("import time:")]
-    assert "dyncheck.checks" in imported  # the imports are reported
+    assert "dyncheck.checks.runs" in imported  # the imports are reported
     assert not [m for m in imported if m.partition(".")[0] == "matplotlib"]
 
 

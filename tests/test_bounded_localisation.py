@@ -1,5 +1,5 @@
 """Localisation is bounded in memory and time at any number of coordinates, and never loses a case's rows: the term
-library is counted before it is built, narrowed or not searched where it would not fit (dyncheck.terms.MEMORY,
+library is counted before it is built, narrowed or not searched where it would not fit (dyncheck.checks.terms.MEMORY,
 WORK), and a search that fails is a localisation that says so."""
 
 import tracemalloc
@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 import chain
-from dyncheck import checks, residuals, terms
-from dyncheck.case import Case
-from dyncheck.results import Status
+from dyncheck.case.folder import Case
+from dyncheck.checks import pointwise
+from dyncheck.checks import runs as checks, residuals, terms
+from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
 
 # The planted error: half the middle mass's weight moment about its own joint, in that joint's equation only.
@@ -34,9 +35,9 @@ def test_the_full_library_grows_as_n_to_the_sixth():
 def equations(case):
     """The equation rows and localisations of a case as `dyncheck run` makes them, with the peak of the memory the
     localisation takes (tracemalloc: numpy's arrays are counted)."""
-    _, sample = checks.pointwise(case)
+    _, sample = pointwise.pointwise(case)
     rows, found = residuals.equation_rows(case, sample)
-    drawn = checks.parameter_sets(case)[0]
+    drawn = pointwise.parameter_sets(case)[0]
     tracemalloc.start()
     try:
         localisations = residuals.localise(case, rows, found, drawn)

@@ -8,11 +8,12 @@ import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
 
-from dyncheck import simulate as sim
-from dyncheck.case import load_case
-from dyncheck.checks import evaluate, parameter_sets, pointwise, random_parameters
+from dyncheck.case.folder import load_case
+from dyncheck.checks.pointwise import evaluate, parameter_sets, pointwise, random_parameters
 from dyncheck.cli import main
-from dyncheck.simulate import Unstable, fastest_frequency, simulate
+from dyncheck.common import ceilings
+from dyncheck.run import simulate as sim
+from dyncheck.run.simulate import Unstable, fastest_frequency, simulate
 
 
 def test_a_run_past_its_step_budget_gives_up_with_when_and_why():
@@ -34,7 +35,7 @@ def test_a_stiff_scene_is_not_started_when_its_expected_steps_exceed_the_cap():
 def test_fixed_step_runs_longer_than_the_cap_are_not_started():
     case = load_case("spring_pendulum")
     with pytest.raises(Unstable, match="not started"):
-        simulate(case.model("book"), case.initial[:2], 3.0, "RK4", dt=1e-6 * 3 / sim.MAX_STEPS, output_step=1e-3)
+        simulate(case.model("book"), case.initial[:2], 3.0, "RK4", dt=1e-6 * 3 / ceilings.MAX_STEPS, output_step=1e-3)
 
 
 def test_a_run_past_its_wall_budget_gives_up(monkeypatch):
@@ -153,7 +154,7 @@ def test_random_parameter_sets_are_physical_beside_an_override(ixx):
 
 
 def test_random_sets_that_cannot_be_drawn_are_a_failing_row(monkeypatch):
-    monkeypatch.setattr("dyncheck.checks.DRAWS", 1)
+    monkeypatch.setattr("dyncheck.checks.pointwise.DRAWS", 1)
     case = load_case("spinning_top", Ixx=0.0029393)
     rows = random_parameters(case)
     assert rows[0].status == "fail" and "not physical in 1 draws" in rows[0].detail
@@ -168,8 +169,8 @@ def test_random_sets_that_cannot_be_drawn_are_a_failing_row(monkeypatch):
     ("horizon = 10.0", "horizon = inf", r"inf is not finite \(at stability.sleeping_top.horizon\)"),
 ])
 def test_settings_that_ask_for_unbounded_work_are_refused(tmp_path, field, text, message):
-    from dyncheck import stability, work_precision
-    from dyncheck.case import CASES_DIR, Case
+    from dyncheck.studies import stability, work_precision
+    from dyncheck.case.folder import CASES_DIR, Case
     folder = tmp_path / "spinning_top"
     shutil.copytree(CASES_DIR / "spinning_top", folder)
     spec = (folder / "case.toml").read_text()

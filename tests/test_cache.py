@@ -1,4 +1,4 @@
-"""The cache of tight solutions (dyncheck/cache.py): what it returns is what simulate computes, bit for bit,
+"""The cache of tight solutions (dyncheck/run/cache.py): what it returns is what simulate computes, bit for bit,
 and a change in anything the solution depends on is a new key, never the old entry."""
 
 import importlib
@@ -9,10 +9,10 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import cache
-from dyncheck.simulate import simulate
+from dyncheck.run import cache
+from dyncheck.run.simulate import simulate
 
-CASES = dyncheck.case.CASES_DIR
+CASES = dyncheck.case.folder.CASES_DIR
 OPTIONS = dict(rtol=1e-12, output_step=1e-3, work=False)
 
 

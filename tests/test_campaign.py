@@ -4,7 +4,9 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import campaign, campaign_page, cli
+from dyncheck import cli
+from dyncheck.pages import campaign_page
+from dyncheck.studies import campaign
 
 CASE = "rotating_particle"  # the cheapest sets
 

@@ -1,4 +1,4 @@
-"""The Campbell diagram and the stability boundaries (dyncheck/campbell.py) follow the parameters: the sweep and the
+"""The Campbell diagram and the stability boundaries (dyncheck/studies/campbell.py) follow the parameters: the sweep and the
 brackets are multiples of their scale, the boundary is found inside its bracket, two modes' closest approach is
 found and judged, and where there is nothing to show the page says so in a sentence.  At `--set k=500` the spring
 pendulum's sweep once ran 0-100 rad/s past sqrt(k/m) = 50 rad/s (an l axis to 1e7 m, no boundary line), its bracket
@@ -14,12 +14,14 @@ from pathlib import Path
 import pytest
 
 import dyncheck
-from dyncheck import campbell, vibration, vibration_page
+from dyncheck.checks import linear
+from dyncheck.pages import vibration_page
+from dyncheck.studies import campbell
 
 
 def spring(**overrides):
     case = dyncheck.load_case("spring_pendulum", **overrides)
-    return case, vibration.settings(case), vibration.linearised(case)
+    return case, linear.settings(case), linear.linearised(case)
 
 
 @pytest.mark.parametrize("k", [500.0, 2000.0, 5000.0])
@@ -118,26 +120,26 @@ def test_a_scale_is_checked_for_its_names_on_load_and_evaluated_where_the_study_
     names what is no parameter is refused, naming the field."""
     case = dyncheck.load_case("spring_pendulum")
     case.spec["vibration"]["campbell"]["scale"] = "sqrt(g - 2*k)"  # no value at the book's numbers
-    vibration.validate(case)
+    linear.validate(case)
     case.spec["vibration"]["boundary"][1]["scale"] = "m*Omega**2"
     with pytest.raises(ValueError, match=r"vibration\.boundary\[1\]\.scale = 'm\*Omega\*\*2' names Omega, not a "
                                          "parameter"):
-        vibration.validate(case)
+        linear.validate(case)
 
 
 def test_the_pages_load_a_saved_sweep_without_running_anything():
     """`dyncheck report --from` imports the pages alone: the Sweep's classes must be registered by them (a saved
-    Campbell diagram was 'not registered with dyncheck.store' once it had a module of its own)."""
-    code = ("import dyncheck.report, dyncheck.store as store; "
+    Campbell diagram was 'not registered with dyncheck.results.store' once it had a module of its own)."""
+    code = ("import dyncheck.pages.report, dyncheck.results.store as store; "
             "assert {'Sweep', 'Approach'} <= set(store._registry), sorted(store._registry)")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).resolve().parent.parent)
 
 
 def test_saved_results_load_in_python_alone(results, tmp_path):
-    """docs/results.md's `dyncheck.results.load_results(Path(DIR))`, in a process that imports nothing else: the
+    """docs/results.md's `dyncheck.results.values.load_results(Path(DIR))`, in a process that imports nothing else: the
     classes a saved result holds (its runs, its vibration analysis) are registered by load_result itself."""
-    from dyncheck.results import save_results
+    from dyncheck.results.values import save_results
     save_results([results["double_pendulum"]], tmp_path)
-    code = (f"from pathlib import Path; from dyncheck.results import load_results; "
+    code = (f"from pathlib import Path; from dyncheck.results.values import load_results; "
             f"assert load_results(Path({str(tmp_path)!r}))[0].vibration is not None")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).resolve().parent.parent)

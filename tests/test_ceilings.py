@@ -4,10 +4,10 @@ import shutil
 
 import pytest
 
-from dyncheck import case as case_module
-from dyncheck import ceilings
-from dyncheck.checks import run_sources, trajectory
-from dyncheck.results import row
+from dyncheck.case import folder as case_module
+from dyncheck.checks.runs import run_sources, trajectory
+from dyncheck.common import ceilings
+from dyncheck.results.values import row
 
 
 @pytest.mark.parametrize("error", [0.0, 0.5, 2.0])

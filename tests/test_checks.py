@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks import apply_findings, pointwise
-from dyncheck.simulate import Unstable, simulate
+from dyncheck.checks.pointwise import pointwise
+from dyncheck.checks.runs import apply_findings
+from dyncheck.run.simulate import Unstable, simulate
 from reference import spring_pendulum
 
 
@@ -97,8 +98,8 @@ def test_two_runs_give_identical_json(results):
     """Determinism: the same inputs give the same JSON (it holds no timing); seeds are in the case file."""
     import json
 
-    from dyncheck.checks import run_case
-    from dyncheck.results import to_json
+    from dyncheck.checks.runs import run_case
+    from dyncheck.results.values import to_json
     again = run_case(dyncheck.load_case("double_pendulum"))
     assert json.dumps(to_json([again])) == json.dumps(to_json([results["double_pendulum"]]))
 
@@ -112,7 +113,7 @@ def test_random_parameter_sets_agree_and_say_what_was_tried(results):
 def test_a_listing_that_blows_up_gives_unstable_rows_not_a_crash():
     """At k = 1e5 N/m the Matlab listing's explicit Euler at 5e-5 s grows by exp(omega^2 dt t / 2): it
     blows up within the run, and its run checks say when and at which step."""
-    from dyncheck.checks import program_checks
+    from dyncheck.checks.programs import program_checks
     case = dyncheck.load_case("spring_pendulum", k=1e5)
     rows, runs = program_checks(case, pointwise(case)[1])
     rows = apply_findings(case, rows)
@@ -128,7 +129,7 @@ def test_a_scene_at_rest_is_judged_in_si_units_and_an_unmeasurable_order_says_so
     """Without gravity the double pendulum released from rest stays put: every trajectory and energy
     row passes (errors in SI units, not 0/0), and the convergence order, which has nothing to measure
     (omega = 0, nothing moves), is not applicable and says why rather than a crash or a failure."""
-    from dyncheck.checks import run_case
+    from dyncheck.checks.runs import run_case
     rows = run_case(dyncheck.load_case("double_pendulum", g=0.0)).rows
     assert {r.status for r in rows} == {"pass", "not applicable"}  # the book's figures are for g = 9.81
     [order] = [r for r in rows if r.check == "convergence"]
@@ -140,7 +141,7 @@ def test_the_book_s_printed_figures_and_data_do_not_apply_to_other_parameters():
     """`--set k=500` once failed on the axes of the book's figures (drawn for k = 2000): such rows are
     not applicable under overrides, say why, and the physics decides the exit code.  What the run measures
     there, the listing's run against the exact motion, stays a measured row (issue 35): its finding."""
-    from dyncheck.checks import run_case
+    from dyncheck.checks.runs import run_case
     result = run_case(dyncheck.load_case("spring_pendulum", k=500.0), localise=False)
     book_only = [r for r in result.rows if r.check in ("figure", "data")]
     assert book_only and all(r.status == "not applicable" and "k = 500 N/m (book: 2000)" in r.detail for r in book_only)

@@ -11,8 +11,9 @@ import jsonschema
 import junitparser
 import pytest
 
-from dyncheck import ci, cli
-from dyncheck.results import CaseResult, Failure, Status, case_json, no_number, row, to_json
+from dyncheck import cli
+from dyncheck.results import ci
+from dyncheck.results.values import CaseResult, Failure, Status, case_json, no_number, row, to_json
 
 SCHEMA = json.loads((Path(__file__).resolve().parent.parent / "docs" / "results.schema.json").read_text())
 

@@ -7,9 +7,10 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import cli, stability, work_precision
-from dyncheck.stability import long_runs
-from dyncheck.results import RESULTS_VERSION, Status
+from dyncheck import cli
+from dyncheck.results.values import RESULTS_VERSION, Status
+from dyncheck.studies import stability, work_precision
+from dyncheck.studies.stability import long_runs
 
 
 @pytest.fixture
@@ -118,7 +119,7 @@ def test_report_writes_pages_figures_and_index(canned, tmp_path):
 def test_a_scene_that_disagrees_with_its_case_exits_2(monkeypatch, tmp_path, capsys):
     import shutil
 
-    from dyncheck import case as case_module
+    from dyncheck.case import folder as case_module
     shutil.copytree(case_module.CASES_DIR, tmp_path / "cases")
     scene = tmp_path / "cases" / "double_pendulum" / "scene.xml"
     scene.write_text(scene.read_text().replace('mass="0.46"', 'mass="0.5"'))
@@ -134,14 +135,14 @@ def test_bench_prints_throughput_and_ratios(capsys):
 
 
 def test_a_failed_report_leaves_the_previous_one_intact(canned, monkeypatch, tmp_path):
-    from dyncheck import report
+    from dyncheck.pages import case_page
     assert cli.main(["report", "double_pendulum", "--out", str(tmp_path)]) == 0
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
 
     def broken(*args, **_):
         args[-1].write_text("half a figure")
         raise RuntimeError("disk full")
-    monkeypatch.setattr(report, "figure_energy", broken)
+    monkeypatch.setattr(case_page, "figure_energy", broken)
     with pytest.raises(RuntimeError, match="disk full"):
         cli.main(["report", "double_pendulum", "--out", str(tmp_path)])
     after = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}

@@ -13,9 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from dyncheck import case as case_module
-from dyncheck import cli, report
-from dyncheck.case import Case
+from dyncheck import cli
+from dyncheck.case import folder as case_module
+from dyncheck.case.folder import Case
+from dyncheck.pages import case_page, report
 
 PISTON_FILES = {"piston.md", "piston_timing.md", "piston_student.md", "index.md", "errata.md", "data/piston.json",
                 *(f"figures/piston_{kind}.{suffix}" for kind in ("scene", "energy", "reactions", "pointwise")
@@ -33,12 +34,12 @@ def canned(monkeypatch, results):
 def quick_figures(monkeypatch):
     """Figures as a few bytes: these tests are about which files land where, not what they draw."""
     def quick(*args, **kwargs):
-        path = args[-1]  # a PNG and its PDF twin, as dyncheck.style.save writes them
+        path = args[-1]  # a PNG and its PDF twin, as dyncheck.common.style.save writes them
         path.write_bytes(b"figure")
         path.with_suffix(".pdf").write_bytes(b"figure")
     for name in ("figure_scene", "figure_energy", "figure_pointwise"):
-        monkeypatch.setattr(report, name, lambda *args, **kwargs: quick(*args) or "A caption.")
-    monkeypatch.setattr(report, "figure_series", lambda *args, **kwargs: quick(*args) or {})  # no departures
+        monkeypatch.setattr(case_page, name, lambda *args, **kwargs: quick(*args) or "A caption.")
+    monkeypatch.setattr(case_page, "figure_series", lambda *args, **kwargs: quick(*args) or {})  # no departures
 
 
 def result(results, name):
@@ -311,7 +312,7 @@ def test_concurrent_writers_take_turns_and_both_cases_land(results, quick_figure
 def test_the_index_counts_no_state_of_a_case_whose_checks_did_not_finish(results, quick_figures, tmp_path):
     """An unfinished case compared nothing: the index says so, and neither counts its states nor calls it a
     disagreement."""
-    from dyncheck.checks import unfinished
+    from dyncheck.checks.runs import unfinished
     lost = unfinished(case_module.load_case("spinning_top"), "killed by signal SIGKILL")
     report.write_reports([results["piston"], lost], tmp_path / "out", animations=False)
     index = (tmp_path / "out" / "index.md").read_text()

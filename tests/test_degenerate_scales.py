@@ -2,10 +2,10 @@
 where MuJoCo's scene cannot model it: no false failure where a force vanishes, a spring is stiff, or a body is a
 placeholder's size."""
 
-from dyncheck import checks, residuals
-from dyncheck.case import Case
+from dyncheck.case.folder import Case
+from dyncheck.checks import runs as checks, residuals
 from dyncheck.cli import main
-from dyncheck.results import Status
+from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
 
 

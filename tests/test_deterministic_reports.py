@@ -5,9 +5,9 @@ from dataclasses import replace
 
 import pandas as pd
 
-from dyncheck import work_precision
-from dyncheck.report import write_reports
-from dyncheck.results import Outcome
+from dyncheck.pages.report import write_reports
+from dyncheck.results.values import Outcome
+from dyncheck.studies import work_precision
 
 
 def small_sweep(case):

@@ -14,6 +14,7 @@ is 1e-3 or more: far above.
 
 import math
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import mujoco
@@ -23,7 +24,8 @@ import pytest
 pytest.importorskip("pydrake", reason="Drake is an optional extra: pip install -e '.[drake]'")
 
 import dyncheck  # noqa: E402
-from dyncheck import vibration  # noqa: E402
+from dyncheck.checks import linear  # noqa: E402
+from dyncheck.case.scene import Coordinates, Driven, Reaction, Scene  # noqa: E402
 from engines.drake_adapter import DrakeModel, Refused  # noqa: E402
 from engines.mujoco_adapter import MujocoModel  # noqa: E402
 from engines.pinocchio_adapter import PinocchioModel  # noqa: E402
@@ -37,7 +39,7 @@ RTOL = 1e-12
 
 
 def writes(case, Model, path):
-    """The writes that dyncheck.case.Case._build gives `Model` on `path` (as tests/test_engines_mjcf.py)."""
+    """The writes that dyncheck.case.folder.Case._build gives `Model` on `path` (as tests/test_engines_mjcf.py)."""
     held = Model.elements_in(path)
     changed = lambda p, loc: p in case.overrides or set(loc.get("depends", ())) & set(case.overrides)
     return sorted([(loc, case.params[p] * loc.get("scale", 1.0))
@@ -57,9 +59,9 @@ def quantities(model, case, t, q, v):
            **{f"reaction {k}": [x] for k, x in model.reactions(t, q, v).items()}}
     if case.driven:
         out["drive power"] = [model.drive_power(t, q, v)]
-    if case.scene["points"]:
+    if case.scene.points:
         out.update({f"point {k}": x for k, x in model.point_accelerations(t, q, v).items()})
-    if case.scene.get("dependent"):
+    if case.scene.dependent:
         positions, rates = model.dependent(t, q, v)
         out.update({f"dependent {k}": [positions[k], rates[k]] for k in positions})
     return out
@@ -104,7 +106,7 @@ def test_drake_takes_the_case_parameters(name, overrides):
 def test_drakes_tree_is_mujocos():
     """The bodies as Drake holds them pass the scene comparison against MuJoCo's, the top's armature counted in
     its inertia as MuJoCo's tree counts it."""
-    from dyncheck.case import compare_scenes
+    from dyncheck.case.scene import compare_scenes
     for name, folder in SCENES:
         case = dyncheck.load_case(name, folder)
         compare_scenes(case.model("mujoco"), drake(case), name)
@@ -121,11 +123,11 @@ def scratch(tmp_path, body, head=""):
 def hinge_scene(names, euler=None, driven=()):
     """A scene of hinge coordinates (and a ball joint's Euler angles `euler`: (joint, three coordinate names))."""
     coords = [n for n in names if n not in driven] + (list(euler[1]) if euler else [])
-    layout = [("scalar", j, [coords.index(j)]) for j in names if j not in driven]
+    layout = [Coordinates("scalar", j, (coords.index(j),)) for j in names if j not in driven]
     if euler:
-        layout.append(("euler", euler[0], [coords.index(c) for c in euler[1]]))
-    return {"coords": tuple(coords), "layout": layout, "driven": {j: (0.3, 2.0, 0.5) for j in driven},
-            "applied": {}, "reactions": {}, "points": {}, "paths": []}
+        layout.append(Coordinates("euler", euler[0], tuple(coords.index(c) for c in euler[1])))
+    return Scene(tuple(coords), tuple(layout), driven={j: Driven(0.3, 2.0, 0.5) for j in driven}, applied={},
+                 reactions={}, points={})
 
 
 def states(n, count=8, seed=3):
@@ -211,8 +213,8 @@ def test_a_ball_joint_under_a_turned_body_maps_to_the_cases_euler_angles(tmp_pat
     (tmp_path / "scene.xml").write_text(path.read_text().replace(
         "</mujoco>", '<sensor><force name="f" site="O"/></sensor></mujoco>'))
     scene = hinge_scene(["arm"], ("tip", ("precession", "nutation", "spin")))
-    scene["reactions"] = {f"R{axis}": {"sensor": "f", "body": "top", "axis": i, "frame": "world"}
-                          for i, axis in enumerate("xyz")}
+    scene = replace(scene, reactions={f"R{axis}": Reaction(body="top", sensor="f", axis=i, frame="world")
+                                      for i, axis in enumerate("xyz")})
     model, reference = DrakeModel(path, scene), MujocoModel(path, scene)
     for t, q, v in states(4):
         q[2] = 0.3 + abs(q[2])  # nutation away from the Euler angles' singularity at 0
@@ -254,7 +256,7 @@ def test_a_urdf_root_link_hangs_on_the_cases_root_joint(tmp_path):
     pinocchio = PinocchioModel(urdf, case.scene, writes(case, PinocchioModel, urdf))
     errors = disagreement(pinocchio, drake(case, "scene.urdf"), case.sample_states()[:8], case)
     assert {k: e for k, e in errors.items() if not e <= RTOL} == {}
-    free = {**case.scene, "urdf_root_joint": None}
+    free = replace(case.scene, urdf_root_joint=None)
     with pytest.raises(Refused, match="free body"):
         DrakeModel(urdf, free, writes(case, DrakeModel, urdf))
 
@@ -326,12 +328,12 @@ MUJOCO_FLOOR = 1e-11
 
 
 def linearisation_states(name, folder, overrides):
-    """(case, states) pairs: the vibration analysis's equilibrium, on its linearised scene (dyncheck.vibration), and
+    """(case, states) pairs: the vibration analysis's equilibrium, on its linearised scene (dyncheck.checks.linear), and
     the case's initial state with two of the pointwise check's random ones (off equilibrium: the springs stretched,
     the drives turning; the top's second with a nutation in (0.3, 2.5), away from its Euler angles' singularity)."""
     case = dyncheck.load_case(name, folder, **overrides)
-    table, scene = vibration.settings(case), vibration.linearised(case)
-    eq = vibration.equilibrium(scene.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords,
+    table, scene = linear.settings(case), linear.linearised(case)
+    eq = linear.equilibrium(scene.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords,
                                scene.model("pinocchio").mass_matrix)
     (t, q, v), (random, other) = (0.0, *case.initial[:2]), case.sample_states()[:2]
     if "nutation" in case.coords:

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from dyncheck import vibration
-from dyncheck.case import load_case
+from dyncheck.case.folder import load_case
+from dyncheck.checks import linear
 from engines import scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -33,11 +33,11 @@ def states(case):
 
 
 def accelerations_jacobian(model, t, q, v):
-    """d(q'')/d(q, q') (n, 2n) of a model's own `accelerations`, by dyncheck.vibration's extrapolated differences (the
+    """d(q'')/d(q, q') (n, 2n) of a model's own `accelerations`, by dyncheck.checks.vibration's extrapolated differences (the
     derivation's linearisation), and their largest error estimate."""
     x = np.concatenate([q, v])
-    jacobian, errors = vibration.jacobian(lambda y: np.asarray(model.accelerations(t, *np.split(y, 2)), dtype=float),
-                                          x, vibration.scales_of(x))
+    jacobian, errors = linear.jacobian(lambda y: np.asarray(model.accelerations(t, *np.split(y, 2)), dtype=float),
+                                          x, linear.scales_of(x))
     return jacobian, float(np.max(errors))
 
 

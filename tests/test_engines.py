@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck.case import CASES_DIR, Case
-from dyncheck.checks import compare, evaluate
+from dyncheck.case.folder import CASES_DIR, Case
+from dyncheck.checks.pointwise import compare, evaluate
 from engines import euler, mujoco_adapter
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
@@ -63,7 +63,7 @@ def test_an_override_reaches_every_source():
 
 def copy_case(tmp_path, name):
     folder = tmp_path / name
-    shutil.copytree(dyncheck.case.CASES_DIR / name, folder)
+    shutil.copytree(dyncheck.case.folder.CASES_DIR / name, folder)
     return folder
 
 
@@ -206,7 +206,7 @@ def test_mujoco_skips_only_stages_that_change_no_number(name, folder, monkeypatc
     np.testing.assert_array_equal(model.drive_powers(t, q, v), plain.drive_powers(t, q, v))
     np.testing.assert_array_equal(model.energy_many(t, q, v), plain.energy_many(t, q, v))
     reactions, plain_reactions = model.reactions_many(t, q, v), plain.reactions_many(t, q, v)
-    for name in case.scene["reactions"]:
+    for name in case.scene.reactions:
         np.testing.assert_array_equal(reactions[name], plain_reactions[name], err_msg=name)
 
 

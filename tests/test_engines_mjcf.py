@@ -1,13 +1,15 @@
 """Pinocchio on a case's MJCF (issue 13: a case may bring scene.xml without scene.urdf), and both engines'
 mass matrix in the case's coordinates."""
 
+from dataclasses import replace
+
 import mujoco
 import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.case import compare_scenes
-from dyncheck.checks import compare, evaluate
+from dyncheck.case.scene import Coordinates, Driven, Scene, compare_scenes
+from dyncheck.checks.pointwise import compare, evaluate
 from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
 
@@ -16,7 +18,7 @@ WITH_COORDS = [name for name in NAMES if dyncheck.load_case(name).coords]
 
 
 def writes(case, Model, path):
-    """The writes that dyncheck.case.Case._build gives `Model` on the scene file `path`: what the file
+    """The writes that dyncheck.case.folder.Case._build gives `Model` on the scene file `path`: what the file
     does not hold of the bindings, and the overrides (after them, what depends on them)."""
     held = Model.elements_in(path)
     changed = lambda p, loc: p in case.overrides or set(loc.get("depends", ())) & set(case.overrides)
@@ -31,7 +33,7 @@ def pinocchio_on_mjcf(case):
 
 
 class WithModel:
-    """The case, with `model` answering every source with one given model (for dyncheck.checks.evaluate)."""
+    """The case, with `model` answering every source with one given model (for dyncheck.checks.runs.evaluate)."""
 
     def __init__(self, case, model):
         self.case, self._model = case, model
@@ -101,8 +103,8 @@ def hinges(path):
     """Pinocchio on a scratch scene whose joints are all hinges, each a coordinate."""
     names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)
              for m in [mujoco.MjModel.from_xml_path(str(path))] for j in range(m.njnt)]
-    scene = {"coords": tuple(names), "layout": [("scalar", j, [i]) for i, j in enumerate(names)], "driven": {},
-             "applied": {}, "reactions": {}, "points": {}}
+    scene = Scene(tuple(names), tuple(Coordinates("scalar", j, (i,)) for i, j in enumerate(names)), driven={},
+                  applied={}, reactions={}, points={})
     return PinocchioModel(path, scene)
 
 
@@ -163,8 +165,8 @@ def test_the_engines_mass_matrices_agree_and_are_symmetric(name):
 
 def frozen(case, t):
     """The case's scene with its prescribed motions stopped where they are at time t."""
-    driven = {j: (q0 + rate * t + 0.5 * acc * t**2, 0.0, 0.0) for j, (q0, rate, acc) in case.scene["driven"].items()}
-    return {**case.scene, "driven": driven}
+    driven = {j: Driven(law.at(t), 0.0, 0.0) for j, law in case.scene.driven.items()}
+    return replace(case.scene, driven=driven)
 
 
 @pytest.mark.parametrize("name", WITH_COORDS)

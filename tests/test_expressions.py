@@ -14,10 +14,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck import stability, work_precision
-from dyncheck.case import CASES_DIR, Case
+from dyncheck.case.folder import CASES_DIR, Case
+from dyncheck.checks import convergence
 from dyncheck.cli import main
-from dyncheck.expressions import evaluate, namespace, of_parameters
+from dyncheck.common.expressions import evaluate, namespace, of_parameters
+from dyncheck.studies import stability
 
 # The classic escape of eval with empty builtins: through object's subclasses to a module's builtins.
 ESCAPE = ("[c for c in ().__class__.__base__.__subclasses__() if c.__name__ == 'catch_warnings'][0]()"
@@ -77,7 +78,7 @@ def test_a_hostile_case_file_exits_2_and_runs_nothing(tmp_path, monkeypatch, cap
 def test_huge_powers_and_numbers_are_refused_at_once(tmp_path, expression, why):
     folder = plant(tmp_path, "piston", "t_end = 2.0", f't_end = "{expression}"')
     # In a subprocess: a hang inside one big-integer operation cannot be interrupted in this one.
-    load = subprocess.run([sys.executable, "-c", "import sys, dyncheck.case; dyncheck.case.Case(sys.argv[1])", folder],
+    load = subprocess.run([sys.executable, "-c", "import sys, dyncheck.case.folder; dyncheck.case.folder.Case(sys.argv[1])", folder],
                           capture_output=True, text=True, timeout=60)
     assert f"cannot evaluate '{expression}': {why}" in load.stderr
     start = time.perf_counter()
@@ -131,7 +132,7 @@ def test_every_number_of_the_case_files_evaluates_as_before(name, monkeypatch):
     case = dyncheck.load_case(name)
     case.initial, case.sample_states(), case.integration, case.scene
     if "work_precision" in case.spec:
-        work_precision.settings(case)
+        convergence.settings(case)
     stability.validate(case)
     for start in case.spec.get("stability", {}).get("lyapunov", {}).get("initial", []):
         for x in start["q"] + start["v"]:  # as stability.double_pendulum.lyapunov reads them
@@ -148,7 +149,7 @@ def test_every_expression_along_a_run_evaluates_as_before(name):
     t = np.linspace(0.0, 1.0, 41)
     rng = np.random.default_rng(0)
     columns = list(case.coords) + [f"{c}_rate" for c in case.coords] + list(case.reaction_names) + ["energy", "work"] \
-        + [f"{body}_{axis}" for body in case.scene["paths"] for axis in "xyz"]  # dyncheck.checks.with_paths
+        + [f"{body}_{axis}" for body in case.scene.paths for axis in "xyz"]  # dyncheck.checks.runs.with_paths
     run = pd.DataFrame({c: rng.uniform(-1.0, 1.0, t.size) for c in columns}, index=pd.Index(t, name="t"))
     names = namespace(case, run)
     report, program = case.spec["report"], case.spec.get("program", {})

@@ -1,13 +1,12 @@
 """Every figure prints: rendered from this session's runs of the book's cases and the examples, each PNG has
 its vector PDF twin and fits the page's text width, and every figure on every page has its caption
-(dyncheck.style.embed).  dyncheck.style.save refuses what would not print."""
+(dyncheck.common.style.embed).  dyncheck.common.style.save refuses what would not print."""
 
 import re
 
 import pytest
 
-from dyncheck import style
-
+from dyncheck.common import style
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +62,7 @@ def test_a_figure_drawn_twice_is_the_same_bytes(tmp_path):
 def test_quantities_are_named_in_the_pages_words():
     """As the prose writes them (psi'', l''), typeset: a symbol in mathtext, primes for a rate or an
     acceleration, a vector's component after it; words stay words."""
-    from dyncheck.report import quantity_label
+    from dyncheck.pages.figures import quantity_label
     assert quantity_label("theta1_acc") == r"$\theta_{1}''$"
     assert quantity_label("omega3_dot_x") == r"$\omega_{3}'$ x"
     assert quantity_label("a_D_x") == "$a_{D}$ x"
@@ -77,13 +76,13 @@ def test_the_pointwise_panels_name_no_code(monkeypatch):
     """Each panel's title is the quantity in the page's words (it was the code's name, omega3_dot_x), and the
     dashed tolerance is in the legend."""
     import dyncheck
-    from dyncheck import report
-    from dyncheck.case import Case
-    from dyncheck.checks import run_case
+    from dyncheck.pages import figures
+    from dyncheck.case.folder import Case
+    from dyncheck.checks.runs import run_case
     result = run_case(dyncheck.load_case("piston"), localise=False)  # seconds: its motions prescribed
     drawn = {}
-    monkeypatch.setattr(report, "save", lambda fig, path: drawn.update(fig=fig))
-    report.figure_pointwise(result, Case(result.folder, result.overrides, result.spec), "x.png", words={})
+    monkeypatch.setattr(figures, "save", lambda fig, path: drawn.update(fig=fig))
+    figures.figure_pointwise(result, Case(result.folder, result.overrides, result.spec), "x.png", words={})
     titles = [ax.get_title() for ax in drawn["fig"].axes if ax.get_title()]
     assert len(titles) == len(result.sample["values"]["reference"])
     assert not [t for t in titles if "_" in re.sub(r"\$[^$]*\$", "", t)], titles

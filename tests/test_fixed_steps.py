@@ -4,8 +4,8 @@ schemes in numpy's array arithmetic, bit for bit."""
 import numpy as np
 import pytest
 
-from dyncheck.case import load_case
-from dyncheck.simulate import FIXED_METHODS, Unstable, simulate
+from dyncheck.case.folder import load_case
+from dyncheck.run.simulate import FIXED_METHODS, Unstable, simulate
 
 
 def numpy_scheme(model, q, v, dt, steps, method):

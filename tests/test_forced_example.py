@@ -7,9 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dyncheck import stability
-from dyncheck.case import load_case
-from dyncheck.stability.common import settings_of
+from dyncheck.case.folder import load_case, settings_of
+from dyncheck.studies import stability
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
 

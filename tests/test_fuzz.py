@@ -21,8 +21,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import dyncheck
+from dyncheck.case.folder import CASES_DIR, SOURCES, Case
 import dyncheck.cli
-from dyncheck.case import CASES_DIR, SOURCES, Case
 
 N = int(os.environ.get("DYNCHECK_FUZZ_EXAMPLES", "0"))
 LOG = os.environ.get("DYNCHECK_FUZZ_LOG")
@@ -374,7 +374,6 @@ def test_a_non_finite_compared_value_is_refused(value):
     compare_scenes' tolerance scaled with the inf and `inf > inf` is false."""
     assert scene_outcome("rotating_pendulum", "compared", "MJCF", MJCF_COMPARED.index((".//joint", "stiffness")),
                          value, 0)[0] == "refused"
-
 
 
 def edited_case(tmp_path, name, old, new):

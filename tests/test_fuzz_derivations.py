@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks import pointwise, validate_placeholders
+from dyncheck.checks.pointwise import pointwise, validate_placeholders
 from dyncheck.cli import exit_code, run_cases
 
 GUIDE = Path(__file__).resolve().parent.parent / "docs" / "own-case.md"
@@ -112,7 +112,7 @@ def command(folder, timeout=120):
 def test_a_forged_end_is_no_end(tmp_path):
     """Code that marks dyncheck's record done (with a token of its own making) and ends the process with 0 ends
     dyncheck with exit 2: only the supervisor's token signs an end."""
-    forger = ("import os, sys\nsys.modules['dyncheck.isolation'].RECORD.done(0, bytes(16))\nos._exit(0)\n"
+    forger = ("import os, sys\nsys.modules['dyncheck.case.isolation'].RECORD.done(0, bytes(16))\nos._exit(0)\n"
               + FILES["equations.py"])
     done = command(make_case(tmp_path, forger))
     assert done.returncode == 2, done.stderr[-500:]

@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-
-from dyncheck.localise import edits, localise
+from dyncheck.checks.localise import edits, localise
 
 RNG = np.random.default_rng(7)
 NAMESPACES = [{"x": x, "y": y, "sin": np.sin, "cos": np.cos} for x, y in RNG.uniform(-3, 3, (50, 2))]
@@ -49,7 +48,7 @@ def test_the_books_errors_are_localised(results):
 def test_a_plain_run_leaves_the_search_out_and_says_so():
     """The search costs seconds per finding; a run that writes nothing of it skips it, and says so."""
     import dyncheck
-    from dyncheck.checks import run_case
+    from dyncheck.checks.runs import run_case
     result = run_case(dyncheck.load_case("piston"), localise=False)
     assert result.findings and all(f.localised.startswith("not searched in this run") for f in result.findings)
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.checks import evaluate
+from dyncheck.checks.pointwise import evaluate
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
@@ -78,7 +78,7 @@ def test_reactions_energy_and_paths_of_many_states_are_those_of_each(name, sourc
                 np.testing.assert_array_equal(got[key], expected[key], err_msg=f"{quantity} {key}")
         else:
             np.testing.assert_array_equal(got, expected, err_msg=quantity)
-    if hasattr(model, "paths_many") and case.scene["paths"]:
+    if hasattr(model, "paths_many") and case.scene.paths:
         np.testing.assert_array_equal(model.paths_many(t, q), np.array([model.points(*s)[0] for s in zip(t, q)]))
     if source in ("mujoco", "pinocchio") or (source == "reference" and name in ("rotating_pendulum", "rotating_particle",
                                                                     "spring_pendulum")):

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dyncheck.case import Case
+from dyncheck.case.folder import Case
 from dyncheck.cli import main
 from test_architecture import doc_example
 
@@ -115,8 +115,8 @@ def test_run_results_will_not_replace_a_folder_it_did_not_write(tmp_path, capsys
 
 
 STUDIES = '''
-from dyncheck.stability.common import Study
-from dyncheck.stability.long_runs import energy_drift, figure_energy_drift
+from dyncheck.studies.stability.common import Study
+from dyncheck.studies.stability.long_runs import energy_drift, figure_energy_drift
 
 STUDIES = {"lyapunov": Study(energy_drift, figure_energy_drift, ())}
 '''
@@ -302,7 +302,7 @@ def as_inverse_dynamics(tutorial, wrong=None):
 def test_m_and_f_from_inverse_dynamics_are_the_derivation_s_own(tutorial, k):
     """M's columns tau(e_j) + f, f = -tau(0): the tutorial's M and f to a few eps of |M| and |f|, also under a spring
     of 1e9 N/m, whose f outweighs M 1e9 times (the unit accelerations are scaled up, or M would keep 7 digits)."""
-    from dyncheck import derived
+    from dyncheck.case import derived
     original = Case(tutorial, {"k": k}).model("reference")
     as_inverse_dynamics(tutorial)
     case = Case(tutorial, {"k": k})

@@ -7,7 +7,7 @@ import shutil
 import pytest
 
 import dyncheck
-from dyncheck.case import Case
+from dyncheck.case.folder import Case
 from dyncheck.cli import main
 from test_scene_options import edit, tutorial
 
@@ -57,7 +57,7 @@ def test_a_springref_set_in_rad_reaches_both_engines_of_a_degree_scene(tmp_path)
 ])
 def test_angles_in_degrees_are_read_alike_by_both_engines(tmp_path, old, new):
     """Orientations and a class's springref under <compiler angle="degree"> (MJCF's default): both engines' bodies
-    compared on load (dyncheck.case.compare_scenes), rotations, inertias and springs."""
+    compared on load (dyncheck.case.folder.compare_scenes), rotations, inertias and springs."""
     case = with_hinge_spring(tmp_path)
     if "class" in new:  # the joint's spring from the class instead
         edit(case / "scene.xml", 'stiffness="0.7" springref="30"/>', 'class="spring"/>')
@@ -99,7 +99,7 @@ def test_a_body_pinocchio_finds_no_inertia_of_is_named_in_words(tmp_path):
 def test_a_urdf_fixed_joint_is_refused_for_its_type(tmp_path):
     """Not told to be named in the case, which cannot make it a coordinate."""
     folder = tmp_path / "rotating_pendulum"
-    shutil.copytree(dyncheck.case.CASES_DIR / "rotating_pendulum", folder)
+    shutil.copytree(dyncheck.case.folder.CASES_DIR / "rotating_pendulum", folder)
     edit(folder / "scene.urdf", "</robot>", '<link name="tip"/><joint name="weld" type="fixed"><parent link="pendulum"/>'
          '<child link="tip"/></joint></robot>')
     with pytest.raises(ValueError) as error:

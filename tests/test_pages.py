@@ -8,10 +8,10 @@ import re
 import pandas as pd
 import pytest
 
-from dyncheck.messages import statuses_in_words
-from dyncheck.report import law_of_time, markdown_table
-from dyncheck.schema import UNIT_REGISTRY
-
+from dyncheck.case.scene import Driven
+from dyncheck.case.units import UNIT_REGISTRY
+from dyncheck.common.messages import statuses_in_words
+from dyncheck.pages.case_page import law_of_time, markdown_table
 
 # The nouns the pages count, singular and plural, for "1 cases" and "16 finding".
 NOUNS = "case|row|finding|check|state|set|parameter|run|edit|quantity|source|method|figure|runaway|step|mode"
@@ -94,4 +94,4 @@ def test_a_table_shows_text_as_written_and_nothing_as_a_dash():
 
 def test_counts_agree_with_their_nouns():
     assert statuses_in_words({"pass": 1, "finding": 16, "fail": 0, "runaway": 1}) == "1 pass, 16 findings, 1 runaway"
-    assert law_of_time(0.8, 0.3, -0.1) == "0.8 + 0.3 t - 0.05 t^2" and law_of_time(0.0, 1.5, 0.0) == "1.5 t"
+    assert law_of_time(Driven(0.8, 0.3, -0.1)) == "0.8 + 0.3 t - 0.05 t^2" and law_of_time(Driven(0.0, 1.5, 0.0)) == "1.5 t"

@@ -2,10 +2,10 @@
 principal moments about the centre of mass that a rigid body has) are drawn within, and a set the engines still
 cannot load is a failing row that says why, never a traceback."""
 
-from dyncheck import checks
-from dyncheck.case import Case
+from dyncheck.case.folder import Case
+from dyncheck.checks import pointwise
 from dyncheck.cli import main
-from dyncheck.results import Status
+from dyncheck.results.values import Status
 from test_planted_errors import tutorial_subject
 
 
@@ -27,17 +27,17 @@ def test_sets_that_break_a_body_s_triangle_inequality_are_not_drawn(tmp_path, ca
     """Before: `dyncheck run` raised MuJoCo's 'inertia must satisfy A + B >= C' out of the run."""
     folder = cart_with_bound_inertia(tmp_path)
     case = Case(folder)
-    sets, missing = checks.parameter_sets(case)
+    sets, missing = pointwise.parameter_sets(case)
     assert missing == 0 and sets and all(s["Iz"] <= 3e-3 for s in sets)
-    assert "A + B >= C" in checks.scene_breaks(case, {"Iz": 3.5e-3})
-    assert checks.scene_breaks(case, {"Iz": 2.9e-3}) is None
+    assert "A + B >= C" in pointwise.scene_breaks(case, {"Iz": 3.5e-3})
+    assert pointwise.scene_breaks(case, {"Iz": 2.9e-3}) is None
     assert main(["run", "--cases", str(folder.parent)]) == 0, capsys.readouterr().out[-2000:]
 
 
 def test_a_set_the_engines_cannot_load_is_a_failing_row_naming_it(tmp_path, monkeypatch):
     case = Case(cart_with_bound_inertia(tmp_path))
-    monkeypatch.setattr(checks, "scene_breaks", lambda case, drawn: None)  # as if the constraints missed it
-    failing = [r for r in checks.random_parameters(case) if r.status == Status.FAIL]
+    monkeypatch.setattr(pointwise, "scene_breaks", lambda case, drawn: None)  # as if the constraints missed it
+    failing = [r for r in pointwise.random_parameters(case) if r.status == Status.FAIL]
     assert failing and all(r.error is None for r in failing)
     assert "the scene cannot be loaded there: ValueError: " in failing[0].detail
     assert "inertia must satisfy A + B >= C" in failing[0].detail and "Iz = " in failing[0].detail

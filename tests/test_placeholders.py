@@ -1,9 +1,10 @@
 """MuJoCo's placeholders (a mass or an inertia where the scene means none): measured on load and refused where they
 are not negligible at the case's parameters; allowed at a random parameter set where a MuJoCo row fails."""
 
-from dyncheck import checks, cli
-from dyncheck.case import load_case
-from dyncheck.results import Status
+from dyncheck import cli
+from dyncheck.case.folder import load_case
+from dyncheck.checks import pointwise
+from dyncheck.results.values import Status
 
 
 def test_bodies_a_thousandth_of_the_book_s_are_refused_naming_file_override_bodies_and_quantity(capsys):
@@ -22,7 +23,7 @@ def test_the_share_is_measured_against_the_case_s_own_tolerance():
         case = load_case("double_pendulum", m1=1e-4)
         case.spec["tolerance"]["pointwise"]["value"] = tolerance
         try:
-            checks.validate_placeholders(case)
+            pointwise.validate_placeholders(case)
         except ValueError:
             assert refused
         else:
@@ -35,11 +36,11 @@ def test_a_random_set_s_failing_mujoco_row_is_judged_with_that_set_s_placeholder
     allowed, and fail where a smaller effect is measured.  (The effect is the largest over a set's states, allowed
     against the largest error over them: a derivation's error there still shows against Pinocchio.)"""
     case = load_case("rotating_pendulum", m=8e-4)
-    checks.validate_placeholders(case)
-    rows = checks.random_parameters(case)
+    pointwise.validate_placeholders(case)
+    rows = pointwise.random_parameters(case)
     assert rows and all(r.status == Status.PASS for r in rows)
     assert all(r.tolerance == case.tolerance["pointwise"]["value"] for r in rows if "mujoco" not in r.sources)
-    monkeypatch.setattr(checks, "placeholders_effect", lambda *args: dict.fromkeys(("drive_power", "energy"), 1e-12))
-    failing = [r for r in checks.random_parameters(case) if r.status == Status.FAIL]
+    monkeypatch.setattr(pointwise, "placeholders_effect", lambda *args: dict.fromkeys(("drive_power", "energy"), 1e-12))
+    failing = [r for r in pointwise.random_parameters(case) if r.status == Status.FAIL]
     assert failing and all("mujoco" in r.sources and "placeholders' effect there 1e-12 allowed" in r.detail
                            for r in failing)

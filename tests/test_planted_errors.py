@@ -25,10 +25,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from dyncheck.case.folder import Case
+from dyncheck.checks import pointwise, residuals
+from dyncheck.results.values import Status
 import planting
-from dyncheck import checks, residuals
-from dyncheck.case import Case
-from dyncheck.results import Status
 from test_own_case_doc import steps
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -122,9 +122,9 @@ class Verdict:
 
 def equations(case):
     """dyncheck's equation rows of a case, their residuals against the engines and the localisations."""
-    _, sample = checks.pointwise(case)
+    _, sample = pointwise.pointwise(case)
     rows, found = residuals.equation_rows(case, sample)
-    return sample, rows, residuals.localise(case, rows, found, checks.parameter_sets(case)[0])
+    return sample, rows, residuals.localise(case, rows, found, pointwise.parameter_sets(case)[0])
 
 
 def judge(subject, mutant, where):

@@ -3,8 +3,9 @@
 import pytest
 
 import dyncheck
-from dyncheck import checks, residuals
-from dyncheck.results import Status
+from dyncheck.checks import pointwise
+from dyncheck.checks import runs as checks, residuals
+from dyncheck.results.values import Status
 
 BOOK_CASES = ("piston", "rotating_pendulum", "rotating_particle", "spring_pendulum", "double_pendulum",
               "spinning_top")
@@ -12,7 +13,7 @@ BOOK_CASES = ("piston", "rotating_pendulum", "rotating_particle", "spring_pendul
 
 def printed_row_statuses(case):
     """{label: status} of the case's printed rows at its random states, its findings applied."""
-    _, sample = checks.pointwise(case)
+    _, sample = pointwise.pointwise(case)
     rows = checks.apply_findings(case, residuals.printed_rows(case, sample))
     return {r.quantity: r.status for r in rows}
 

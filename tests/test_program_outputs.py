@@ -1,13 +1,14 @@
-"""What the book's programs write out against MuJoCo at the same states (dyncheck.checks.program_output_checks)."""
+"""What the book's programs write out against MuJoCo at the same states (dyncheck.checks.runs.program_output_checks)."""
 
 import copy
 
 import pytest
 
 import dyncheck
-from dyncheck.case import Case
-from dyncheck.checks import apply_findings, program_output_checks
-from dyncheck.results import Status
+from dyncheck.case.folder import Case
+from dyncheck.checks.programs import program_output_checks
+from dyncheck.checks.runs import apply_findings
+from dyncheck.results.values import Status
 
 CASES = ("double_pendulum", "spinning_top", "spring_pendulum")
 

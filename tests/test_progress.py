@@ -8,7 +8,10 @@ from dataclasses import replace
 import pandas as pd
 import pytest
 
-from dyncheck import campbell, cli, progress, report, stability, work_precision
+from dyncheck import cli
+from dyncheck.common import progress
+from dyncheck.pages import report
+from dyncheck.studies import campbell, stability, work_precision
 from test_ci_contract import toy
 
 

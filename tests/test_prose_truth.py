@@ -1,6 +1,6 @@
 """Every sentence true (issue 35): a page's numbers are computed at its run's parameters (`{= ...}`) or measured in
-its results (`{~ ...}`, dyncheck.measured), and a word that judges a number ("twice", "agrees") is chosen from it by
-a rule of dyncheck.words.
+its results (`{~ ...}`, dyncheck.results.measured), and a word that judges a number ("twice", "agrees") is chosen from it by
+a rule of dyncheck.common.words.
 
 Fast: the rules at their thresholds; the measures of a small made-up result, and a paragraph whose run failed saying
 so; what loading refuses; every case file's shown prose, at random valid parameter sets, keeps no literal number
@@ -18,17 +18,18 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import measured, words
-from dyncheck.checks import parameter_sets
-from dyncheck.results import CaseResult, Outcome, Row, Status
+from dyncheck.checks.pointwise import parameter_sets
+from dyncheck.common import words
+from dyncheck.results import measured
+from dyncheck.results.values import CaseResult, Outcome, Row, Status
 
-ROOT = dyncheck.case.CASES_DIR.parent
+ROOT = dyncheck.case.folder.CASES_DIR.parent
 FOLDERS = (ROOT / "cases", ROOT / "examples")
 CASES = [(folder, name) for folder in FOLDERS for name in dyncheck.case_names(folder)]
 PLACEHOLDER = re.compile(r"\{[=~][^{}]*\}")
 NUMBER = re.compile(r"(?<![\w.\\^_{])[0-9]+(?:\.[0-9]+)?(?:e-?[0-9]+)?(?![\w.])")
 # The texts a page shows as its own account of the run: everything but a finding's explanation and effect, which a
-# page under overrides marks as the case file's account of the book's numbers (dyncheck.checks.account).  The
+# page under overrides marks as the case file's account of the book's numbers (dyncheck.checks.runs.account).  The
 # Campbell sweep's and the boundaries' texts follow their own study (issue 35, item 2).
 SHOWN = re.compile(r"summary|report\.modelling|report\.figures\.\w+\.caption|tolerance\.\w+\.why|runaway\[\d+\]\.why"
                    r"|stability\.(\w+\.)?why|vibration(\.floquet)?\.why"
@@ -215,10 +216,10 @@ def test_no_shown_sentence_judges_a_size_but_by_a_rule(folder, name):
 @pytest.fixture(scope="module")
 def varied(results, example_results, rendered, tmp_path_factory):
     """Every case's runs at the book's numbers (the session's, and their pages: conftest) and at its first random
-    parameter set (dyncheck.checks.parameter_sets), and both sets of pages: ({case: {"book": result, "other":
+    parameter set (dyncheck.checks.runs.parameter_sets), and both sets of pages: ({case: {"book": result, "other":
     result}}, {"book": folder, "other": folder} of the pages)."""
     from dyncheck.cli import run_cases
-    from dyncheck.report import write_reports
+    from dyncheck.pages.report import write_reports
     results = {name: {"book": result} for name, result in {**results, **example_results}.items()}
     pages = {"book": rendered / "reports", "other": tmp_path_factory.mktemp("other") / "reports"}
     for folder in FOLDERS:
@@ -255,7 +256,7 @@ def test_no_measured_sentence_keeps_a_number_of_the_book_s_run(varied):
     for name, runs in varied[0].items():
         if "other" not in runs:
             continue
-        book, other = (dyncheck.case.Case(r.folder, r.overrides, r.spec) for r in (runs["book"], runs["other"]))
+        book, other = (dyncheck.case.folder.Case(r.folder, r.overrides, r.spec) for r in (runs["book"], runs["other"]))
         written = [NUMBER.findall(text) for text in measured_texts(runs["book"])]
         rewritten = [NUMBER.findall(text) for text in measured_texts(runs["other"])]
         pairs = [(b, o) for numbers, again in zip(written, rewritten) if len(numbers) == len(again)

@@ -58,7 +58,7 @@ def test_reference_energy_rate_equals_drive_power():
 
 
 # PRINTED entries no model method evaluates: the book's Y2 row, which the run evaluates against the finding's
-# right side (dyncheck.checks.right_sides), while the model checks the row term by term (Book.printed_rows).
+# right side (dyncheck.checks.runs.right_sides), while the model checks the row term by term (Book.printed_rows).
 ROW_ONLY = {("spinning_top", "Euler Y2 (1.10)")}
 
 

@@ -6,10 +6,10 @@ import json
 import re
 from pathlib import Path
 
-from dyncheck.case import Case
-from dyncheck.ci import tool_versions
-from dyncheck.report import write_summary
-from dyncheck.results import RESULTS_VERSION, to_json
+from dyncheck.case.folder import Case
+from dyncheck.pages.report import write_summary
+from dyncheck.results.ci import tool_versions
+from dyncheck.results.values import RESULTS_VERSION, to_json
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "results.md"
 # Objects whose keys are data (parameter names, accuracy levels), not the layout's keys.

@@ -8,11 +8,10 @@ import pytest
 
 import dyncheck
 from dyncheck import cli
-from dyncheck.case import Case
-from dyncheck.case import Runaway
-from dyncheck.checks import run_sources, runaway_rows
-from dyncheck.results import Failure, Outcome, Row, Status
-from dyncheck.simulate import Escape, Escaped, simulate
+from dyncheck.case.folder import Case, Runaway
+from dyncheck.checks.runs import run_sources, runaway_rows
+from dyncheck.results.values import Failure, Outcome, Row, Status
+from dyncheck.run.simulate import Escape, Escaped, simulate
 
 K_CRIT = 0.2 * (9 * 3.141592653589793) ** 2  # m Omega^2 at the book's m = 0.2 kg, Omega = pi + 8 pi rad/s: 159.9 N/m
 

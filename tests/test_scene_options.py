@@ -11,8 +11,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from dyncheck.case import Case
-from dyncheck.checks import evaluate
+from dyncheck.case.folder import Case
+from dyncheck.checks.pointwise import evaluate
 from dyncheck.cli import main
 from engines import scene
 from engines.mujoco_adapter import OPTION_ATTRIBUTES, options_set

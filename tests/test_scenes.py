@@ -13,7 +13,7 @@ import pytest
 
 import dyncheck
 from dyncheck import cli
-from dyncheck.case import Case
+from dyncheck.case.folder import Case
 from engines import scene
 
 DOCS = Path(__file__).resolve().parent.parent / "docs" / "scene-elements.md"
@@ -24,7 +24,7 @@ FILES = {"MJCF": "scene.xml", "URDF": "scene.urdf"}
 def mutated(tmp_path, case, file, old, new):
     """A copy of a case whose scene `file` has every `old` replaced by `new`."""
     folder = tmp_path / case
-    shutil.copytree(dyncheck.case.CASES_DIR / case, folder)
+    shutil.copytree(dyncheck.case.folder.CASES_DIR / case, folder)
     text = (folder / file).read_text()
     assert old in text, (case, file, old)
     (folder / file).write_text(text.replace(old, new))
@@ -154,7 +154,7 @@ def test_each_refused_element_is_refused_on_load_naming_file_element_and_attribu
     file, element, attribute = key
     old, new, shown = REFUSALS[key]
     folder = tmp_path / "rotating_pendulum"
-    shutil.copytree(dyncheck.case.CASES_DIR / "rotating_pendulum", folder)
+    shutil.copytree(dyncheck.case.folder.CASES_DIR / "rotating_pendulum", folder)
     path = folder / FILES[file]
     text = path.read_text()
     assert old in text, key
@@ -252,7 +252,7 @@ def test_the_same_rotations_written_in_both_files_are_accepted(tmp_path):
             ("spinning_top", '<inertial pos="0 0 0.0558"', '<origin xyz="0 0 0.0558"'),
             ("rotating_pendulum", '<body name="pendulum" pos="0 0.1 0.2"', '<origin xyz="0 0.1 0.2"')):
         folder = tmp_path / name
-        shutil.copytree(dyncheck.case.CASES_DIR / name, folder)
+        shutil.copytree(dyncheck.case.folder.CASES_DIR / name, folder)
         for file, old, new in (("scene.xml", xml_old, f"{xml_old} {quat}"),
                                ("scene.urdf", urdf_old, f'{urdf_old} rpy="0 0 {2 * half!r}"')):
             text = (folder / file).read_text()
@@ -323,7 +323,7 @@ def _has_rule(file, element, attribute):
 
 @pytest.mark.parametrize("name", dyncheck.case_names())
 def test_every_urdf_element_and_attribute_of_the_cases_has_a_rule(name):
-    root = ET.parse(dyncheck.case.CASES_DIR / name / "scene.urdf").getroot()
+    root = ET.parse(dyncheck.case.folder.CASES_DIR / name / "scene.urdf").getroot()
 
     def walk(element, path):
         for child in element:

@@ -12,9 +12,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck import case as case_module
-from dyncheck import cli, schema
-from dyncheck.case import Case
+from dyncheck import cli
+from dyncheck.case import folder as case_module
+from dyncheck.case import meanings, schema
+from dyncheck.case.folder import Case
 
 DOCS = Path(__file__).resolve().parent.parent / "docs" / "case-file.md"
 
@@ -81,7 +82,7 @@ BAD_CASE_FILES = [
      "+ max(alpha_rate**2, (alpha_rate + beta_rate)**2)) / 10.5)), 166)' = 0.0001"),
     ("spring_pendulum", "tight_rtol = 1e-12", "tight_rtol = 1e-8",
      "integration.tight_rtol = 1e-08 is not below integration.rtol"),
-    # runs the integrators cannot make as asked (dyncheck.simulate.LEAST_RTOL), or whose rows would mean nothing
+    # runs the integrators cannot make as asked (dyncheck.common.ceilings.LEAST_RTOL), or whose rows would mean nothing
     ("spring_pendulum", "rtol = 1e-10\n", "rtol = 1e-300\n", "integration.rtol = 1e-300 is below 2.22e-14, 100 machine "
                                                              "epsilons: scipy's integrators raise a smaller rtol to that"),
     ("spring_pendulum", "tight_rtol = 1e-12", "tight_rtol = 1e-15", "integration.tight_rtol = 1e-15 is below 2.22e-14"),
@@ -114,7 +115,7 @@ BAD_CASE_FILES = [
      "not valid TOML: Expected ']' at the end of a table declaration"),
     ("double_pendulum", "m1 = [0.05, 2.0]", "m1 = [0.0, 2.0]",
      "sample.params.ranges.m1 = [0.0, 2.0] leaves the physical values: m1 must be > 0 (m1 is a mass, in kg)"),
-    # settings that would make a check vacuous (dyncheck/ceilings.py)
+    # settings that would make a check vacuous (dyncheck/common/ceilings.py)
     ("spring_pendulum", 'sources = ["book"]', 'sources = ["mujoco"]',
      "findings[0].sources = 'mujoco' is not the book's: a finding is an error of the book"),
     ("spring_pendulum", 'sources = ["book"]', 'sources = ["reference vs mujoco"]',
@@ -288,15 +289,15 @@ def test_the_schema_names_no_case():
 
 
 def test_every_key_has_a_meaning():
-    keys = {key for key, _, _ in schema.keys()}
-    assert not keys - set(schema.MEANINGS), f"keys without a meaning in schema.MEANINGS: {keys - set(schema.MEANINGS)}"
-    assert not set(schema.MEANINGS) - keys, f"meanings of no key: {set(schema.MEANINGS) - keys}"
-    assert set(schema.KEY_UNITS) <= keys, f"units of no key: {set(schema.KEY_UNITS) - keys}"
+    keys = {key for key, _, _ in meanings.keys()}
+    assert not keys - set(meanings.MEANINGS), f"keys without a meaning in meanings.MEANINGS: {keys - set(meanings.MEANINGS)}"
+    assert not set(meanings.MEANINGS) - keys, f"meanings of no key: {set(meanings.MEANINGS) - keys}"
+    assert set(meanings.KEY_UNITS) <= keys, f"units of no key: {set(meanings.KEY_UNITS) - keys}"
 
 
 def test_the_case_file_reference_is_current():
-    assert DOCS.read_text() == schema.markdown(), \
-        "regenerate: python -c 'import dyncheck.schema as s; print(s.markdown(), end=\"\")' > docs/case-file.md"
+    assert DOCS.read_text() == meanings.markdown(), \
+        "regenerate: python -c 'import dyncheck.case.meanings as s; print(s.markdown(), end=\"\")' > docs/case-file.md"
 
 
 def test_without_its_urdf_pinocchio_reads_the_mjcf(cases):

@@ -1,4 +1,4 @@
-"""Stability studies (dyncheck/stability/, and the cases' own studies.py): theory, the measured limits against it, blow-ups as data.
+"""Stability studies (dyncheck/studies/stability/, and the cases' own studies.py): theory, the measured limits against it, blow-ups as data.
 
 Fast by default (a few seconds each): each test runs one study on a reduced set of its numbers.
 `pytest -m slow` runs every study of every case as the report does and draws the figures.
@@ -16,9 +16,12 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import stability, style
-from dyncheck.stability import common, long_runs
-from dyncheck.simulate import Unstable
+from dyncheck.checks.horizon import agreement_horizon, benettin
+from dyncheck.common import style
+from dyncheck.run import simulate
+from dyncheck.run.simulate import Unstable
+from dyncheck.studies import stability
+from dyncheck.studies.stability import common, long_runs
 
 
 def settings(case, study, **changes):
@@ -127,11 +130,11 @@ def test_a_blown_up_run_is_recorded_with_time_and_step():
     the bound; `attempt` turns both into data."""
     case = dyncheck.load_case("spring_pendulum", k=1e5)
     for method in ("semi-implicit Euler", "mujoco:RK4"):
-        out, fail = common.attempt(lambda: common.run_fixed(case, "book", method, 0.01, 0.5,
+        out, fail = simulate.attempt(lambda: common.run_fixed(case, "book", method, 0.01, 0.5,
                                                                   bound=100.0, index=1))
         assert out is None and fail["status"] == "unstable"
         assert 0 < fail["t"] <= 0.5 and fail["step"] > 0 and fail["why"]
-        assert "unstable at t = " in common.describe(fail)
+        assert "unstable at t = " in simulate.describe(fail)
     with pytest.raises(Unstable):  # outside `attempt` it is the simulator's own exception
         common.run_fixed(case, "book", "RK4", 0.01, 0.5, bound=100.0, index=1)
 
@@ -141,14 +144,14 @@ def test_a_blown_up_run_is_recorded_with_time_and_step():
 def test_agreement_horizon_is_finite_positive_and_cheap():
     case = dyncheck.load_case("double_pendulum")
     start = time.perf_counter()
-    horizon, details = long_runs.agreement_horizon(case)
+    horizon, details = agreement_horizon(case)
     assert time.perf_counter() - start < 4.0  # < 2 s on an idle machine
     assert math.isfinite(horizon) and horizon > 0
     assert details["within"] == (horizon >= case.initial[2])
     assert details["amplification"] > 1 and details["eps0"] * details["amplification"] < details["tol"]
     assert "agreement horizon" in details["sentence"]
     # A case without [stability.lyapunov] sets no limit.
-    horizon, details = long_runs.agreement_horizon(dyncheck.load_case("piston"))
+    horizon, details = agreement_horizon(dyncheck.load_case("piston"))
     assert horizon == math.inf and details["within"]
 
 
@@ -156,10 +159,10 @@ def test_agreement_horizon_is_finite_positive_and_cheap():
 def test_lyapunov_exponent_tells_chaos_from_regular_motion():
     case = dyncheck.load_case("double_pendulum")
     chaotic = np.array([math.pi / 2, math.pi / 2])
-    t, logs = long_runs.benettin(case, chaotic, np.zeros(2), 8.0, 0.1, 1e-8, 1e-9)
+    t, logs = benettin(case, chaotic, np.zeros(2), 8.0, 0.1, 1e-8, 1e-9)
     assert 5.0 < logs[-1] / t[-1] < 11.0  # ~7.6 1/s over 30 s
     q0, v0, _ = case.initial
-    t, logs = long_runs.benettin(case, q0, v0, 8.0, 0.1, 1e-8, 1e-9)
+    t, logs = benettin(case, q0, v0, 8.0, 0.1, 1e-8, 1e-9)
     assert logs[-1] / t[-1] < 1.5  # regular: ln(stretch) stays ~6
 
 

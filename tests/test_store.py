@@ -1,10 +1,12 @@
-"""dyncheck.store: every kind of value comes back as it was saved, every float bit for bit, and saving
+"""dyncheck.results.store: every kind of value comes back as it was saved, every float bit for bit, and saving
 the same value twice gives the same bytes."""
 
 import dataclasses
 import enum
 import json
 import struct
+import subprocess
+import sys
 import tempfile
 import zipfile
 from pathlib import Path
@@ -16,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from dyncheck import store
+from dyncheck.results import store
 
 
 @store.register
@@ -330,4 +332,18 @@ def test_a_read_only_mapping_comes_back_a_dict(tmp_path):
     from types import MappingProxyType
     store.save({"params": MappingProxyType({"k": 2000.0})}, tmp_path / "s")
     assert store.load(tmp_path / "s") == {"params": {"k": 2000.0}}
+
+
+@pytest.mark.parametrize("name, module", [("Vibration", "dyncheck.vibration"), ("Floquet", "dyncheck.vibration"),
+                                          ("Sweep", "dyncheck.campbell"), ("Escape", "dyncheck.simulate"),
+                                          ("Row", "dyncheck.results")])
+def test_a_class_saved_under_its_module_before_the_move_loads_in_a_fresh_process(name, module):
+    """Results saved before the layout of a package per stage name the old modules (dyncheck.vibration, ...): a
+    process that imported only the store still finds each class (store.MOVED)."""
+    code = ("from dyncheck.results import store\n"
+            f"cls = store._registered({{'class': {name!r}, 'module': {module!r}}}, 'value')\n"
+            "print(cls.__name__, cls.__module__)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split()[0] == name and done.stdout.split()[1].startswith("dyncheck.")
 

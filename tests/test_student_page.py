@@ -1,4 +1,4 @@
-"""The student's pages (dyncheck/student_page.py): every book example has one, every step that shows an
+"""The student's pages (dyncheck/pages/student_page.py): every book example has one, every step that shows an
 expression has it typeset and checked, the words are a student's, and a [course] that names what the case does not
 have is refused."""
 
@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import pytest
 
 import dyncheck
-from dyncheck import student_page
+from dyncheck.pages import student_page
 
 BOOK = ("piston", "rotating_pendulum", "rotating_particle", "spring_pendulum", "double_pendulum", "spinning_top")
 JARGON = re.compile(r"\b(armature|rollout|placeholder|rows?|tolerance ceiling|ceiling)\b", re.IGNORECASE)

@@ -1,4 +1,4 @@
-"""dyncheck.terms: the wrong term of a derivation named from its residual, on synthetic residuals.
+"""dyncheck.checks.terms: the wrong term of a derivation named from its residual, on synthetic residuals.
 
 A residual is r = f_derivation - f_engines (M q'' = f, M right): a term T the derivation lacks gives
 r = -T, and the fit names +T, the term to add.  States and parameter sets are random; rounding noise of
@@ -7,7 +7,7 @@ r = -T, and the fit names +T, the term to add.  States and parameter sets are ra
 import numpy as np
 import pytest
 
-from dyncheck.terms import fit, library
+from dyncheck.checks.terms import fit, library
 
 NOISE, FLOOR = 1e-12, 1e-10
 CART = (["x", "theta"], ["m", "rad"], ["M", "m", "l", "k", "g"])  # a cart on a spring, a pendulum hung from it

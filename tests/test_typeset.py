@@ -1,10 +1,10 @@
-"""dyncheck.typeset: the expressions the code evaluates, as LaTeX, and two versions with what differs boxed."""
+"""dyncheck.pages.typeset: the expressions the code evaluates, as LaTeX, and two versions with what differs boxed."""
 
 import importlib
 
 import pytest
 
-from dyncheck.typeset import latex, marked
+from dyncheck.pages.typeset import latex, marked
 
 BOOKS = [(module, cls) for module in ("piston", "rotating_pendulum", "rotating_particle", "spring_pendulum",
                                       "double_pendulum", "spinning_top")

@@ -6,6 +6,7 @@ files run green; each of four errors planted in its equations (a dropped term, a
 cos, a factor 2 lost) fails the run with the line naming the wrong equation and the missing term in the
 derivation's own symbols.
 """
+
 import json
 
 import pytest

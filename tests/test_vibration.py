@@ -1,4 +1,4 @@
-"""Vibration analysis (dyncheck/vibration.py, the book's step 16): equilibria by Newton-Raphson, the
+"""Vibration analysis (dyncheck/checks/vibration.py, the book's step 16): equilibria by Newton-Raphson, the
 linearisation of the derivation and of both engines, frequencies against closed forms and against runs,
 the stability boundaries against their formulas and runs either side; a wrong term fails, a bad table is
 refused naming its field."""
@@ -12,8 +12,11 @@ import pytest
 import scipy.linalg
 
 import dyncheck
-from dyncheck import campbell, ceilings, vibration, vibration_page
-from dyncheck.results import Status
+from dyncheck.checks import floquet, linear, vibration
+from dyncheck.common import ceilings
+from dyncheck.pages import vibration_page
+from dyncheck.results.values import Status
+from dyncheck.studies import campbell
 
 pytestmark = pytest.mark.full  # runs of the cases' engines, seconds each: `pytest -m full`
 
@@ -33,15 +36,15 @@ def test_the_double_pendulums_frequencies_are_the_closed_forms_at_random_paramet
     rng = np.random.default_rng(seed)
     case = dyncheck.load_case("double_pendulum", m1=rng.uniform(0.01, 1), m2=rng.uniform(0.01, 1),
                               l1=rng.uniform(0.05, 1), l2=rng.uniform(0.05, 1), g=rng.uniform(1, 20))
-    table = vibration.settings(case)
-    eq = vibration.equilibrium(case.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords)
+    table = linear.settings(case)
+    eq = linear.equilibrium(case.model("reference"), 0.0, table["q"], table["v"], table["solve"], case.coords)
     assert np.max(np.abs(eq.q)) < 1e-12
     expected = double_pendulum_closed_form(case.params)
     for source in ("reference", "mujoco", "pinocchio"):
         model = case.model(source)
-        linear = (vibration.derivation_linear(model, source, eq) if source == "reference"
-                  else vibration.engine_linear(model, source, eq))
-        modes = vibration.modal(linear)
+        equations = (linear.derivation_linear(model, source, eq) if source == "reference"
+                  else linear.engine_linear(model, source, eq))
+        modes = linear.modal(equations)
         found = [modes.eigenvalues[i].imag for i in modes.oscillating()]
         # the eigenvalues' own bounds are ~1e-10 of them; the engines' placeholders ~1e-11
         np.testing.assert_allclose(found, expected, rtol=1e-8)
@@ -79,7 +82,7 @@ def test_the_tops_steady_precession_is_the_slow_root_of_the_x2_row(analysed):
 def test_the_spring_pendulums_runaway_boundary_comes_out_of_the_eigenvalues():
     case = dyncheck.load_case("spring_pendulum")
     sweep = campbell.sweep(case)
-    scene = vibration.linearised(case)
+    scene = linear.linearised(case)
     omega = scene.params["beta_rate"]
     assert sweep.boundary == pytest.approx(math.sqrt(scene.params["k"] / scene.params["m"]), rel=2e-6)
     k_crit = [f for f in sweep.findings if f.startswith("Boundary from the eigenvalues: k =")]
@@ -104,7 +107,7 @@ def test_a_soft_spring_finds_only_the_unstable_equilibrium_through_the_hinge():
 
 
 def test_no_equilibrium_in_either_is_not_applicable(monkeypatch):
-    monkeypatch.setattr(vibration, "NEWTON_ITERATIONS", 0)  # Newton-Raphson gives up at once, in every source
+    monkeypatch.setattr(linear, "NEWTON_ITERATIONS", 0)  # Newton-Raphson gives up at once, in every source
     vib = vibration.analyse(dyncheck.load_case("double_pendulum"))
     assert [r.status for r in vib.rows] == [Status.NOT_APPLICABLE] and "finds none from the guess in either" in vib.rows[0].detail
 
@@ -112,12 +115,12 @@ def test_no_equilibrium_in_either_is_not_applicable(monkeypatch):
 def test_a_mujoco_run_whose_twin_failed_is_no_number_naming_the_twin(monkeypatch):
     # Without its twin at twice the step MuJoCo's step error is unknown: its row says so rather than allow none.
     case = dyncheck.load_case("double_pendulum")
-    twin_step = vibration.MUJOCO_TWIN * case.integration["mujoco_step"]
-    real = vibration.mode_run
+    twin_step = linear.MUJOCO_TWIN * case.integration["mujoco_step"]
+    real = linear.mode_run
 
     def twin_fails(case, model, source, eq, modes, i, amplitude, periods, method, dt=None):
         if dt == twin_step:
-            return vibration.Motion(source, i, amplitude, None, None, "mujoco:RK4: unstable at t = 0.1 s (step 500)")
+            return linear.Motion(source, i, amplitude, None, None, "mujoco:RK4: unstable at t = 0.1 s (step 500)")
         return real(case, model, source, eq, modes, i, amplitude, periods, method, dt)
 
     monkeypatch.setattr(vibration, "mode_run", twin_fails)
@@ -173,8 +176,7 @@ def test_a_derivation_without_the_engines_equilibrium_fails(tmp_path):
 ])
 def test_a_bad_vibration_table_is_refused_naming_its_field(tmp_path, edit, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace("[", r"\[")):
-        vibration.validate(edited_case(tmp_path, EXAMPLES / "forced_cart_pendulum", ("case.toml", *edit)))
-
+        linear.validate(edited_case(tmp_path, EXAMPLES / "forced_cart_pendulum", ("case.toml", *edit)))
 
 
 @pytest.mark.parametrize("name, override", [("spring_pendulum", {"m": 0.9})])
@@ -194,7 +196,6 @@ def test_newton_finds_the_heavy_double_pendulums_equilibrium():
     assert all(r.status is Status.PASS for r in vib.rows), [(r.quantity, str(r.status)) for r in vib.rows]
 
 
-
 def test_a_small_multiplier_beside_a_large_one_is_judged_by_its_condition():
     # Drawn by `pytest -m slow` (tests/test_whole_runs.py): an unstable orbit (psi = -146.04 rad, psi' = -0.62), its
     # multipliers 0.017 and 59.  The small one's Floquet rows were inconclusive (ceiling 1e-6 of |mu|, tolerance
@@ -203,13 +204,13 @@ def test_a_small_multiplier_beside_a_large_one_is_judged_by_its_condition():
                               a=0.016549572222525136, c=0.010889868082228252, g=1.0, b=0.9954854367992794,
                               l=0.4876207142464939, h=0.016549572222525136, alpha_rate=-3.7657084985644085, beta0=-1.9,
                               alpha0=-3.116409447015411, r=0.19198205169631802)
-    period = vibration.period_of(case, vibration.floquet_settings(case))
-    states = vibration.periodic_orbit(case, "reference", np.array([-146.0356, -0.6217]), period)[0]
+    period = floquet.period_of(case, floquet.floquet_settings(case))
+    states = floquet.periodic_orbit(case, "reference", np.array([-146.0356, -0.6217]), period)[0]
     assert states[0] == pytest.approx([-146.0355951, -0.62170769], abs=1e-6)
     rows = []
-    _, monodromy = vibration.resolved_monodromy(case, states, period, rows)
+    _, monodromy = floquet.resolved_monodromy(case, states, period, rows)
     assert sorted(abs(monodromy["reference"].multipliers)) == pytest.approx([0.01695534, 58.978468], rel=1e-6)
-    rows = vibration.floquet_rows(monodromy, case.tolerance["pointwise"]["value"])
+    rows = floquet.floquet_rows(monodromy, case.tolerance["pointwise"]["value"])
     small = [r for r in rows if r.quantity == "Floquet multiplier 1"]
     assert len(small) == 3 and all(r.ceiling > r.tolerance > ceilings.POINTWISE for r in small)  # once inconclusive
     assert all(r.status == Status.PASS for r in rows), [r for r in rows if r.status != Status.PASS]
@@ -219,7 +220,7 @@ def test_mujoco_s_stroboscopic_run_allows_for_its_approximations():
     # A spring held just above its runaway (k = 165 N/m, k_crit = m Omega^2 = 160): the drift of the disk's prescribed
     # rate through MuJoCo's armature moved its measured |mu| by 2.7e-7, the rest of its allowance 5e-9 (a random
     # --set sweep: the row failed).  Its run with the approximations doubled measures the effect: 2.58e-7
-    floquet = vibration.floquet(dyncheck.load_case("spring_pendulum", k=165.0))
-    mujoco = [r for r in floquet.rows if r.quantity.startswith("largest Floquet") and r.sources == ("mujoco",)]
-    assert len(floquet.motions) == 6 and mujoco and mujoco[0].status == Status.PASS
+    analysis = floquet.floquet(dyncheck.load_case("spring_pendulum", k=165.0))
+    mujoco = [r for r in analysis.rows if r.quantity.startswith("largest Floquet") and r.sources == ("mujoco",)]
+    assert len(analysis.motions) == 6 and mujoco and mujoco[0].status == Status.PASS
     assert 1e-7 < mujoco[0].error < mujoco[0].tolerance < ceilings.MOTION

@@ -14,9 +14,10 @@ from hypothesis import HealthCheck, Phase, assume, given, settings
 from hypothesis import strategies as st
 
 import dyncheck
-from dyncheck import cli, schema
-from dyncheck.checks import run_case
-from dyncheck.simulate import fastest_frequency
+from dyncheck import cli
+from dyncheck.case import schema
+from dyncheck.checks.runs import run_case
+from dyncheck.run.simulate import fastest_frequency
 
 CASES = dyncheck.case_names()
 DEFAULT_EXAMPLES = 2  # per case: 1-5 s each, ~25 s of CPU for the six (the default run may add < 40 s)
@@ -27,7 +28,7 @@ def horizon(case):
     """One period 2 pi / omega of the case's fastest motion, at most the book's run: every error has a
     swing to build up in, beyond the 1/omega the trajectory check needs to compare anything.  A case
     that names no frequency (nothing integrated, only the balance of a prescribed motion) runs a tenth
-    of the book's.  A whole number of output steps, as every run's (dyncheck.simulate)."""
+    of the book's.  A whole number of output steps, as every run's (dyncheck.run.simulate)."""
     t_end, output_step = case.initial[2], case.integration["output_step"]
     omega = fastest_frequency(case)
     wanted = min(t_end, 2 * math.pi / omega) if omega else t_end / 10
@@ -114,7 +115,7 @@ def test_a_heavier_second_pendulum_gives_a_passing_page():
 def test_mujocos_step_stops_following_where_its_twin_would_outrun_a_run(name, override):
     # far beyond the book: the case still loads (its other checks run; MuJoCo's rows say how far off its step is),
     # and the twin at half the step keeps within the steps one run may take
-    from dyncheck.simulate import MAX_STEPS
+    from dyncheck.common.ceilings import MAX_STEPS
     case = dyncheck.load_case(name, **override)
     assert MAX_STEPS / 2 < 2 * case.initial[2] / case.integration["mujoco_step"] <= MAX_STEPS
 

@@ -7,14 +7,15 @@ import pandas as pd
 import pytest
 
 import dyncheck
-from dyncheck import work_precision
-from dyncheck.simulate import simulate as real_simulate
+from dyncheck.checks import convergence
+from dyncheck.run.simulate import simulate as real_simulate
+from dyncheck.studies import work_precision
 
 
 def test_convergence_observes_the_orders():
     for name in ("double_pendulum", "spinning_top"):
-        rows = work_precision.convergence(dyncheck.load_case(name))
-        assert [r.quantity for r in rows] == list(work_precision.EXPECTED_ORDER)
+        rows = convergence.convergence(dyncheck.load_case(name))
+        assert [r.quantity for r in rows] == list(convergence.EXPECTED_ORDER)
         assert all(r.check == "convergence" and r.status == "pass" for r in rows), rows
         assert all(0 < r.tolerance <= 0.25 for r in rows)  # an order off by one must fail
 
@@ -24,14 +25,14 @@ def test_convergence_fails_for_a_wrong_order(monkeypatch):
     # An integrator bug: "RK4" that is really explicit Euler (order 1, expected 4).
     swapped = lambda model, ic, t_end, method, **kw: real_simulate(
         model, ic, t_end, "explicit Euler" if method == "RK4" else method, **kw)
-    monkeypatch.setattr(work_precision, "simulate", swapped)
-    rows = {r.quantity: r for r in work_precision.convergence(case)}
+    monkeypatch.setattr(convergence, "simulate", swapped)
+    rows = {r.quantity: r for r in convergence.convergence(case)}
     assert rows["RK4"].status == "fail" and rows["RK4"].error > 2.5
     assert rows["explicit Euler"].status == "pass"
     # A wrong expectation fails too.
-    monkeypatch.setattr(work_precision, "simulate", real_simulate)
-    monkeypatch.setitem(work_precision.EXPECTED_ORDER, "semi-implicit Euler", 2)
-    rows = {r.quantity: r for r in work_precision.convergence(case)}
+    monkeypatch.setattr(convergence, "simulate", real_simulate)
+    monkeypatch.setitem(convergence.EXPECTED_ORDER, "semi-implicit Euler", 2)
+    rows = {r.quantity: r for r in convergence.convergence(case)}
     assert rows["semi-implicit Euler"].status == "fail"
 
 
@@ -40,7 +41,7 @@ def test_convergence_refuses_differences_at_rounding_level():
     # RK4 at omega h = 5e-4: its differences, ~(omega h)^4, drown in rounding.
     case.spec["work_precision"]["convergence"].update(omega_t=0.1, omega_h={"RK4": 5e-4})
     with pytest.raises(ValueError, match="within rounding"):
-        work_precision.convergence(case)
+        convergence.convergence(case)
 
 
 # A top with Izz = Ixx / 4 under g = 1 m/s^2 (drawn by `pytest -m slow`): 0.24 s in, its axis passes 0.003 rad from
@@ -53,17 +54,17 @@ def test_convergence_stops_its_horizon_where_the_motion_outruns_omega():
     """RK4 at the case's step blew up near the singularity (an `unstable` row for a motion every source runs
     through): the horizon now ends before the motion outruns omega, and the row says so.  Where the motion never
     does (the book's top), the horizon is the case's."""
-    near = {r.quantity: r for r in work_precision.convergence(dyncheck.load_case("spinning_top", **NEAR_SINGULAR))}
+    near = {r.quantity: r for r in convergence.convergence(dyncheck.load_case("spinning_top", **NEAR_SINGULAR))}
     assert all(r.status == "pass" for r in near.values()), near
     assert "the horizon ends before" in near["RK4"].detail and "omega = 11.5" in near["RK4"].detail
-    book = {r.quantity: r for r in work_precision.convergence(dyncheck.load_case("spinning_top"))}
+    book = {r.quantity: r for r in convergence.convergence(dyncheck.load_case("spinning_top"))}
     assert not any("the horizon ends" in r.detail for r in book.values())
 
 
 def test_a_motion_outrunning_omega_at_once_leaves_the_order_unmeasured():
     case = dyncheck.load_case("spinning_top", **NEAR_SINGULAR)
     case.spec["work_precision"]["convergence"]["method_omega"]["RK4"] = "1.0"  # the motion: 7 rad/s from the start
-    rows = {r.quantity: r for r in work_precision.convergence(case)}
+    rows = {r.quantity: r for r in convergence.convergence(case)}
     assert rows["RK4"].status == "inconclusive" and "not measured: within 20 steps" in rows["RK4"].detail
 
 
@@ -107,7 +108,7 @@ def test_sweep_rows_and_an_unstable_point(tmp_path):
 
 def test_nothing_to_integrate():
     case = dyncheck.load_case("piston")
-    assert work_precision.sweep(case).empty and work_precision.convergence(case) == []
+    assert work_precision.sweep(case).empty and convergence.convergence(case) == []
     assert "prescribed" in work_precision.NO_SWEEP
 
 

@@ -8,11 +8,11 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import brentq
 
-from dyncheck.simulate import Unstable, fastest_frequency, simulate
-from dyncheck.stability.common import (EPS, Map, NotApplicable, Study, attempt, describe, fmt, settings_of,
-                                       study_result)
-from dyncheck.vibration import SAFETY
-from dyncheck.style import legend_below, panels, save, title
+from dyncheck.case.folder import settings_of
+from dyncheck.checks.linear import SAFETY
+from dyncheck.common.style import legend_below, panels, save, title
+from dyncheck.run.simulate import Unstable, attempt, describe, fastest_frequency, simulate
+from dyncheck.studies.stability.common import EPS, Map, NotApplicable, Study, fmt, study_result
 
 
 def _rot_exact(angles):

@@ -7,10 +7,11 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import fsolve
 
-from dyncheck.simulate import fastest_frequency, simulate
-from dyncheck.stability.common import (FAMILY, SHARP, Guarded, Map, Study, attempt, describe, fmt, grid_step, limit_step,
-                                      rms, run_fixed, settings_of, study_result)
-from dyncheck.style import legend_below, method_style, panels, save, title
+from dyncheck.case.folder import settings_of
+from dyncheck.common.style import legend_below, method_style, panels, save, title
+from dyncheck.run.simulate import attempt, describe, fastest_frequency, simulate
+from dyncheck.studies.stability.common import (FAMILY, SHARP, Guarded, Map, Study, fmt, grid_step, limit_step, rms,
+                                               run_fixed, study_result)
 
 
 def spring_linearisation(case, k):

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from dyncheck.simulate import fastest_frequency, simulate
-from dyncheck.stability.common import Study, attempt, describe, fmt, study_result
-from dyncheck.style import SOURCE_STYLE, SWEEP_STYLE, legend_below, panels, save, title
+from dyncheck.common.style import SOURCE_STYLE, SWEEP_STYLE, legend_below, panels, save, title
+from dyncheck.run.simulate import attempt, describe, fastest_frequency, simulate
+from dyncheck.studies.stability.common import Study, fmt, study_result
 
 PUSHED = "x"  # the coordinate that case.toml's [scene.applied] pushes with F0 cos(Omega t)
 SWINGING = "theta"  # the coordinate whose amplitude the neglected (cubic) terms grow with
