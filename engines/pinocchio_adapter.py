@@ -45,15 +45,18 @@ class PinocchioModel:
             elif _is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
                 self.m = pin.buildModelFromMJCF(self.path)
             elif root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
-                self.m = pin.buildModelFromUrdf(self.path, ROOT_JOINTS[root["type"]](), root["name"])
+                self.m = pin.buildModelFromXML(_urdf_text(self.path), ROOT_JOINTS[root["type"]](), root["name"])
             else:
-                self.m = pin.buildModelFromUrdf(self.path)
+                self.m = pin.buildModelFromXML(_urdf_text(self.path))
         except (ValueError, RuntimeError) as error:
             raise ValueError(f"{self.path}: {_reader_error(self.path, error)}") from error
         try:
             document = ET.parse(self.path).getroot()
         except ET.ParseError as error:  # stricter than urdfdom's parser
             raise ValueError(f"{self.path}: {error}") from None
+        self._links = self._links_by_joint()
+        self._ball_armature = {}  # joint id: the armature `_complete_mjcf` holds in its body's inertia
+        self._joints = self._joints_by_name(document)
         if _is_mjcf(self.path):
             self._complete_mjcf(document, scene)
         else:
@@ -63,8 +66,10 @@ class PinocchioModel:
                                              for j in range(1, self.m.njoints) if self.m.joints[j].nv == 1
                                              and self.m.damping[self.m.joints[j].idx_v]}}
             self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
-        for location, value in writes:
-            self._write(location, value)
+        self._inertial_frames = _inertial_frames(document, self.path)
+        written = {self._write(location, value) for location, value in writes} - {None}
+        for body in written:  # once all are written: several writes may pass through an unphysical body
+            scene_rules.refuse_unphysical(self.path, body, self._inertia_of(body))
         for constraint, element in zip(constraints, _equalities(self.path)):  # the reader keeps no names
             constraint.name = element.get("name", "")
         self.loops = PinocchioLoops(self.m, constraints, self.path)  # after the model is complete
@@ -89,7 +94,7 @@ class PinocchioModel:
         self.applied = None if self.varying else self._applied_at(0.0, np.zeros(len(self.coords)),
                                                                    np.zeros(len(self.coords)))
         loop_names = [loop.name for loop in self.loops.loops]
-        self.reaction_specs = {name: (self._body_joint(spec["body"]), spec["axis"], spec["frame"],
+        self.reaction_specs = {name: (self._moved_joint(spec["body"], f"reaction '{name}'"), spec["axis"], spec["frame"],
                                       spec.get("quantity", "force")) if spec["sensor"] not in loop_names
                                else ("loop", (loop_names.index(spec["sensor"]), spec["axis"]), "world", "force")
                                for name, spec in scene["reactions"].items()}
@@ -156,15 +161,39 @@ class PinocchioModel:
             if joint.shortname() == "JointModelSpherical" and self.m.parents[j] == 0:
                 dofs = slice(joint.idx_v, joint.idx_v + joint.nv)
                 inertia = self.m.inertias[j]
+                self._ball_armature[j] = float(self.m.armature[joint.idx_v])  # MJCF's one value for the 3 dofs
                 self.m.inertias[j] = pin.Inertia(inertia.mass, inertia.lever,
                                                  inertia.inertia + np.diag(self.m.armature[dofs]))
                 self.m.armature[dofs] = 0.0
 
     # -- names -------------------------------------------------------------
+    def _joints_by_name(self, document):
+        """{joint name: Pinocchio's joint model (nq, nv, idx_q, idx_v)}: the model's joints, and the joints that
+        Pinocchio's MJCF reader makes one composite joint of, for an MJCF body with several (named after the first,
+        its parts keep no names: they are the body's joints, in the file's order, engines.scene.moving_body)."""
+        joints = {}
+        for j in range(1, self.m.njoints):
+            joint = self.m.joints[j]
+            if joint.shortname() != "JointModelComposite":
+                joints[self.m.names[j]] = joint
+                continue
+            names = [e.get("name") for b in document.iter("body") if b.get("name") == self._links[j]
+                     for e in b if e.tag == "joint"]
+            joints.update(zip(names, joint.extract().joints))
+        return joints
+
+    def _links_by_joint(self):
+        """{joint id: the link it moves}: the first body frame on each joint; the links welded to it follow."""
+        links = {}
+        for frame in self.m.frames:
+            if frame.type == pin.FrameType.BODY:
+                links.setdefault(frame.parentJoint, frame.name)
+        return links
+
     def _joint(self, name):
-        if not self.m.existJointName(name):
+        if name not in self._joints:
             raise ValueError(f"{self.path}: no joint named '{name}'")
-        return self.m.joints[self.m.getJointId(name)]
+        return self._joints[name]
 
     def _body_frame(self, body):
         if not self.m.existBodyName(body):
@@ -177,14 +206,37 @@ class PinocchioModel:
         if spec.get("kind") != "com acceleration":
             return frame_id
         frame = self.m.frames[frame_id]
-        lever = self.m.inertias[frame.parentJoint].lever  # in the joint's frame
-        at_com = pin.SE3(frame.placement.rotation, lever)  # the link's axes, at its centre of mass
+        at_com = pin.SE3(frame.placement.rotation, self._own_com(frame_id))  # the link's axes, at its centre of mass
         return self.m.addFrame(pin.Frame(spec["body"] + "_com", frame.parentJoint, frame_id, at_com,
                                          pin.FrameType.OP_FRAME))
+
+    def _own_com(self, frame_id):
+        """The centre of mass of the link of body frame `frame_id` alone, in its joint's frame: Pinocchio's readers
+        merge welded links into the joint's inertia, and keep each welded link's own in the frame of its weld (the
+        body frame's parent)."""
+        frame = self.m.frames[frame_id]
+        welds = [f for f in self.m.frames if f.type == pin.FrameType.FIXED_JOINT and f.parentJoint == frame.parentJoint
+                 and f.inertia.mass > 0]
+        if self._links.get(frame.parentJoint) != frame.name:  # a welded link: its weld's inertia is its own
+            weld = self.m.frames[frame.parentFrame]
+            return weld.placement.act(weld.inertia.lever)
+        merged = self.m.inertias[frame.parentJoint]
+        mass = merged.mass - sum(f.inertia.mass for f in welds)
+        return (merged.mass * merged.lever - sum(f.inertia.mass * f.placement.act(f.inertia.lever) for f in welds)) / mass
 
     def _body_joint(self, body):
         """Id of the joint that moves link `body` (URDF link frames are those joints' frames here)."""
         return self.m.frames[self._body_frame(body)].parentJoint
+
+    def _moved_joint(self, body, what):
+        """`_body_joint` of a link that a joint moves itself; ValueError naming `what` for a welded link, whose
+        mass and inertia Pinocchio's readers merge into the link it is welded to."""
+        joint = self._body_joint(body)
+        if self._links.get(joint) != body:
+            raise ValueError(f"{self.path}: {what} of body '{body}', which is welded to body '{self._links.get(joint, 'world')}':"
+                             " Pinocchio's reader merges its mass and inertia into that body's, and the Pinocchio side"
+                             " reads no force or value of the weld itself")
+        return joint
 
     def _slot(self, location):
         """(object, attribute) holding a binding location's value in the Pinocchio model."""
@@ -193,50 +245,89 @@ class PinocchioModel:
             return self.m.gravity, "linear"
         if element == "joint":
             return self.joint_values[attribute], name
-        joint = self._body_joint(name)
+        joint = self._moved_joint(name, f"a binding of {attribute}")
         if attribute == "pos":
             return self.m.jointPlacements[joint], "translation"
-        if attribute == "inertia_about_origin":
+        if attribute in INERTIA_ATTRIBUTES:
             return self.m.inertias[joint], attribute
         return self.m.inertias[joint], {"mass": "mass", "ipos": "lever"}[attribute]
 
     def _write(self, location, value):
+        """Set a binding location's value; the body whose inertia it changes (checked by the caller once all are
+        written), else None."""
         holder, key = self._slot(location)
         i = location.get("index", 0)
-        if key == "inertia_about_origin":  # about the body origin: less the parallel-axis term
-            lever, inertia = holder.lever, holder.inertia.copy()
-            inertia[i, i] = value - holder.mass * (lever @ lever - lever[i] ** 2)
-            self.m.inertias[self._body_joint(location["name"])] = pin.Inertia(holder.mass, lever, inertia)
-        elif location["element"] == "joint":
+        if key in INERTIA_ATTRIBUTES:
+            name = location["name"]
+            inertia = self._inertia_of(name)  # about the centre of mass, in the body's frame
+            joint = self._body_joint(name)
+            if key == "inertia_about_origin":  # about the body origin (a ball joint's armature in it): less the
+                inertia[i, i] = (value - holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2)  # parallel
+                                 - self._ball_armature.get(joint, 0.0))  # axis term and the armature
+            elif key == "fullinertia":
+                inertia[scene_rules.FULL_INERTIA[i]] = inertia[scene_rules.FULL_INERTIA[i][::-1]] = value
+            else:  # in the inertial frame
+                frame = self._inertial_frame(name)
+                principal = frame.T @ inertia @ frame
+                principal[i, i] = value
+                inertia = frame @ principal @ frame.T
+            self.m.inertias[joint] = pin.Inertia(holder.mass, holder.lever, inertia + self._armature_of(joint))
+            return name
+        if location["element"] == "joint":
             holder[key] = value
         elif np.ndim(getattr(holder, key)) == 0:
             setattr(holder, key, value)
         else:  # Pinocchio's bindings return these arrays by reference
             getattr(holder, key)[i] = value
+        return None
+
+    def _inertia_of(self, body):
+        """A moving body's inertia about its centre of mass in its frame, as the file writes it: without the
+        armature of a ball joint on the world that `_complete_mjcf` holds in it."""
+        joint = self._moved_joint(body, "the inertia")
+        return self.m.inertias[joint].inertia.copy() - self._armature_of(joint)
+
+    def _armature_of(self, joint):
+        return self._ball_armature.get(joint, 0.0) * np.eye(3)
+
+    def _inertial_frame(self, body):
+        """The rotation of a body's inertial frame in its frame (MJCF's <inertial> orientation, URDF's <inertial>
+        <origin rpy>), in which a binding of `inertia` is a diagonal entry (MJCF's diaginertia)."""
+        frame = self._inertial_frames.get(body)
+        if isinstance(frame, str):  # an orientation this adapter does not read
+            raise ValueError(f"{self.path}: body '{body}': {frame}")
+        return np.eye(3) if frame is None else frame
 
     def tree(self):
-        """The moving bodies as Pinocchio models them (see engines.scene.Body): one per joint, named after
-        the link it moves; a joint's axis is its motion subspace at the neutral configuration."""
-        link = {f.parentJoint: f.name for f in self.m.frames if f.type == pin.FrameType.BODY}
+        """The moving bodies as Pinocchio models them (see engines.scene.Body, engines.scene.moving_body): one per
+        joint, named after the link it moves (its welded links' mass and inertia merged into it by Pinocchio's
+        readers), a composite joint's parts a chain; a joint's axis is its motion subspace at the neutral
+        configuration."""
         bodies = []
         for j in range(1, self.m.njoints):
-            joint, placement, inertia = self.m.joints[j], self.m.jointPlacements[j], self.m.inertias[j]
+            placement, inertia = self.m.jointPlacements[j], self.m.inertias[j]
             # 6 x nv; eigenpy hands a one-column matrix (a scene of one joint) back as a vector
             jacobian = np.reshape(pin.computeJointJacobian(self.m, self.m.createData(), self.neutral, j), (6, -1))
-            motion = jacobian[:, joint.idx_v]
-            if joint.nv == 1:  # motion = (linear, angular) per unit rate, in the joint's frame
-                kind, axis = ("hinge", motion[3:]) if np.any(motion[3:]) else ("slide", motion[:3])
-            else:  # the root joint that the case names (spherical: the top)
-                kind, axis = "ball", np.zeros(3)
+            joints = []
+            for name, joint in self._parts(j):
+                motion = jacobian[:, joint.idx_v]
+                if joint.nv == 1:  # motion = (linear, angular) per unit rate, in the joint's frame
+                    kind, axis = ("hinge", motion[3:]) if np.any(motion[3:]) else ("slide", motion[:3])
+                else:  # a ball joint (spherical: the top)
+                    kind, axis = "ball", np.zeros(3)
+                joints.append((name, kind, axis.copy(), [self.joint_values["stiffness"].get(name, 0.0), 0.0, 0.0],
+                               self.joint_values["springref"].get(name, 0.0), self.joint_values["damping"].get(name, 0.0)))
             parent = self.m.parents[j]
-            bodies.append(Body(name=link[j], parent=link[parent] if parent else "world", joint=self.m.names[j],
-                               joint_type=kind, axis=axis.copy(), position=placement.translation.copy(),
-                               rotation=placement.rotation.copy(), mass=float(inertia.mass),
-                               com=inertia.lever.copy(), inertia=inertia.inertia.copy(),
-                               stiffness=np.array([self.joint_values["stiffness"].get(self.m.names[j], 0.0), 0.0, 0.0]),
-                               springref=self.joint_values["springref"].get(self.m.names[j], 0.0),
-                               damping=self.joint_values["damping"].get(self.m.names[j], 0.0)))
+            bodies += scene_rules.moving_body(self._links[j], self._links[parent] if parent else "world", joints,
+                                              placement.translation.copy(), placement.rotation.copy(),
+                                              float(inertia.mass), inertia.lever.copy(), inertia.inertia.copy())
         return bodies
+
+    def _parts(self, j):
+        """(name, joint model) of the case's joints that Pinocchio's joint j holds: itself, or a composite's parts."""
+        joint = self.m.joints[j]
+        return [(name, part) for name, part in self._joints.items()
+                if joint.idx_v <= part.idx_v < joint.idx_v + joint.nv]
 
     @property
     def gravity(self):
@@ -247,6 +338,11 @@ class PinocchioModel:
         i = location.get("index", 0)
         if key == "inertia_about_origin":
             return float(holder.inertia[i, i] + holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2))
+        if key == "fullinertia":
+            return float(self._inertia_of(location["name"])[scene_rules.FULL_INERTIA[i]])
+        if key == "inertia":
+            frame = self._inertial_frame(location["name"])
+            return float((frame.T @ self._inertia_of(location["name"]) @ frame)[i, i])
         if location["element"] == "joint":
             return float(holder.get(key, 0.0))
         return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
@@ -609,6 +705,46 @@ def _is_mjcf(path):
     return str(path).endswith(".xml")
 
 
+# A body's inertia as a binding sets it: about the body origin (a diagonal entry), the principal moments in the
+# inertial frame (MJCF's diaginertia, index 0..2) or the full tensor about the centre of mass in the body's frame (MJCF's
+# fullinertia, a URDF <inertia> where its <origin> has no rpy: index 0..5, engines.scene.FULL_INERTIA)
+INERTIA_ATTRIBUTES = ("inertia_about_origin", "inertia", "fullinertia")
+
+
+def _urdf_text(path):
+    """The URDF at `path` with `NO_LIMIT` written into each revolute or prismatic joint without a <limit>, which
+    urdfdom rejects ("does not specify limits"): a joint without a limit has none."""
+    robot = ET.parse(path).getroot()
+    for joint in robot.iter("joint"):
+        if joint.get("type") in ("revolute", "prismatic") and joint.find("limit") is None:
+            ET.SubElement(joint, "limit", lower=f"{-NO_LIMIT:g}", upper=f"{NO_LIMIT:g}", effort="0", velocity="0")
+    return ET.tostring(robot, encoding="unicode")
+
+
+def _inertial_frames(document, path):
+    """{body: the rotation of its inertial frame in the body's frame} where it is not the identity: an MJCF
+    <inertial quat>, a URDF <inertial><origin rpy>; for an MJCF orientation written otherwise, the words of the
+    refusal of a binding that needs it (`inertia`)."""
+    frames = {}
+    if _is_mjcf(path):
+        for body in document.iter("body"):
+            inertial = body.find("inertial")
+            written = [] if inertial is None else [a for a in ("quat", "axisangle", "euler", "xyaxes", "zaxis")
+                                                    if a in inertial.attrib]
+            if written == ["quat"]:
+                w, x, y, z = (float(t) for t in inertial.get("quat").split())
+                frames[body.get("name")] = pin.Quaternion(w, x, y, z).normalized().matrix()
+            elif written:
+                frames[body.get("name")] = (f"its <inertial {written[0]}> is read here only as quat: write the inertial"
+                                            " frame's orientation as quat, or bind fullinertia")
+    else:
+        for link in document.iter("link"):
+            origin = link.find("inertial/origin")
+            if origin is not None and origin.get("rpy"):
+                frames[link.get("name")] = pin.rpy.rpyToMatrix(*(float(t) for t in origin.get("rpy").split()))
+    return frames
+
+
 def _reader_error(path, error):
     """Pinocchio's reader's error in words: its message without the C++ file and function it comes from, and
     for an MJCF body that it finds no inertia of, which one and what to write."""
@@ -688,6 +824,8 @@ def _unmodelled(robot, scene):
     for joint in robot.iter("joint"):
         name, kind = joint.get("name"), joint.get("type")
         owner = f"joint '{name}'"
+        if kind == "fixed":  # a welded link: no coordinate, its mass and inertia merged into its parent's
+            continue
         if kind not in ("revolute", "continuous", "prismatic"):  # no coordinate, named in the case or not
             yield "joint", "type", owner, kind
         if name not in moved:

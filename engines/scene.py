@@ -37,6 +37,68 @@ class Body:
     damping: float  # viscous damping of the joint's dofs, force -damping q' (N s/m, N m s/rad)
 
 
+def joint_frame(body, joint):
+    """The name, in `tree`, of the frame of a body with several joints that its joint `joint` moves and its next joint
+    moves on (a massless Body: see `moving_body`)."""
+    return f"{body}/{joint}"
+
+
+def moving_body(name, parent, joints, position, rotation, mass, com, inertia):
+    """A moving body as the adapters' `tree` describes it: a Body per joint of `joints` ((joint, joint_type, axis,
+    stiffness, springref, damping) each, in the file's order).  Several joints on one body act in turn at the body's
+    origin (MuJoCo's kinematics, and Pinocchio's composite joint): each turns or slides the frame that the one before
+    leaves, about its axis in the body's frame; so they are a chain of massless frames (`joint_frame`), the first at
+    the body's placement, the others on it, and the body, with all its mass, on the last."""
+    bodies = []
+    for k, (joint, joint_type, axis, stiffness, springref, damping) in enumerate(joints):
+        first, last = k == 0, k == len(joints) - 1
+        bodies.append(Body(name=name if last else joint_frame(name, joint), parent=parent if first else bodies[-1].name,
+                           joint=joint, joint_type=joint_type, axis=np.asarray(axis, dtype=float),
+                           position=position if first else np.zeros(3), rotation=rotation if first else np.eye(3),
+                           mass=mass if last else 0.0, com=com if last else np.zeros(3),
+                           inertia=inertia if last else np.zeros((3, 3)), stiffness=np.asarray(stiffness, dtype=float),
+                           springref=springref, damping=damping))
+    return bodies
+
+
+def combined_inertia(parts):
+    """(mass, centre of mass, inertia about it) of rigidly joined parts, each (mass, centre of mass, inertia about its
+    centre of mass) in one frame: a body and the bodies welded to it."""
+    mass = sum(part_mass for part_mass, _, _ in parts)
+    com = sum(part_mass * np.asarray(part_com) for part_mass, part_com, _ in parts) / mass if mass else np.zeros(3)
+    inertia = np.zeros((3, 3))
+    for part_mass, part_com, part_inertia in parts:
+        lever = np.asarray(part_com) - com
+        inertia = inertia + part_inertia + part_mass * (lever @ lever * np.eye(3) - np.outer(lever, lever))
+    return float(mass), com, inertia
+
+
+# The six entries of a full inertia (MJCF fullinertia, URDF <inertia>: ixx iyy izz ixy ixz iyz) in the 3 x 3 tensor.
+FULL_INERTIA = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+
+
+def full_tensor(six):
+    """The symmetric 3 x 3 inertia of its six entries (FULL_INERTIA's order)."""
+    tensor = np.zeros((3, 3))
+    for value, (row, column) in zip(six, FULL_INERTIA):
+        tensor[row, column] = tensor[column, row] = value
+    return tensor
+
+
+# The principal moments of an inertia written by a binding are a rigid body's when each is positive and A + B >= C
+# to within their rounding: eigvalsh of a 3 x 3 tensor rounds each by a few eps of the largest; 1e-12 of C allows a
+# flat plate's A + B = C (as dyncheck's random parameter sets allow it).
+TRIANGLE_ROUNDING = 1e-12
+
+
+def refuse_unphysical(path, body, inertia):
+    """ValueError naming the file and the body unless `inertia` (about the centre of mass) is a rigid body's."""
+    moments = np.sort(np.linalg.eigvalsh(np.asarray(inertia, dtype=float)))
+    if not (moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - TRIANGLE_ROUNDING)):
+        raise ValueError(f"{path}: body '{body}': principal moments of inertia about its centre of mass "
+                         f"{', '.join(f'{x:.6g}' for x in moments)} kg m^2 are not a rigid body's (each > 0, A + B >= C)")
+
+
 @dataclass(frozen=True)
 class Rule:
     file: str  # "MJCF" | "URDF"
