@@ -60,7 +60,7 @@ class MujocoModel:
         self.path = str(path)
         try:
             spec = mujoco.MjSpec.from_file(self.path)
-            _write_all(spec, writes, self.path)
+            _write_all(spec, writes)
             self.m = spec.compile()
         except (ValueError, KeyError) as error:
             raise ValueError(f"{self.path}: {error}") from error
@@ -68,6 +68,7 @@ class MujocoModel:
         self.loops = MujocoLoops(self.m, self.path)  # refuses an equality that is not a loop's <connect>
         self.armature = self.m.dof_armature.copy()
         self.d = mujoco.MjData(self.m)
+        self._grounds_potential = self._potential_of_grounds()
         self.coords = tuple(scene["coords"])
         self.reaction_names = tuple(scene["reactions"])
         self.layout = [(kind, self._joint(j), idx) for kind, j, idx in scene["layout"]]
@@ -107,6 +108,13 @@ class MujocoModel:
         self.point_specs = {name: (self.body_id(spec["body"]), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
         self.paths = [self.body_id(b) for b in scene["paths"]]
+
+    def _potential_of_grounds(self):
+        """The potential energy of the bodies welded to the world (a ground, a URDF base link), a constant in
+        MuJoCo's that Pinocchio's readers, which fold them into the world, do not count: `_energy` leaves it out."""
+        mujoco.mj_kinematics(self.m, self.d)
+        return -sum(float(self.m.body_mass[b] * (self.m.opt.gravity @ self.d.xipos[b]))
+                    for b in range(1, self.m.nbody) if self.m.body_weldid[b] == 0)
 
     def _refuse_unclosable(self, scene):
         """ValueError for a loop scene that dyncheck cannot evaluate: prescribed motions or a ball joint (not yet
@@ -482,7 +490,7 @@ class MujocoModel:
         mujoco.mj_fwdPosition(self.m, self.d)
         mujoco.mj_energyPos(self.m, self.d)
         mujoco.mj_energyVel(self.m, self.d)
-        return float(self.d.energy[0] + self.d.energy[1])
+        return float(self.d.energy[0] - self._grounds_potential + self.d.energy[1])
 
     def energy_many(self, t, q, v):
         """`energy` at many states, the same numbers: t of shape (N,), q and v (N, n) -> (N,); with loops, state by
@@ -830,9 +838,9 @@ def _refuse_nan(path):
                                  "compiler may quietly replace")
 
 
-def _write_all(spec, writes, path):
-    """`_write` each (location, value) into an MjSpec; then ValueError naming the file and the body for an inertia
-    they leave unphysical (several writes may pass through one: checked once all are written)."""
+def _write_all(spec, writes):
+    """`_write` each (location, value) into an MjSpec; then ValueError naming the body for an inertia they leave
+    unphysical (several writes may pass through one: checked once all are written)."""
     full = [location["name"] for location, _ in writes
             if location["element"] == "body" and location.get("attribute") == "fullinertia"]
     compiled = spec.compile() if full else None  # the inertial frame of a body that the file gives diaginertia
@@ -843,8 +851,10 @@ def _write_all(spec, writes, path):
         _write(spec, location, value, compiled)
     for name in written:
         body = spec.body(name)
-        scene_rules.refuse_unphysical(path, name, np.diag(body.inertia) if np.isnan(body.fullinertia[0])
-                                      else scene_rules.full_tensor(body.fullinertia))
+        why = scene_rules.unphysical(name, np.diag(body.inertia) if np.isnan(body.fullinertia[0])
+                                     else scene_rules.full_tensor(body.fullinertia))
+        if why:
+            raise ValueError(why)
 
 
 def _write(spec, location, value, compiled=None):

@@ -67,9 +67,25 @@ class PinocchioModel:
                                              and self.m.damping[self.m.joints[j].idx_v]}}
             self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
         self._inertial_frames = _inertial_frames(document, self.path)
-        written = {self._write(location, value) for location, value in writes} - {None}
-        for body in written:  # once all are written: several writes may pass through an unphysical body
-            scene_rules.refuse_unphysical(self.path, body, self._inertia_of(body))
+        # each joint's welded links (Pinocchio's readers merge them into its inertia, and keep each link's own in the
+        # frame of its weld) and its own link's inertia, which the bindings set: the model's is their sum
+        self._welded = {j: sum((f.placement.act(f.inertia) for f in self.m.frames if f.parentJoint == j
+                                and f.type == pin.FrameType.FIXED_JOINT), pin.Inertia.Zero())
+                        for j in range(1, self.m.njoints)}
+        self._own = {j: self.m.inertias[j] - self._welded[j] if self._welded[j].mass else self.m.inertias[j].copy()
+                     for j in range(1, self.m.njoints)}
+        self._touched = set()  # the joints whose own link's inertia a binding sets
+        self._written = {}  # body: its inertia as the writes leave it (about the centre of mass, in its frame)
+        for location, value in writes:
+            self._write(location, value)
+        for body, inertia in self._written.items():  # once all are written: several may pass through an unphysical one
+            why = scene_rules.unphysical(body, inertia)
+            if why:
+                raise ValueError(f"{self.path}: {why}")
+            joint = self._body_joint(body)
+            self._own[joint] = pin.Inertia(self._own[joint].mass, self._own[joint].lever, inertia + self._armature_of(joint))
+        for joint in self._touched:
+            self.m.inertias[joint] = self._own[joint] + self._welded[joint]
         for constraint, element in zip(constraints, _equalities(self.path)):  # the reader keeps no names
             constraint.name = element.get("name", "")
         self.loops = PinocchioLoops(self.m, constraints, self.path)  # after the model is complete
@@ -215,14 +231,10 @@ class PinocchioModel:
         merge welded links into the joint's inertia, and keep each welded link's own in the frame of its weld (the
         body frame's parent)."""
         frame = self.m.frames[frame_id]
-        welds = [f for f in self.m.frames if f.type == pin.FrameType.FIXED_JOINT and f.parentJoint == frame.parentJoint
-                 and f.inertia.mass > 0]
         if self._links.get(frame.parentJoint) != frame.name:  # a welded link: its weld's inertia is its own
             weld = self.m.frames[frame.parentFrame]
             return weld.placement.act(weld.inertia.lever)
-        merged = self.m.inertias[frame.parentJoint]
-        mass = merged.mass - sum(f.inertia.mass for f in welds)
-        return (merged.mass * merged.lever - sum(f.inertia.mass * f.placement.act(f.inertia.lever) for f in welds)) / mass
+        return self._own[frame.parentJoint].lever
 
     def _body_joint(self, body):
         """Id of the joint that moves link `body` (URDF link frames are those joints' frames here)."""
@@ -249,17 +261,18 @@ class PinocchioModel:
         if attribute == "pos":
             return self.m.jointPlacements[joint], "translation"
         if attribute in INERTIA_ATTRIBUTES:
-            return self.m.inertias[joint], attribute
-        return self.m.inertias[joint], {"mass": "mass", "ipos": "lever"}[attribute]
+            return self._own[joint], attribute
+        return self._own[joint], {"mass": "mass", "ipos": "lever"}[attribute]
 
     def _write(self, location, value):
-        """Set a binding location's value; the body whose inertia it changes (checked by the caller once all are
-        written), else None."""
+        """Set a binding location's value; an inertia's in `_written` (set in the model once all are written)."""
         holder, key = self._slot(location)
         i = location.get("index", 0)
+        if location["element"] == "body" and key != "translation":
+            self._touched.add(self._body_joint(location["name"]))
         if key in INERTIA_ATTRIBUTES:
             name = location["name"]
-            inertia = self._inertia_of(name)  # about the centre of mass, in the body's frame
+            inertia = self._written.setdefault(name, self._inertia_of(name))  # about the com, in the body's frame
             joint = self._body_joint(name)
             if key == "inertia_about_origin":  # about the body origin (a ball joint's armature in it): less the
                 inertia[i, i] = (value - holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2)  # parallel
@@ -270,22 +283,19 @@ class PinocchioModel:
                 frame = self._inertial_frame(name)
                 principal = frame.T @ inertia @ frame
                 principal[i, i] = value
-                inertia = frame @ principal @ frame.T
-            self.m.inertias[joint] = pin.Inertia(holder.mass, holder.lever, inertia + self._armature_of(joint))
-            return name
-        if location["element"] == "joint":
+                inertia[:] = frame @ principal @ frame.T
+        elif location["element"] == "joint":
             holder[key] = value
         elif np.ndim(getattr(holder, key)) == 0:
             setattr(holder, key, value)
         else:  # Pinocchio's bindings return these arrays by reference
             getattr(holder, key)[i] = value
-        return None
 
     def _inertia_of(self, body):
         """A moving body's inertia about its centre of mass in its frame, as the file writes it: without the
         armature of a ball joint on the world that `_complete_mjcf` holds in it."""
         joint = self._moved_joint(body, "the inertia")
-        return self.m.inertias[joint].inertia.copy() - self._armature_of(joint)
+        return self._own[joint].inertia.copy() - self._armature_of(joint)
 
     def _armature_of(self, joint):
         return self._ball_armature.get(joint, 0.0) * np.eye(3)

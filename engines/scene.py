@@ -91,12 +91,13 @@ def full_tensor(six):
 TRIANGLE_ROUNDING = 1e-12
 
 
-def refuse_unphysical(path, body, inertia):
-    """ValueError naming the file and the body unless `inertia` (about the centre of mass) is a rigid body's."""
+def unphysical(body, inertia):
+    """Why `inertia` (about the centre of mass) is no rigid body's, naming the body; None if it is one."""
     moments = np.sort(np.linalg.eigvalsh(np.asarray(inertia, dtype=float)))
-    if not (moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - TRIANGLE_ROUNDING)):
-        raise ValueError(f"{path}: body '{body}': principal moments of inertia about its centre of mass "
-                         f"{', '.join(f'{x:.6g}' for x in moments)} kg m^2 are not a rigid body's (each > 0, A + B >= C)")
+    if moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - TRIANGLE_ROUNDING):
+        return None
+    return (f"body '{body}': principal moments of inertia about its centre of mass "
+            f"{', '.join(f'{x:.6g}' for x in moments)} kg m^2 are not a rigid body's (each > 0, A + B >= C)")
 
 
 @dataclass(frozen=True)
