@@ -55,6 +55,7 @@ class PinocchioModel:
         except ET.ParseError as error:  # stricter than urdfdom's parser
             raise ValueError(f"{self.path}: {error}") from None
         self._links = self._links_by_joint()
+        self._composite = any(joint.shortname() == "JointModelComposite" for joint in self.m.joints)
         self._ball_armature = {}  # joint id: the armature `_complete_mjcf` holds in its body's inertia
         self._joints = self._joints_by_name(document)
         if _is_mjcf(self.path):
@@ -612,6 +613,26 @@ class PinocchioModel:
                              f"({', '.join(loop.name for loop in self.loops.loops)}) is not supported: its "
                              "coordinates' equations hold the loops' constraint forces, which RNEA does not give")
         config, velocity, acc, _ = self._dynamics(t, q, v)
+        if self._composite:
+            dtau_dq, dtau_dv, error = self._rnea_differences(config, velocity, acc)
+            method = ("Pinocchio RNEA differenced (centred, extrapolated, at the step of least estimated error): its"
+                      " analytic derivatives are wrong through a composite joint")
+        else:
+            dtau_dq, dtau_dv, error = self._rnea_derivatives(config, velocity, acc)
+            method = "Pinocchio computeRNEADerivatives (analytic)"
+        force_q, force_v = -dtau_dq, -dtau_dv
+        mass = pin.crba(self.m, self.d, config)[self._whole]  # `mass_matrix`'s to the bit (RNEA's rounds otherwise)
+        for _, iv, k, _, damping in self.passive:
+            force_q[iv, iv] -= k
+            force_v[iv, iv] -= damping
+        # the sums' rounding: half an ulp of each, within eps of the term added (RNEA's share is in its own)
+        error += EPS * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive), default=0.0)
+        layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
+        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
+                                              mass, force_q, force_v, error, method)
+
+    def _rnea_derivatives(self, config, velocity, acc):
+        """dtau/dq, dtau/dv of RNEA at the state's accelerations by computeRNEADerivatives, and their error."""
         derivatives = lambda c, w: [np.array(m) for m in pin.computeRNEADerivatives(self.m, self.d, c, w, acc)[:2]]
         dtau_dq, dtau_dv = derivatives(config, velocity)
         # RNEA's rounding is of RNEA's own entries: a stiff spring's -k, added here in one rounding, would make it
@@ -622,17 +643,40 @@ class PinocchioModel:
                     NOISE_MARGIN * scene_rules.rounding_noise(
                         lambda step_q, step_v: derivatives(pin.integrate(self.m, config, step_q), velocity + step_v),
                         (dtau_dq, dtau_dv), velocity))
-        force_q, force_v = -dtau_dq, -dtau_dv
-        mass = pin.crba(self.m, self.d, config)[self._whole]  # `mass_matrix`'s to the bit (RNEA's rounds otherwise)
-        for _, iv, k, _, damping in self.passive:
-            force_q[iv, iv] -= k
-            force_v[iv, iv] -= damping
-        # the sums' rounding: half an ulp of each, within eps of the term added (RNEA's share is in its own)
-        error += EPS * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive), default=0.0)
-        layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
-        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
-                                              mass, force_q, force_v, error,
-                                              "Pinocchio computeRNEADerivatives (analytic)")
+        return dtau_dq, dtau_dv, error
+
+    def _rnea_differences(self, config, velocity, acc):
+        """dtau/dq, dtau/dv of RNEA at the state's accelerations by centred differences (positions stepped in
+        Pinocchio's tangent space, pin.integrate, as MuJoCo's mj_integratePos), extrapolated at the step of least
+        estimated error (engines.scene.extrapolated_differences, difference_rounding: as MujocoModel's
+        `_inverse_derivatives`), and that error.  For a model with a composite joint (several joints of one MJCF
+        body), through which computeRNEADerivatives (Pinocchio 4.1) gives wrong derivatives: measured on a
+        spherical pendulum of two hinges, dtau/dq of the second hinge off by 1.58 N m/rad and dtau/dv by 0.085 N m s,
+        where differences of RNEA and MuJoCo's of its inverse dynamics agree (tests/test_scene_forms.py)."""
+        nv, tau = self.m.nv, lambda c, w: np.array(pin.rnea(self.m, self.d, c, w, acc))
+        relative = np.maximum(1.0, np.abs(velocity))
+
+        def centred(step):
+            dq, dv = np.zeros((nv, nv)), np.zeros((nv, nv))
+            for j, unit in enumerate(np.eye(nv)):
+                dq[:, j] = (tau(pin.integrate(self.m, config, step * unit), velocity)
+                            - tau(pin.integrate(self.m, config, -step * unit), velocity)) / (2 * step)
+                dv[:, j] = (tau(config, velocity + step * relative[j] * unit)
+                            - tau(config, velocity - step * relative[j] * unit)) / (2 * step * relative[j])
+            return [dq, dv]
+
+        # the largest term RNEA sums: M acc, the velocity terms or gravity's
+        inertial = pin.crba(self.m, self.d, config)[self._whole] @ acc
+        bias, gravity = (np.array(pin.nonLinearEffects(self.m, self.d, config, velocity)),
+                         np.array(pin.computeGeneralizedGravity(self.m, self.d, config)))
+        size = max(float(np.max(np.abs(x))) for x in (inertial, bias - gravity, gravity))
+        best = None
+        for step in scene_rules.DIFFERENCE_STEPS:
+            (dq, dv), truncation = scene_rules.extrapolated_differences(centred, step)
+            error = truncation + scene_rules.difference_rounding(size, step)
+            if best is None or error < best[2]:
+                best = dq, dv, error
+        return best
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state (`engine_state`)."""

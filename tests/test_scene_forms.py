@@ -5,10 +5,11 @@ same mass matrix, generalised forces, accelerations, reactions, point accelerati
 
 Tolerance: RTOL = 1e-12 of the largest magnitude of each quantity.  Each engine's numbers are sums over these few
 bodies of products of placements, inertias and velocities of order 1, a few dozen roundings of eps each: some
-5e-15 of the largest term; the accelerations are M^-1 of the forces, which multiplies that by M's condition number
-(at most 200 in these scenes, `test_the_scenes_are_well_conditioned`): 1e-12 is their product.  Its
-ceiling: the joints of one body taken in the other order, or a welded body's mass missed, move these numbers by
-1e-2 and more (`test_the_comparison_sees_the_order_of_a_body_s_joints`)."""
+5e-15 of the largest term; the accelerations are M^-1 of the forces, which multiplies that by the condition number
+of M scaled by its diagonal (the coordinates' own scales: a slide's kg beside a ball's kg m^2), at most 60 in these
+scenes (`test_the_scenes_are_well_conditioned`): 3e-13, and 1e-12 keeps a factor of three over it.  Its ceiling:
+the joints of one body taken in the other order move M by 1e-2 and more
+(`test_the_comparison_sees_the_order_of_a_body_s_joints`)."""
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
 
 RTOL = 1e-12
-CONDITION = 200.0
+CONDITION = 100.0
 
 SPHERICAL = """<mujoco model="spherical pendulum">
   <option gravity="0 0 -9.81"/>
@@ -115,10 +116,26 @@ def scene(coords, reactions=(), points=()):
     return spec
 
 
+# a slide and a ball joint on one body (a top on a sliding base); the ball's Euler angles as the case's coordinates
+SLIDE_BALL = """<mujoco model="slide and ball">
+  <worldbody>
+    <body name="top" pos="0 0 0.2">
+      <joint name="x" type="slide" axis="1 0 0" damping="0.1"/>
+      <joint name="ball" type="ball"/>
+      <inertial pos="0 0 0.05" mass="0.5" diaginertia="1e-3 1e-3 2e-3"/>
+      <site name="s"/>
+    </body>
+  </worldbody>
+  <sensor><force name="f" site="s"/></sensor>
+</mujoco>"""
+BALL_SCENE = {**scene(["x", "psi", "theta", "phi"], ["top"], ["top"]),
+              "layout": [("scalar", "x", [0]), ("euler", "ball", [1, 2, 3])]}
+
 SCENES = {  # name: (MJCF, URDF or None, [scene])
     "spherical": (SPHERICAL, None, scene(["a", "b"], ["bob"], ["bob"])),
     "slide_hinge": (SLIDE_HINGE, None, scene(["x", "theta", "phi"], ["arm"], ["cart", "arm", "weight"])),
     "welded": (WELDED_MJCF, WELDED_URDF, scene(["theta", "phi"], ["forearm"], ["arm", "forearm", "tool"])),
+    "slide_ball": (SLIDE_BALL, None, BALL_SCENE),
 }
 
 
@@ -135,8 +152,14 @@ def models(tmp_path, name, writes=()):
 
 
 def states(n_coords, count=6):
+    """Random states; with Euler angles (4 coordinates: the slide and the ball) the nutation kept within 0.3..2.8
+    rad, away from the angles' singularity."""
     rng = np.random.default_rng(37)
-    return [(0.0, rng.uniform(-2, 2, n_coords), rng.uniform(-3, 3, n_coords)) for _ in range(count)]
+    out = [(0.0, rng.uniform(-2, 2, n_coords), rng.uniform(-3, 3, n_coords)) for _ in range(count)]
+    for _, q, _ in out:
+        if n_coords == 4:
+            q[2] = 1.55 + 0.6 * q[2]
+    return out
 
 
 def quantities(model, t, q, v):
@@ -186,9 +209,13 @@ def test_both_engines_agree_on_every_quantity(tmp_path, name):
 
 @pytest.mark.parametrize("name", SCENES)
 def test_the_scenes_are_well_conditioned(tmp_path, name):
-    """The tolerance's argument: M's condition number at the states compared."""
+    """The tolerance's argument: the condition number of M scaled by its diagonal at the states compared (measured:
+    1.5 spherical, 57 slide_hinge, 1.0 welded, 24 slide_ball)."""
     mujoco, _ = models(tmp_path, name)
-    assert max(np.linalg.cond(mujoco.mass_matrix(*state)) for state in states(len(SCENES[name][2]["coords"]))) < CONDITION
+    for state in states(len(SCENES[name][2]["coords"])):
+        mass = mujoco.mass_matrix(*state)
+        scale = 1 / np.sqrt(np.diag(mass))
+        assert np.linalg.cond(scale[:, None] * mass * scale) < CONDITION
 
 
 def test_the_comparison_sees_the_order_of_a_body_s_joints(tmp_path):
@@ -202,7 +229,7 @@ def test_the_comparison_sees_the_order_of_a_body_s_joints(tmp_path):
                                          '      <joint name="a" type="hinge" axis="1 0 0" stiffness="0.7" damping="0.05"/>'))
     pinocchio = PinocchioModel(swapped, SCENES["spherical"][2])
     assert min(relative(mujoco.mass_matrix(*s), pinocchio.mass_matrix(*s)) for s in states(2)) > 1e-2
-    with pytest.raises(ValueError, match="body 'bob/b' is in swapped.xml but not in scene.xml"):
+    with pytest.raises(ValueError, match="body 'bob/[ab]' is in (scene|swapped).xml but not in"):
         compare_scenes(mujoco, pinocchio, "spherical")
 
 
@@ -310,3 +337,29 @@ def test_the_frames_of_a_body_s_joints_carry_no_mass_to_double(tmp_path):
     mujoco, _ = models(tmp_path, "spherical")
     assert mujoco.approximations_doubled({"bob/a": (2.0, 2.0)}).m.body_mass[1] == 0.3
     assert scene_rules.joint_frame("bob", "a") == "bob/a"
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_both_engines_linearisations_agree(tmp_path, name):
+    """df/dq and df/dq' within the sum of both engines' error estimates (MuJoCo's differences; Pinocchio's analytic
+    derivatives' rounding, or its differences through a composite joint), M to RTOL.  Measured: at most 0.57 of that
+    sum (welded), 0.02 and below elsewhere."""
+    mujoco, pinocchio = models(tmp_path, name)
+    for state in states(len(SCENES[name][2]["coords"]), 2):
+        a, b = mujoco.linearisation(*state), pinocchio.linearisation(*state)
+        assert relative(a.mass, b.mass) <= RTOL
+        for field in ("force_q", "force_v"):
+            assert np.max(np.abs(getattr(a, field) - getattr(b, field))) <= a.error + b.error, field
+
+
+def test_pinocchio_s_analytic_derivatives_are_wrong_through_a_composite_joint(tmp_path):
+    """Why Pinocchio's adapter differences RNEA on a scene with several joints on one body: computeRNEADerivatives
+    (Pinocchio 4.1) gives the spherical pendulum's dtau/dq of the second hinge off by 1.58 N m/rad and its dtau/dv
+    by 0.085 N m s (its differences and MuJoCo's agree within their estimated errors).  Fails once Pinocchio's are right: then the
+    adapter can take them again."""
+    _, pinocchio = models(tmp_path, "spherical")
+    _, q, v = states(2, 1)[0]
+    config, velocity, acc, _ = pinocchio._dynamics(0.0, q, v)
+    analytic, differenced = pinocchio._rnea_derivatives(config, velocity, acc), pinocchio._rnea_differences(config, velocity, acc)
+    assert np.max(np.abs(analytic[0] - differenced[0])) > 1.0
+    assert np.max(np.abs(analytic[1] - differenced[1])) > 0.05  # dtau/dv too: 0.085 N m s
