@@ -19,7 +19,7 @@ import pinocchio as pin
 from engines import euler, scene as scene_rules
 from engines.linalg import linear_solution
 from engines.loops import PinocchioLoops
-from engines.mjcf_joints import joint_values
+from engines.mjcf_joints import inertial_frames, joint_values
 from engines.scene import Body
 
 ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
@@ -67,7 +67,7 @@ class PinocchioModel:
                                              for j in range(1, self.m.njoints) if self.m.joints[j].nv == 1
                                              and self.m.damping[self.m.joints[j].idx_v]}}
             self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
-        self._inertial_frames = _inertial_frames(document, self.path)
+        self._inertial_frames = inertial_frames(document, self.path)
         # each joint's welded links (Pinocchio's readers merge them into its inertia, and keep each link's own in the
         # frame of its weld) and its own link's inertia, which the bindings set: the model's is their sum
         self._welded = {j: sum((f.placement.act(f.inertia) for f in self.m.frames if f.parentJoint == j
@@ -773,30 +773,6 @@ def _urdf_text(path):
         if joint.get("type") in ("revolute", "prismatic") and joint.find("limit") is None:
             ET.SubElement(joint, "limit", lower=f"{-NO_LIMIT:g}", upper=f"{NO_LIMIT:g}", effort="0", velocity="0")
     return ET.tostring(robot, encoding="unicode")
-
-
-def _inertial_frames(document, path):
-    """{body: the rotation of its inertial frame in the body's frame} where it is not the identity: an MJCF
-    <inertial quat>, a URDF <inertial><origin rpy>; for an MJCF orientation written otherwise, the words of the
-    refusal of a binding that needs it (`inertia`)."""
-    frames = {}
-    if _is_mjcf(path):
-        for body in document.iter("body"):
-            inertial = body.find("inertial")
-            written = [] if inertial is None else [a for a in ("quat", "axisangle", "euler", "xyaxes", "zaxis")
-                                                    if a in inertial.attrib]
-            if written == ["quat"]:
-                w, x, y, z = (float(t) for t in inertial.get("quat").split())
-                frames[body.get("name")] = pin.Quaternion(w, x, y, z).normalized().matrix()
-            elif written:
-                frames[body.get("name")] = (f"its <inertial {written[0]}> is read here only as quat: write the inertial"
-                                            " frame's orientation as quat, or bind fullinertia")
-    else:
-        for link in document.iter("link"):
-            origin = link.find("inertial/origin")
-            if origin is not None and origin.get("rpy"):
-                frames[link.get("name")] = pin.rpy.rpyToMatrix(*(float(t) for t in origin.get("rpy").split()))
-    return frames
 
 
 def _reader_error(path, error):

@@ -363,3 +363,30 @@ def test_pinocchio_s_analytic_derivatives_are_wrong_through_a_composite_joint(tm
     analytic, differenced = pinocchio._rnea_derivatives(config, velocity, acc), pinocchio._rnea_differences(config, velocity, acc)
     assert np.max(np.abs(analytic[0] - differenced[0])) > 1.0
     assert np.max(np.abs(analytic[1] - differenced[1])) > 0.05  # dtau/dv too: 0.085 N m s
+
+
+# -- Drake (the optional extra): welded bodies as the others, several joints on one body refused -------------------
+
+@pytest.mark.parametrize("file", ["scene.xml", "scene.urdf"])
+@pytest.mark.parametrize("write", [None, ("forearm", "fullinertia", 3, 1e-4), ("arm", "inertia", 1, 2.5e-3)])
+def test_drake_models_the_welded_scene_as_mujoco(tmp_path, file, write):
+    """Measured worst: 1.7e-15 (reactions); the bindings read back exactly."""
+    drake_adapter = pytest.importorskip("engines.drake_adapter")
+    writes = [] if write is None else [({"element": "body", "name": write[0], "attribute": write[1],
+                                         "index": write[2]}, write[3])]
+    mujoco, _ = models(tmp_path, "welded", writes)
+    gravity = [({"element": "option", "name": "gravity", "index": 2}, -9.81)] if file == "scene.urdf" else []
+    drake = drake_adapter.DrakeModel(tmp_path / file, SCENES["welded"][2], writes + gravity)
+    compare_scenes(mujoco, drake, "welded")
+    for state in states(2, 3):
+        errors = differences(quantities(mujoco, *state), quantities(drake, *state))
+        assert {q: e for q, e in errors.items() if not e <= RTOL} == {}
+    for location, value in writes:
+        assert drake.read(location) == pytest.approx(value, rel=1e-15)
+
+
+def test_drake_refuses_several_joints_on_one_body(tmp_path):
+    drake_adapter = pytest.importorskip("engines.drake_adapter")
+    (tmp_path / "scene.xml").write_text(SPHERICAL)
+    with pytest.raises(drake_adapter.Refused, match="body 'bob' has 2 joints: Drake's MJCF parser puts all but the last"):
+        drake_adapter.DrakeModel(tmp_path / "scene.xml", SCENES["spherical"][2])
