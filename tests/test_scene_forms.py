@@ -11,10 +11,14 @@ scenes (`test_the_scenes_are_well_conditioned`): 3e-13, and 1e-12 keeps a factor
 the joints of one body taken in the other order move M by 1e-2 and more
 (`test_the_comparison_sees_the_order_of_a_body_s_joints`)."""
 
+import shutil
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from dyncheck.case import compare_scenes
+from dyncheck.cli import main
 from engines import scene as scene_rules
 from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
@@ -390,3 +394,21 @@ def test_drake_refuses_several_joints_on_one_body(tmp_path):
     (tmp_path / "scene.xml").write_text(SPHERICAL)
     with pytest.raises(drake_adapter.Refused, match="body 'bob' has 2 joints: Drake's MJCF parser puts all but the last"):
         drake_adapter.DrakeModel(tmp_path / "scene.xml", SCENES["spherical"][2])
+
+
+# -- a researcher's case of two files on a body with two joints ----------------------------------------------------
+
+SPHERICAL_CASE = Path(__file__).resolve().parent / "scene_forms" / "spherical_pendulum"
+
+
+@pytest.mark.parametrize("planted, status", [(None, 0), ("IZZ * np.sin(b)**2", 1)])
+def test_a_spherical_pendulum_of_two_hinges_on_one_body_passes_dyncheck_run(tmp_path, capsys, planted, status):
+    """scene.xml and equations.py only (tests/scene_forms/spherical_pendulum): green (51 rows, 8 s here); with the
+    body's IZZ left out of M[a,a], red."""
+    folder = tmp_path / "spherical_pendulum"
+    shutil.copytree(SPHERICAL_CASE, folder)
+    if planted:
+        text = (folder / "equations.py").read_text()
+        assert text.count(f" + {planted}") == 2
+        (folder / "equations.py").write_text(text.replace(f" + {planted}", "", 1))
+    assert main(["run", "--cases", str(tmp_path)]) == status, capsys.readouterr().out
