@@ -64,7 +64,10 @@ def inertial_frames(document, path):
             inertial = body.find("inertial")
             written = [] if inertial is None else [a for a in ("quat", "axisangle", "euler", "xyaxes", "zaxis")
                                                     if a in inertial.attrib]
-            if written == ["quat"]:
+            if inertial is not None and "fullinertia" in inertial.attrib:
+                frames[body.get("name")] = ("its <inertial> gives fullinertia, whose principal moments are MuJoCo's"
+                                            " decomposition of it; bind fullinertia")
+            elif written == ["quat"]:
                 frames[body.get("name")] = _quaternion_matrix([float(t) for t in inertial.get("quat").split()])
             elif written:
                 frames[body.get("name")] = (f"its <inertial {written[0]}> is read here only as quat: write the inertial"

@@ -767,8 +767,12 @@ INERTIA_ATTRIBUTES = ("inertia_about_origin", "inertia", "fullinertia")
 
 def _urdf_text(path):
     """The URDF at `path` with `NO_LIMIT` written into each revolute or prismatic joint without a <limit>, which
-    urdfdom rejects ("does not specify limits"): a joint without a limit has none."""
-    robot = ET.parse(path).getroot()
+    urdfdom rejects ("does not specify limits"): a joint without a limit has none.  ValueError for a file that
+    is not XML, saying where."""
+    try:
+        robot = ET.parse(path).getroot()
+    except ET.ParseError as error:
+        raise ValueError(f"not well-formed XML: {error}") from None
     for joint in robot.iter("joint"):
         if joint.get("type") in ("revolute", "prismatic") and joint.find("limit") is None:
             ET.SubElement(joint, "limit", lower=f"{-NO_LIMIT:g}", upper=f"{NO_LIMIT:g}", effort="0", velocity="0")

@@ -329,11 +329,16 @@ def test_several_writes_are_judged_together(tmp_path):
         assert [model.read(location) for location, _ in writes] == pytest.approx([value for _, value in writes])
 
 
-def test_an_inertia_binding_of_a_fullinertia_body_s_principal_moments_is_refused(tmp_path):
+@pytest.mark.parametrize("Model", [MujocoModel, PinocchioModel])
+def test_an_inertia_binding_of_a_fullinertia_body_s_principal_moments_is_refused(tmp_path, Model):
+    """Written or read: MuJoCo's principal moments of a fullinertia are its own decomposition's, in its order."""
     (tmp_path / "scene.xml").write_text(SLIDE_HINGE)
     location = {"element": "body", "name": "cart", "attribute": "inertia", "index": 0}
-    with pytest.raises(ValueError, match="bind fullinertia"):
-        MujocoModel(tmp_path / "scene.xml", SCENES["slide_hinge"][2], [(location, 5e-3)])
+    with pytest.raises(ValueError, match="body 'cart'.* fullinertia.* bind fullinertia"):
+        Model(tmp_path / "scene.xml", SCENES["slide_hinge"][2], [(location, 5e-3)])
+    if Model is PinocchioModel:
+        with pytest.raises(ValueError, match="bind fullinertia"):
+            Model(tmp_path / "scene.xml", SCENES["slide_hinge"][2]).read(location)
 
 
 def test_the_frames_of_a_body_s_joints_carry_no_mass_to_double(tmp_path):
