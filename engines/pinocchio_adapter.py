@@ -90,6 +90,9 @@ class PinocchioModel:
         for constraint, element in zip(constraints, _equalities(self.path)):  # the reader keeps no names
             constraint.name = element.get("name", "")
         self.loops = PinocchioLoops(self.m, constraints, self.path)  # after the model is complete
+        if self.loops.loops and self._composite:  # the loops' joints are the model's: a composite's parts are not
+            raise ValueError(f"{self.path}: a scene with closed loops is evaluated with one joint on each body; "
+                             "several joints on one body in it are not supported yet")
         self._closed = None  # the last closed configuration, where the next closing starts (`engine_state`)
         self.point_specs = {name: (self._point_frame(spec), spec["frame"], spec.get("kind", "acceleration"))
                             for name, spec in scene["points"].items()}
