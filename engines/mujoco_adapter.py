@@ -217,9 +217,13 @@ class MujocoModel:
         for b in range(1, m.nbody):
             if not m.body_jntnum[b]:  # a ground (folded into the world) or welded to a moving body (below)
                 continue
-            parts = [(float(m.body_mass[w]), position + rotation @ m.body_ipos[w],
-                      rotation @ _matrix(m.body_iquat[w]) @ np.diag(m.body_inertia[w]) @ (rotation @ _matrix(m.body_iquat[w])).T)
-                     for w in range(b, m.nbody) if m.body_weldid[w] == b for position, rotation in [_in_body(m, w, b)]]
+            parts = []  # the body and those welded to it, in its frame
+            for w in range(b, m.nbody):
+                if m.body_weldid[w] == b:
+                    position, rotation = _in_body(m, w, b)
+                    principal = rotation @ _matrix(m.body_iquat[w])
+                    parts.append((float(m.body_mass[w]), position + rotation @ m.body_ipos[w],
+                                  principal @ np.diag(m.body_inertia[w]) @ principal.T))
             mass, com, inertia = scene_rules.combined_inertia(parts)
             joints = []
             for j in range(m.body_jntadr[b], m.body_jntadr[b] + m.body_jntnum[b]):
@@ -841,9 +845,8 @@ def _refuse_nan(path):
 def _write_all(spec, writes):
     """`_write` each (location, value) into an MjSpec; then ValueError naming the body for an inertia they leave
     unphysical (several writes may pass through one: checked once all are written)."""
-    full = [location["name"] for location, _ in writes
-            if location["element"] == "body" and location.get("attribute") == "fullinertia"]
-    compiled = spec.compile() if full else None  # the inertial frame of a body that the file gives diaginertia
+    # the inertial frame of a body that the file gives diaginertia, for a write of its fullinertia
+    compiled = spec.compile() if any(location.get("attribute") == "fullinertia" for location, _ in writes) else None
     written = set()
     for location, value in writes:
         if location["element"] == "body" and location.get("attribute") in ("inertia", "fullinertia"):
@@ -874,8 +877,8 @@ def _write(spec, location, value, compiled=None):
     if attribute == "springref" and spec.compiler.degree and target.type == mujoco.mjtJoint.mjJNT_HINGE:
         value = math.degrees(value)  # the case's rad, the file's degrees (<compiler angle>, MJCF's default degree)
     if attribute == "inertia" and not np.isnan(target.fullinertia[0]):
-        raise KeyError(f"body '{name}' inertia[{index}]: its file gives fullinertia, whose principal moments are"
-                       " MuJoCo's decomposition of it; bind fullinertia")
+        raise ValueError(f"body '{name}' inertia[{index}]: its <inertial> gives fullinertia, whose principal moments"
+                         " are MuJoCo's decomposition of it; bind fullinertia")
     if attribute == "fullinertia" and np.isnan(target.fullinertia[0]):  # the file's diaginertia and frame, as one
         body = compiled.body(name)
         frame = _matrix(body.iquat)
