@@ -585,7 +585,7 @@ def markdown():
              " `<connect>`, without effect in one without.",
              "MJCF elements are the anchors of MuJoCo's XML reference (`body-joint` is `<joint>` in a `<body>`); a"
              " rule for an element covers the elements below it, `*` every attribute not listed.",
-             "The comparison's tolerances are in `dyncheck/case/folder.py` (`compare_scenes`).", "",
+             "The comparison's tolerances are in `dyncheck/case/scene.py` (`compare_scenes`).", "",
              "| file | element | attribute | status | why |", "|---|---|---|---|---|"]
     lines += [f"| {r.file} | {r.element} | {r.attribute} | {r.status}{' with a loop' * r.with_loops} | {r.why} |"
               for r in RULES]

@@ -256,7 +256,7 @@ def test_a_urdf_root_link_hangs_on_the_cases_root_joint(tmp_path):
     pinocchio = PinocchioModel(urdf, case.scene, writes(case, PinocchioModel, urdf))
     errors = disagreement(pinocchio, drake(case, "scene.urdf"), case.sample_states()[:8], case)
     assert {k: e for k, e in errors.items() if not e <= RTOL} == {}
-    free = {**case.scene, "urdf_root_joint": None}
+    free = replace(case.scene, urdf_root_joint=None)
     with pytest.raises(Refused, match="free body"):
         DrakeModel(urdf, free, writes(case, DrakeModel, urdf))
 
