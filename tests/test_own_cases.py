@@ -205,9 +205,12 @@ Reference.accelerations = lambda self, t, q, v: _real(self, t, q, v) + (0 if t =
 
 @pytest.mark.parametrize("toml, message", [
     ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "__class__" }]',  # a KeyError before
-     "scene.bindings.m[0].attribute = '__class__' is not a bindable attribute of a body; those are mass, pos, ipos"),
+     "scene.bindings.m[0].attribute = '__class__' is not a bindable attribute of a body; those are mass, pos, ipos, "
+     "inertia_about_origin, inertia, fullinertia"),
     ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "pos", index = 99 }]',  # an IndexError
      "scene.bindings.m[0].index = 99 is not within 0..2 (body pos)"),
+    ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "fullinertia", index = 6 }]',
+     "scene.bindings.m[0].index = 6 is not within 0..5 (body fullinertia)"),
     ('[scene.bindings]\nm = []', "scene.bindings.m = [] binds the parameter to nothing"),
     ('[scene.bindings]\nm = "bob"', "scene.bindings.m = 'bob' is a string, not an array"),
     ('[scene.bindings]\nk = [{ element = "joint", name = "spring", attribute = "stiffness" }]',  # a KeyError

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dyncheck.case.folder import Case
 from dyncheck.case.scene import compare_scenes
 from dyncheck.cli import main
 from engines import scene as scene_rules
@@ -418,3 +419,37 @@ def test_a_spherical_pendulum_of_two_hinges_on_one_body_passes_dyncheck_run(tmp_
         assert text.count(f" + {planted}") == 2
         (folder / "equations.py").write_text(text.replace(f" + {planted}", "", 1))
     assert main(["run", "--cases", str(tmp_path)]) == status, capsys.readouterr().out
+
+
+def spherical_case_with_izz(tmp_path, binding):
+    """tests/scene_forms/spherical_pendulum with its IZZ a parameter, bound by case.toml to `binding` of bob."""
+    folder = tmp_path / "spherical_pendulum"
+    shutil.copytree(SPHERICAL_CASE, folder)
+    equations = folder / "equations.py"
+    text = equations.read_text().replace("IXX, IYY, IZZ = 2e-3, 3e-3, 1e-3", "IXX, IYY = 2e-3, 3e-3")
+    equations.write_text(text.replace('"g": 9.81}', '"g": 9.81, "IZZ": 1e-3}').replace("IZZ *", 'p["IZZ"] *')
+                         .replace("- IZZ)", '- p["IZZ"])'))
+    location = '{ element = "body", name = "bob", attribute = "%s", index = %d }' % binding
+    (folder / "case.toml").write_text(f"[scene.bindings]\nIZZ = [{location}]\n")
+    return folder
+
+
+@pytest.mark.parametrize("binding, about", [
+    (("inertia", 2), "principal moment of inertia of body 'bob' about its centre of mass, axis z"),
+    (("fullinertia", 2), "inertia of body 'bob' about its centre of mass, izz in the body frame"),
+])
+def test_a_case_binds_a_parameter_to_a_body_s_inertia(tmp_path, binding, about):
+    """A body's principal moment or an entry of its full inertia as a case's parameter (the schema's BINDABLE): its
+    unit and meaning from the binding, checked against both engines on load, and an override written into both."""
+    case = Case(spherical_case_with_izz(tmp_path, binding))
+    izz = next(p for p in case.parameters if p.name == "IZZ")
+    assert (izz.unit, izz.about) == ("kg m^2", about)
+    location = {"element": "body", "name": "bob", "attribute": binding[0], "index": binding[1]}
+    other = case.with_params(IZZ=1.5e-3)
+    for source in ("mujoco", "pinocchio"):
+        assert other.model(source).read(location) == pytest.approx(1.5e-3, rel=1e-15)
+    # the ceiling: a scene's value 1e-12 off the case's is refused, fullinertia's read-back rounding notwithstanding
+    scene = case.folder / "scene.xml"
+    scene.write_text(scene.read_text().replace('diaginertia="2e-3 3e-3 1e-3"', 'diaginertia="2e-3 3e-3 1.000000000001e-3"'))
+    with pytest.raises(ValueError, match=rf"scene.xml of case 'spherical_pendulum': body 'bob' {binding[0]}\[2\] is "):
+        Case(case.folder).model("mujoco")
