@@ -197,8 +197,6 @@ class MujocoModel:
         twin.armature = self.armature.copy()
         twin.armature[self._driven_dofs] /= 2
         for name, (mass, inertia) in scales.items():
-            if mujoco.mj_name2id(self.m, mujoco.mjtObj.mjOBJ_BODY, name) < 0:  # a frame between a body's joints
-                continue  # (engines.scene.joint_frame): massless in both engines, nothing to double
             twin.m.body_mass[self.body_id(name)] *= mass
             twin.m.body_inertia[self.body_id(name)] *= inertia
         twin.d = mujoco.MjData(twin.m)

@@ -35,6 +35,7 @@ class Body:
     stiffness: np.ndarray  # (a, b, c) of the joint's spring force -(a x + b x^2 + c x^3), x = q - springref
     springref: float  # the joint position at which its spring is relaxed (rad or m; 0 for a ball joint)
     damping: float  # viscous damping of the joint's dofs, force -damping q' (N s/m, N m s/rad)
+    frame: bool = False  # a massless frame between the joints of one body of the file (`moving_body`), no body of it
 
 
 def joint_frame(body, joint):
@@ -57,7 +58,7 @@ def moving_body(name, parent, joints, position, rotation, mass, com, inertia):
                            position=position if first else np.zeros(3), rotation=rotation if first else np.eye(3),
                            mass=mass if last else 0.0, com=com if last else np.zeros(3),
                            inertia=inertia if last else np.zeros((3, 3)), stiffness=np.asarray(stiffness, dtype=float),
-                           springref=springref, damping=damping))
+                           springref=springref, damping=damping, frame=not last))
     return bodies
 
 

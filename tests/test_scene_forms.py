@@ -20,7 +20,6 @@ import pytest
 from dyncheck.case.folder import Case
 from dyncheck.case.scene import compare_scenes
 from dyncheck.cli import main
-from engines import scene as scene_rules
 from engines.description import Coordinates, Point, Reaction, Scene
 from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
@@ -343,11 +342,21 @@ def test_an_inertia_binding_of_a_fullinertia_body_s_principal_moments_is_refused
             Model(tmp_path / "scene.xml", SCENES["slide_hinge"][2]).read(location)
 
 
-def test_the_frames_of_a_body_s_joints_carry_no_mass_to_double(tmp_path):
-    """MuJoCo's twin with placeholders doubled skips the frames between a body's joints (no MuJoCo body)."""
-    mujoco, _ = models(tmp_path, "spherical")
-    assert mujoco.approximations_doubled({"bob/a": (2.0, 2.0)}).m.body_mass[1] == 0.3
-    assert scene_rules.joint_frame("bob", "a") == "bob/a"
+def test_the_frames_of_a_body_s_joints_are_no_placeholders(tmp_path):
+    """The massless frames between a body's joints (engines.scene.joint_frame) are marked in both engines' trees and
+    are not the bodies whose placeholders MuJoCo's twin doubles: the spherical pendulum of two hinges has none (it
+    reported 'bob/a', which MuJoCo has no body of)."""
+    for model in models(tmp_path, "spherical"):
+        assert [(body.name, body.frame) for body in model.tree()] == [("bob/a", True), ("bob", False)]
+    folder = tmp_path / "spherical_pendulum"
+    shutil.copytree(SPHERICAL_CASE, folder)
+    case = Case(folder)
+    assert case.placeholders() == {} and case.approximations_doubled() is case.model("mujoco")
+    (folder / "scene.xml").write_text((folder / "scene.xml").read_text().replace(
+        'diaginertia="2e-3 3e-3 1e-3"', 'diaginertia="1e-14 1e-14 1e-14"'))  # a point mass: a placeholder inertia
+    placeholders = Case(folder).placeholders()
+    assert placeholders == {"bob": (False, True)}
+    assert Case(folder).approximations_doubled().m.body_inertia[1].tolist() == [2e-14] * 3
 
 
 @pytest.mark.parametrize("name", SCENES)

@@ -432,10 +432,11 @@ class Case:
     def placeholders(self):
         """The bodies to which MuJoCo gives a placeholder where the scene means none (MuJoCo refuses a moving body
         without mass and inertia): {body: (placeholder mass?, placeholder inertia?)}, a mass of at most
-        PLACEHOLDER_MASS, an inertia of at most PLACEHOLDER_INERTIA."""
+        PLACEHOLDER_MASS, an inertia of at most PLACEHOLDER_INERTIA.  Not the frames between the joints of one
+        body (engines.scene.moving_body), massless in both engines and no body of MuJoCo's."""
         held = {body.name: (bool(body.mass <= PLACEHOLDER_MASS),
                             bool(np.max(np.abs(body.inertia)) <= PLACEHOLDER_INERTIA))
-                for body in self.model("pinocchio").tree()}
+                for body in self.model("pinocchio").tree() if not body.frame}
         return {name: pair for name, pair in held.items() if any(pair)}
 
     def _build(self, source):
