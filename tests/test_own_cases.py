@@ -242,7 +242,8 @@ def test_a_number_in_prose_may_be_as_wide_and_precise_as_three_digits(tutorial):
 ])
 def test_a_scene_number_that_is_not_its_parameter_names_the_file_that_gives_it(tutorial, capsys, params, given_by):
     """The two masses' bindings swapped (one scene number bound by two parameters is refused before: issue 37)."""
-    (tutorial / "case.toml").write_text('[scene.bindings]\nm = [{ element = "body", name = "cart", attribute = "mass" }]\n'
+    (tutorial / "case.toml").write_text('[scene.bindings]\n'
+                                        'm = [{ element = "body", name = "cart", attribute = "mass" }]\n'
                                         'M = [{ element = "body", name = "bob", attribute = "mass" }]' + params + "\n")
     assert main(["run", "--cases", str(tutorial.parent)]) == 2
     assert f"scene.xml of case 'cart_pendulum': body 'bob' mass[0] is 0.3, but {given_by}" in capsys.readouterr().err

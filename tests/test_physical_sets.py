@@ -51,8 +51,10 @@ def cart_with_a_welded_lamp(tmp_path, binding):
     J bound by `binding` (its attribute, index): above 3e-3, A + B >= C breaks."""
     folder = tutorial_subject(tmp_path).folder
     scene = folder / "scene.xml"
-    lamp = ('<body name="lamp" pos="0 0 0.1"><inertial pos="0 0 0.05" mass="0.2" %s/></body>\n      <body name="bob">'
-            % ('fullinertia="1e-3 2e-3 2.5e-3 0 0 0"' if binding[0] == "fullinertia" else 'diaginertia="1e-3 2e-3 2.5e-3"'))
+    inertia = "fullinertia" if binding[0] == "fullinertia" else "diaginertia"
+    moments = "1e-3 2e-3 2.5e-3" + (" 0 0 0" if inertia == "fullinertia" else "")
+    lamp = (f'<body name="lamp" pos="0 0 0.1"><inertial pos="0 0 0.05" mass="0.2" {inertia}="{moments}"/></body>\n'
+            '      <body name="bob">')
     text = scene.read_text()
     assert text.count('<body name="bob">') == 1
     scene.write_text(text.replace('<body name="bob">', lamp))

@@ -415,7 +415,8 @@ def case_file(folder, module, scene, given, overrides=None):
         "coord_units": units,
         "params": {p: {"value": value, "unit": param_units[p],
                        "about": "in the applied forces (`scene.applied` of case.toml)" if p in forcing else
-                       ABOUT[bound[p][0].get("attribute")].format(name=bound[p][0]["name"], index=component(bound[p][0]))}
+                       ABOUT[bound[p][0].get("attribute")].format(name=bound[p][0]["name"],
+                                                                  index=component(bound[p][0]))}
                    for p, value in params.items()},  # every other parameter is bound (bindings refuses the rest)
         "initial": {"q": q0.tolist(), "v": v0.tolist(), "t_end": t_end},
         "sample": {"count": SAMPLE_COUNT, "budget": SAMPLE_BUDGET, "seed": 1, "t": [0.0, 4 * t_end],
