@@ -12,6 +12,8 @@ Drake's parser (pydrake 1.51.1) reads some elements otherwise than MuJoCo's comp
     the case's Euler angles are mapped to its angles, and Drake's dofs are turned into the body's axes, MuJoCo's and
     Pinocchio's dofs (`_rotations`), before anything is solved or compared;
   - several joints on one body take the parent's axes for all but the last: refused;
+  - a body without a joint is welded (a WeldJoint): to the world, its constant potential energy left out of `energy`,
+    or to a moving body, whose mass and inertia it joins in `tree`, as MuJoCo's and Pinocchio's adapters count it;
   - a <connect> becomes a ball constraint, for which a continuous plant refuses to compute dynamics: it is removed
     before the plant is finalised and the loop solved rigidly here (`DrakeLoops`);
   - a URDF gets gravity -9.81 z, and its root link becomes a free body: gravity is set to 0 (the case's binding sets
@@ -38,7 +40,7 @@ from pydrake.multibody.tree import (BallRpyJoint, BodyIndex, JacobianWrtVariable
 from engines import euler, scene as scene_rules
 from engines.linalg import linear_solution
 from engines.loops import Loop, _continuation, _dependent_rates, _rates_map
-from engines.mjcf_joints import joint_values
+from engines.mjcf_joints import inertial_frames, joint_values
 from engines.scene import Body
 
 SCALAR_JOINTS = (RevoluteJoint, PrismaticJoint)
@@ -135,11 +137,15 @@ class DrakeModel:
         self._inertias = {}  # (mass, com, inertia about the com), body frame, of each body: `_body_inertia`
         self._last = None, None  # the last state asked and its dynamics (`_dynamics`)
         self._written = set()  # the bodies whose inertia `_write` changed
+        self._inertial_frames = inertial_frames(document, self.path)
         self._ad = None  # Drake's AutoDiffXd plant and its context, made at the first linearisation (`_autodiff`)
         for location, value in writes:
             self._write(location, value)
         for index in self._written:  # once all are written: Drake refuses an inertia no body can have
             mass, com, inertia = self._inertias[index]
+            why = scene_rules.unphysical(self.plant.get_body(BodyIndex(index)).name(), inertia)
+            if why:
+                raise ValueError(f"{self.path}: {why}")
             self.plant.get_body(BodyIndex(index)).SetSpatialInertiaInBodyFrame(
                 self.context, SpatialInertia.MakeFromCentralInertia(mass, com, RotationalInertia(
                     *np.diag(inertia), inertia[0, 1], inertia[0, 2], inertia[1, 2])))
@@ -195,6 +201,12 @@ class DrakeModel:
         self.reaction_specs = {name: self._reaction_spec(name, spec) for name, spec in scene.reactions.items()}
         self.point_specs = {name: (self._body(spec.body), spec.frame, spec.kind)
                             for name, spec in scene.points.items()}
+        # the potential energy of the bodies welded to the world, a constant in Drake's that `energy` leaves out,
+        # as MujocoModel's does (Pinocchio's readers fold those bodies into the world)
+        gravity = self.plant.gravity_field().gravity_vector()
+        self._grounds_potential = -sum(
+            self._body_inertia(body)[0] * gravity @ (body.EvalPoseInWorld(self.context) @ self._body_inertia(body)[1])
+            for body in _bodies(self.plant)[1:] if self._weld_root(body)[0].index() == self.plant.world_body().index())
 
     # -- reading ----------------------------------------------------------
     def _hang_urdf_root(self, root):
@@ -292,9 +304,17 @@ class DrakeModel:
             elif attribute == "ipos":
                 com = com.copy()
                 com[i] = value
-            else:  # inertia_about_origin: less the parallel-axis term and a ball joint's armature (as MuJoCo's)
-                inertia = inertia.copy()
+            elif attribute == "inertia_about_origin":  # less the parallel-axis term and a ball joint's armature
+                inertia = inertia.copy()  # (as MuJoCo's)
                 inertia[i, i] = value - mass * (com @ com - com[i] ** 2) - self._ball_armature(name)
+            elif attribute == "fullinertia":  # about the centre of mass, in the body frame
+                inertia = inertia.copy()
+                inertia[scene_rules.FULL_INERTIA[i]] = inertia[scene_rules.FULL_INERTIA[i][::-1]] = value
+            else:  # inertia: a principal moment, in the inertial frame
+                frame = self._inertial_frame(name)
+                principal = frame.T @ inertia @ frame
+                principal[i, i] = value
+                inertia = frame @ principal @ frame.T
             self._inertias[int(self._body(name).index())] = mass, com, inertia
             self._written.add(int(self._body(name).index()))  # set in the context after the writes
         self._last = None, None
@@ -318,7 +338,19 @@ class DrakeModel:
             return mass
         if attribute == "ipos":
             return float(com[i])
+        if attribute == "fullinertia":
+            return float(inertia[scene_rules.FULL_INERTIA[i]])
+        if attribute == "inertia":
+            frame = self._inertial_frame(name)
+            return float((frame.T @ inertia @ frame)[i, i])
         return float(inertia[i, i] + mass * (com @ com - com[i] ** 2) + self._ball_armature(name))
+
+    def _inertial_frame(self, body):
+        """As PinocchioModel._inertial_frame: the body's inertial frame in its frame (engines.mjcf_joints)."""
+        frame = self._inertial_frames.get(body)
+        if isinstance(frame, str):
+            raise ValueError(f"{self.path}: body '{body}': {frame}")
+        return np.eye(3) if frame is None else frame
 
     def _inboard(self, body):
         """The joint (or weld) that carries body `body`."""
@@ -342,15 +374,23 @@ class DrakeModel:
 
     def tree(self):
         """The moving bodies as Drake models them (see engines.scene.Body): one per joint, named after its child;
-        a body welded to the world (MJCF's ground) folded into it, as the other adapters fold it; a ball joint's
-        armature counted in its body's inertia, as MujocoModel.tree counts it."""
+        a body welded to the world (MJCF's ground) folded into it, a body welded to a moving body into that body
+        (its mass and inertia joined, engines.scene.combined_inertia), as the other adapters fold them; a ball
+        joint's armature counted in its body's inertia, as MujocoModel.tree counts it."""
         bodies = []
+        roots = {int(body.index()): self._weld_root(body) for body in _bodies(self.plant)[1:]}
         for name, joint in self._joints().items():
-            parent, pose = joint.parent_body(), joint.frame_on_parent().CalcPoseInBodyFrame(self.context)
-            welded = self._welded_to_world(parent)
-            if welded:
-                pose = parent.EvalPoseInWorld(self.context) @ pose
-            mass, com, inertia = self._body_inertia(joint.child_body())
+            parent, above = self._weld_root(joint.parent_body())
+            pose = above @ joint.frame_on_parent().CalcPoseInBodyFrame(self.context)
+            welded = parent.index() == self.plant.world_body().index()
+            child = joint.child_body()
+            parts = []
+            for index, (root, placement) in roots.items():
+                if root.index() == child.index():
+                    part_mass, part_com, part_inertia = self._body_inertia(self.plant.get_body(BodyIndex(index)))
+                    rotation = placement.rotation().matrix()
+                    parts.append((part_mass, placement @ part_com, rotation @ part_inertia @ rotation.T))
+            mass, com, inertia = scene_rules.combined_inertia(parts)
             kind = ("hinge" if isinstance(joint, RevoluteJoint) else "slide" if isinstance(joint, PrismaticJoint)
                     else "ball")
             axis = (joint.revolute_axis() if kind == "hinge" else joint.translation_axis() if kind == "slide"
@@ -364,14 +404,18 @@ class DrakeModel:
                                damping=self.joint_values["damping"].get(name, 0.0)))
         return bodies
 
-    def _welded_to_world(self, body):
-        """Whether `body` is the world or welded to it through jointless bodies."""
+    def _weld_root(self, body):
+        """The body that `body` is welded to through jointless bodies (itself if a joint moves it, the world if it
+        is welded to the world), and body's pose in that body's frame."""
+        pose = RigidTransform()
         while body.index() != self.plant.world_body().index():
             joint = self._inboard(body.name())
             if joint.num_velocities():
-                return False
+                break
+            pose = self.plant.CalcRelativeTransform(self.context, joint.parent_body().body_frame(),
+                                                    body.body_frame()) @ pose
             body = joint.parent_body()
-        return True
+        return body, pose
 
     # -- state -------------------------------------------------------------
     def engine_state(self, t, q, v):
@@ -524,7 +568,7 @@ class DrakeModel:
         dofs = velocities if rotations is None else rotations.T @ velocities
         springs = sum(0.5 * k * (positions[iq] - rest) ** 2 for iq, _, k, rest in self.springs)
         return float(self.plant.CalcKineticEnergy(self.context) + self.plant.CalcPotentialEnergy(self.context)
-                     + springs + 0.5 * self.armature @ dofs**2)
+                     - self._grounds_potential + springs + 0.5 * self.armature @ dofs**2)
 
     def energy_many(self, t, q, v):
         return np.array([self.energy(*state) for state in zip(np.asarray(t, dtype=float), q, v)])

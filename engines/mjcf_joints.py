@@ -1,8 +1,11 @@
 """The joint values of an MJCF that an engine's own MJCF reader drops or reads otherwise than MuJoCo's compiler
 (springs, their rest positions, dampers, rotor inertia), resolved from the file's text as MuJoCo's compiler resolves
-them: Pinocchio's and Drake's adapters read them here, with no engine of their own."""
+them, and the bodies' inertial frames (MJCF or URDF), which the readers fold into the inertia: Pinocchio's and
+Drake's adapters read them here, with no engine of their own."""
 
 import math
+
+import numpy as np
 
 JOINT_VALUES = {"stiffness": "spring", "springref": "spring's rest position", "damping": "damper",
                 "armature": "rotor inertia"}
@@ -49,3 +52,45 @@ def joint_values(document, path):
 
     walk(document.find("worldbody"), "main")
     return values
+
+
+def inertial_frames(document, path):
+    """{body: the rotation of its inertial frame in the body's frame} where it is not the identity: an MJCF
+    <inertial quat>, a URDF <inertial><origin rpy>; for an MJCF orientation written otherwise, the words of the
+    refusal of a binding that needs it (a body's `inertia`: diaginertia, in that frame)."""
+    frames = {}
+    if str(path).endswith(".xml"):
+        for body in document.iter("body"):
+            inertial = body.find("inertial")
+            written = [] if inertial is None else [a for a in ("quat", "axisangle", "euler", "xyaxes", "zaxis")
+                                                    if a in inertial.attrib]
+            if inertial is not None and "fullinertia" in inertial.attrib:
+                frames[body.get("name")] = ("its <inertial> gives fullinertia, whose principal moments are MuJoCo's"
+                                            " decomposition of it; bind fullinertia")
+            elif written == ["quat"]:
+                frames[body.get("name")] = _quaternion_matrix([float(t) for t in inertial.get("quat").split()])
+            elif written:
+                frames[body.get("name")] = (f"its <inertial {written[0]}> is read here only as quat: write the inertial"
+                                            " frame's orientation as quat, or bind fullinertia")
+    else:
+        for link in document.iter("link"):
+            origin = link.find("inertial/origin")
+            if origin is not None and origin.get("rpy"):
+                frames[link.get("name")] = _rpy_matrix([float(t) for t in origin.get("rpy").split()])
+    return frames
+
+
+def _quaternion_matrix(quaternion):
+    """The rotation of a quaternion (w, x, y, z), normalised as MuJoCo's compiler normalises it."""
+    w, x, y, z = np.asarray(quaternion) / np.linalg.norm(quaternion)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def _rpy_matrix(rpy):
+    """URDF's roll, pitch, yaw: Rz(yaw) Ry(pitch) Rx(roll)."""
+    (cr, cp, cy), (sr, sp, sy) = np.cos(rpy), np.sin(rpy)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])

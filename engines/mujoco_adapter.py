@@ -23,7 +23,6 @@ import numpy as np
 from engines import euler, scene as scene_rules
 from engines.linalg import linear_solution
 from engines.loops import MujocoLoops
-from engines.scene import Body
 
 # MuJoCo prints a line for each run that blows up, and the studies blow runs up on purpose: each
 # is reported instead as an unstable row, from the warnings MuJoCo counts in its data.
@@ -59,8 +58,7 @@ class MujocoModel:
         self.path = str(path)
         try:
             spec = mujoco.MjSpec.from_file(self.path)
-            for location, value in writes:
-                _write(spec, location, value)
+            _write_all(spec, writes)
             self.m = spec.compile()
         except (ValueError, KeyError) as error:
             raise ValueError(f"{self.path}: {error}") from error
@@ -68,6 +66,7 @@ class MujocoModel:
         self.loops = MujocoLoops(self.m, self.path)  # refuses an equality that is not a loop's <connect>
         self.armature = self.m.dof_armature.copy()
         self.d = mujoco.MjData(self.m)
+        self._grounds_potential = self._potential_of_grounds()
         self.coords = tuple(scene.coords)
         self.reaction_names = tuple(scene.reactions)
         self.layout = [(c.kind, self._joint(c.joint), list(c.indices)) for c in scene.layout]
@@ -107,6 +106,13 @@ class MujocoModel:
         self.point_specs = {name: (self.body_id(spec.body), spec.frame, spec.kind)
                             for name, spec in scene.points.items()}
         self.paths = [self.body_id(b) for b in scene.paths]
+
+    def _potential_of_grounds(self):
+        """The potential energy of the bodies welded to the world (a ground, a URDF base link), a constant in
+        MuJoCo's that Pinocchio's readers, which fold them into the world, do not count: `_energy` leaves it out."""
+        mujoco.mj_kinematics(self.m, self.d)
+        return -sum(float(self.m.body_mass[b] * (self.m.opt.gravity @ self.d.xipos[b]))
+                    for b in range(1, self.m.nbody) if self.m.body_weldid[b] == 0)
 
     def _refuse_unclosable(self, scene):
         """ValueError for a loop scene that dyncheck cannot evaluate: prescribed motions or a ball joint (not yet
@@ -160,6 +166,9 @@ class MujocoModel:
         body = mujoco.mj_id2name(self.m, mujoco.mjtObj.mjOBJ_BODY, self.m.site_bodyid[site])
         if body != spec.body:
             raise ValueError(f"{where} is on body '{body}', but case.toml's reaction is on body '{spec.body}'")
+        if not self.m.body_jntnum[self.m.site_bodyid[site]]:
+            raise ValueError(f"{where} is on body '{body}', which has no joint: the weld's force, which the Pinocchio"
+                             " side does not read (its reader merges a welded body into the body it is welded to)")
         # A site's quat is normalised from decimal text: identity to a few ulps when it is one.
         if not np.max(np.abs(self.m.site_quat[site] - [1, 0, 0, 0])) <= 4 * np.finfo(float).eps:  # NaN too
             raise scene_rules.refusal(self.path, "MJCF", "body-site", "quat", f"site of sensor '{spec.sensor}'",
@@ -195,28 +204,37 @@ class MujocoModel:
         return twin
 
     def tree(self):
-        """The moving bodies as MuJoCo models them (see engines.scene.Body).  A ball joint's armature a on a
-        body on the world is the isotropic inertia a I about the joint (no mass, so the same about the centre
-        of mass), and is counted in the body's inertia."""
+        """The moving bodies as MuJoCo models them (see engines.scene.Body, engines.scene.moving_body: a body with
+        several joints is a chain of them).  A body without a joint under a moving body is welded to it: its mass
+        and inertia ride with that body (engines.scene.combined_inertia), as Pinocchio's readers merge them.  A ball
+        joint's armature a on a body on the world is the isotropic inertia a I about the joint (no mass, so the same
+        about the centre of mass), and is counted in the body's inertia."""
         m, bodies = self.m, []
         for b in range(1, m.nbody):
-            if _ground(m, b):  # folded into the world, as Pinocchio's MJCF reader does
+            if not m.body_jntnum[b]:  # a ground (folded into the world) or welded to a moving body (below)
                 continue
-            j = m.body_jntadr[b]
-            kind = mujoco.mjtJoint(m.jnt_type[j]).name[6:].lower()
-            inertia = _matrix(m.body_iquat[b]) @ np.diag(m.body_inertia[b]) @ _matrix(m.body_iquat[b]).T
-            if kind == "ball":
-                inertia += self.armature[m.jnt_dofadr[j]] * np.eye(3)
+            parts = []  # the body and those welded to it, in its frame
+            for w in range(b, m.nbody):
+                if m.body_weldid[w] == b:
+                    position, rotation = _in_body(m, w, b)
+                    principal = rotation @ _matrix(m.body_iquat[w])
+                    parts.append((float(m.body_mass[w]), position + rotation @ m.body_ipos[w],
+                                  principal @ np.diag(m.body_inertia[w]) @ principal.T))
+            mass, com, inertia = scene_rules.combined_inertia(parts)
+            joints = []
+            for j in range(m.body_jntadr[b], m.body_jntadr[b] + m.body_jntnum[b]):
+                kind = mujoco.mjtJoint(m.jnt_type[j]).name[6:].lower()
+                if kind == "ball":
+                    inertia = inertia + self.armature[m.jnt_dofadr[j]] * np.eye(3)
+                joints.append((_name(m, mujoco.mjtObj.mjOBJ_JOINT, j), kind,
+                               m.jnt_axis[j].copy() if kind != "ball" else np.zeros(3),
+                               np.r_[m.jnt_stiffness[j], m.jnt_stiffnesspoly[j]],
+                               float(m.qpos_spring[m.jnt_qposadr[j]]) if kind != "ball" else 0.0,
+                               float(m.dof_damping[m.jnt_dofadr[j]])))
             parent, position, rotation = _placement(m, b)
-            bodies.append(Body(name=_name(m, mujoco.mjtObj.mjOBJ_BODY, b),
-                               parent=_name(m, mujoco.mjtObj.mjOBJ_BODY, parent) if parent else "world",
-                               joint=_name(m, mujoco.mjtObj.mjOBJ_JOINT, j), joint_type=kind,
-                               axis=m.jnt_axis[j].copy() if kind != "ball" else np.zeros(3),
-                               position=position, rotation=rotation,
-                               mass=float(m.body_mass[b]), com=m.body_ipos[b].copy(), inertia=inertia,
-                               stiffness=np.r_[m.jnt_stiffness[j], m.jnt_stiffnesspoly[j]],
-                               springref=float(m.qpos_spring[m.jnt_qposadr[j]]) if kind != "ball" else 0.0,
-                               damping=float(m.dof_damping[m.jnt_dofadr[j]])))
+            bodies += scene_rules.moving_body(_name(m, mujoco.mjtObj.mjOBJ_BODY, b),
+                                              _name(m, mujoco.mjtObj.mjOBJ_BODY, parent) if parent else "world",
+                                              joints, position, rotation, mass, com, inertia)
         return bodies
 
     @property
@@ -235,6 +253,10 @@ class MujocoModel:
             ball = self.m.dof_armature[self.m.body_dofadr[body]:][:self.m.body_dofnum[body]]
             armature = ball[index] if len(ball) == 3 else 0.0
             return float(self.m.body_inertia[body][index] + mass * (ipos @ ipos - ipos[index] ** 2) + armature)
+        if element == "body" and location["attribute"] == "fullinertia":  # about the centre of mass, body frame
+            body = self.body_id(name)
+            frame = _matrix(self.m.body_iquat[body])
+            return float((frame @ np.diag(self.m.body_inertia[body]) @ frame.T)[scene_rules.FULL_INERTIA[index]])
         if element == "body":
             array = getattr(self.m, "body_" + location["attribute"])[self.body_id(name)]
         else:
@@ -468,7 +490,7 @@ class MujocoModel:
         mujoco.mj_fwdPosition(self.m, self.d)
         mujoco.mj_energyPos(self.m, self.d)
         mujoco.mj_energyVel(self.m, self.d)
-        return float(self.d.energy[0] + self.d.energy[1])
+        return float(self.d.energy[0] - self._grounds_potential + self.d.energy[1])
 
     def energy_many(self, t, q, v):
         """`energy` at many states, the same numbers: t of shape (N,), q and v (N, n) -> (N,); with loops, state by
@@ -704,16 +726,21 @@ def _matrix(quat):
     return matrix.reshape(3, 3)
 
 
-def _ground(m, b):
-    """Whether body b is a jointless body welded to the world: the "ground" that Pinocchio's MJCF reader needs
-    as the one body on <worldbody>, folded into the world as that reader folds it."""
-    return not m.body_jntnum[b] and m.body_weldid[b] == 0
+def _in_body(m, w, b):
+    """The position and rotation of body w's frame in body b's, w welded to b (only jointless bodies between)."""
+    position, rotation = np.zeros(3), np.eye(3)
+    while w != b:
+        position, rotation = m.body_pos[w] + _matrix(m.body_quat[w]) @ position, _matrix(m.body_quat[w]) @ rotation
+        w = m.body_parentid[w]
+    return position, rotation
 
 
 def _placement(m, b):
-    """Body b's parent, its position and its rotation in it, a ground body's placement (`_ground`) folded in."""
+    """Body b's parent, its position and its rotation in it: the jointless bodies between folded in, a ground (welded
+    to the world, as Pinocchio's MJCF reader needs one body on <worldbody>) into the world as that reader folds it,
+    a body welded to a moving body into that body (`tree`)."""
     parent, position, rotation = m.body_parentid[b], m.body_pos[b].copy(), _matrix(m.body_quat[b])
-    while parent and _ground(m, parent):
+    while parent and not m.body_jntnum[parent]:
         above = _matrix(m.body_quat[parent])
         position, rotation = m.body_pos[parent] + above @ position, above @ rotation
         parent = m.body_parentid[parent]
@@ -780,7 +807,8 @@ def _unmodelled(m, scene):
             yield "body-joint", "name", owner, name
         scalar = kind in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
         dofs = slice(dof, dof + (1 if scalar else 3))
-        on_world_ball = kind == mujoco.mjtJoint.mjJNT_BALL and m.body_parentid[m.jnt_bodyid[j]] == 0
+        on_world_ball = (kind == mujoco.mjtJoint.mjJNT_BALL and m.body_parentid[m.jnt_bodyid[j]] == 0
+                         and m.body_jntnum[m.jnt_bodyid[j]] == 1)
         checks = [("pos", m.jnt_pos[j]), ("limited", m.jnt_limited[j]), ("springyield", m.jnt_springyield[j]),
                   ("frictionloss", m.dof_frictionloss[dofs]),
                   ("damping", m.dof_dampingpoly[dofs].ravel()),  # the linear damping is compared (tree)
@@ -795,8 +823,6 @@ def _unmodelled(m, scene):
             yield "body", "mocap", named(obj.mjOBJ_BODY, b), "true"
         if m.body_gravcomp[b]:
             yield "body", "gravcomp", named(obj.mjOBJ_BODY, b), _text(m.body_gravcomp[b])
-        if m.body_jntnum[b] != 1 and not _ground(m, b):
-            yield "body", "(joints)", named(obj.mjOBJ_BODY, b), m.body_jntnum[b]
 
 
 def _refuse_nan(path):
@@ -812,9 +838,28 @@ def _refuse_nan(path):
                                  "compiler may quietly replace")
 
 
-def _write(spec, location, value):
-    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia_about_origin, joint stiffness, damping, springref
-    (a hinge's in rad), option gravity."""
+def _write_all(spec, writes):
+    """`_write` each (location, value) into an MjSpec; then ValueError naming the body for an inertia they leave
+    unphysical (several writes may pass through one: checked once all are written)."""
+    # the inertial frame of a body that the file gives diaginertia, for a write of its fullinertia
+    compiled = spec.compile() if any(location.get("attribute") == "fullinertia" for location, _ in writes) else None
+    written = set()
+    for location, value in writes:
+        if location["element"] == "body" and location.get("attribute") in ("inertia", "fullinertia"):
+            written.add(location["name"])
+        _write(spec, location, value, compiled)
+    for name in written:
+        body = spec.body(name)
+        why = scene_rules.unphysical(name, np.diag(body.inertia) if np.isnan(body.fullinertia[0])
+                                     else scene_rules.full_tensor(body.fullinertia))
+        if why:
+            raise ValueError(why)
+
+
+def _write(spec, location, value, compiled=None):
+    """Set a scene value in an MjSpec: body pos/ipos/mass/inertia_about_origin/inertia (diaginertia, a body
+    without fullinertia)/fullinertia (the body frame's, from `compiled`'s inertia where the file gives
+    diaginertia), joint stiffness, damping, springref (a hinge's in rad), option gravity."""
     element, name, attribute = location["element"], location.get("name"), location.get("attribute")
     index = location.get("index", 0)
     if element == "option":
@@ -827,6 +872,16 @@ def _write(spec, location, value):
         raise KeyError(f"no {element} named '{name}'")
     if attribute == "springref" and spec.compiler.degree and target.type == mujoco.mjtJoint.mjJNT_HINGE:
         value = math.degrees(value)  # the case's rad, the file's degrees (<compiler angle>, MJCF's default degree)
+    if attribute == "inertia" and not np.isnan(target.fullinertia[0]):
+        raise ValueError(f"body '{name}' inertia[{index}]: its <inertial> gives fullinertia, whose principal moments"
+                         " are MuJoCo's decomposition of it; bind fullinertia")
+    if attribute == "fullinertia" and np.isnan(target.fullinertia[0]):  # the file's diaginertia and frame, as one
+        body = compiled.body(name)
+        frame = _matrix(body.iquat)
+        tensor = frame @ np.diag(body.inertia) @ frame.T
+        target.fullinertia = [tensor[entry] for entry in scene_rules.FULL_INERTIA]
+        target.inertia, target.iquat = np.zeros(3), [1.0, 0.0, 0.0, 0.0]
+        target.ialt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
     if attribute == "inertia_about_origin":
         # The moment of inertia about body axis `index` through the body origin: subtract the
         # parallel-axis term of the centre of mass and the body's ball-joint armature (see the top).

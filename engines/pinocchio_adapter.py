@@ -19,8 +19,7 @@ import pinocchio as pin
 from engines import euler, scene as scene_rules
 from engines.linalg import linear_solution
 from engines.loops import PinocchioLoops
-from engines.mjcf_joints import joint_values
-from engines.scene import Body
+from engines.mjcf_joints import inertial_frames, joint_values
 
 ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
 
@@ -45,15 +44,19 @@ class PinocchioModel:
             elif _is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
                 self.m = pin.buildModelFromMJCF(self.path)
             elif root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
-                self.m = pin.buildModelFromUrdf(self.path, ROOT_JOINTS[root.type](), root.name)
+                self.m = pin.buildModelFromXML(_urdf_text(self.path), ROOT_JOINTS[root.type](), root.name)
             else:
-                self.m = pin.buildModelFromUrdf(self.path)
+                self.m = pin.buildModelFromXML(_urdf_text(self.path))
         except (ValueError, RuntimeError) as error:
             raise ValueError(f"{self.path}: {_reader_error(self.path, error)}") from error
         try:
             document = ET.parse(self.path).getroot()
         except ET.ParseError as error:  # stricter than urdfdom's parser
             raise ValueError(f"{self.path}: {error}") from None
+        self._links = self._links_by_joint()
+        self._composite = any(joint.shortname() == "JointModelComposite" for joint in self.m.joints)
+        self._ball_armature = {}  # joint id: the armature `_complete_mjcf` holds in its body's inertia
+        self._joints = self._joints_by_name(document)
         if _is_mjcf(self.path):
             self._complete_mjcf(document, scene)
         else:
@@ -63,11 +66,32 @@ class PinocchioModel:
                                              for j in range(1, self.m.njoints) if self.m.joints[j].nv == 1
                                              and self.m.damping[self.m.joints[j].idx_v]}}
             self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
+        self._inertial_frames = inertial_frames(document, self.path)
+        # each joint's welded links (Pinocchio's readers merge them into its inertia, and keep each link's own in the
+        # frame of its weld) and its own link's inertia, which the bindings set: the model's is their sum
+        self._welded = {j: sum((f.placement.act(f.inertia) for f in self.m.frames if f.parentJoint == j
+                                and f.type == pin.FrameType.FIXED_JOINT), pin.Inertia.Zero())
+                        for j in range(1, self.m.njoints)}
+        self._own = {j: self.m.inertias[j] - self._welded[j] if self._welded[j].mass else self.m.inertias[j].copy()
+                     for j in range(1, self.m.njoints)}
+        self._touched = set()  # the joints whose own link's inertia a binding sets
+        self._written = {}  # body: its inertia as the writes leave it (about the centre of mass, in its frame)
         for location, value in writes:
             self._write(location, value)
+        for body, inertia in self._written.items():  # once all are written: several may pass through an unphysical one
+            why = scene_rules.unphysical(body, inertia)
+            if why:
+                raise ValueError(f"{self.path}: {why}")
+            joint = self._body_joint(body)
+            self._own[joint] = pin.Inertia(self._own[joint].mass, self._own[joint].lever, inertia + self._armature_of(joint))
+        for joint in self._touched:
+            self.m.inertias[joint] = self._own[joint] + self._welded[joint]
         for constraint, element in zip(constraints, _equalities(self.path)):  # the reader keeps no names
             constraint.name = element.get("name", "")
         self.loops = PinocchioLoops(self.m, constraints, self.path)  # after the model is complete
+        if self.loops.loops and self._composite:  # the loops' joints are the model's: a composite's parts are not
+            raise ValueError(f"{self.path}: a scene with closed loops is evaluated with one joint on each body; "
+                             "several joints on one body in it are not supported yet")
         self._closed = None  # the last closed configuration, where the next closing starts (`engine_state`)
         self.point_specs = {name: (self._point_frame(spec), spec.frame, spec.kind)
                             for name, spec in scene.points.items()}
@@ -89,7 +113,7 @@ class PinocchioModel:
         self.applied = None if self.varying else self._applied_at(0.0, np.zeros(len(self.coords)),
                                                                    np.zeros(len(self.coords)))
         loop_names = [loop.name for loop in self.loops.loops]
-        self.reaction_specs = {name: (self._body_joint(spec.body), spec.axis, spec.frame,
+        self.reaction_specs = {name: (self._moved_joint(spec.body, f"reaction '{name}'"), spec.axis, spec.frame,
                                       spec.quantity) if spec.sensor not in loop_names
                                else ("loop", (loop_names.index(spec.sensor), spec.axis), "world", "force")
                                for name, spec in scene.reactions.items()}
@@ -156,15 +180,39 @@ class PinocchioModel:
             if joint.shortname() == "JointModelSpherical" and self.m.parents[j] == 0:
                 dofs = slice(joint.idx_v, joint.idx_v + joint.nv)
                 inertia = self.m.inertias[j]
+                self._ball_armature[j] = float(self.m.armature[joint.idx_v])  # MJCF's one value for the 3 dofs
                 self.m.inertias[j] = pin.Inertia(inertia.mass, inertia.lever,
                                                  inertia.inertia + np.diag(self.m.armature[dofs]))
                 self.m.armature[dofs] = 0.0
 
     # -- names -------------------------------------------------------------
+    def _joints_by_name(self, document):
+        """{joint name: Pinocchio's joint model (nq, nv, idx_q, idx_v)}: the model's joints, and the joints that
+        Pinocchio's MJCF reader makes one composite joint of, for an MJCF body with several (named after the first,
+        its parts keep no names: they are the body's joints, in the file's order, engines.scene.moving_body)."""
+        joints = {}
+        for j in range(1, self.m.njoints):
+            joint = self.m.joints[j]
+            if joint.shortname() != "JointModelComposite":
+                joints[self.m.names[j]] = joint
+                continue
+            names = [e.get("name") for b in document.iter("body") if b.get("name") == self._links[j]
+                     for e in b if e.tag == "joint"]
+            joints.update(zip(names, joint.extract().joints))
+        return joints
+
+    def _links_by_joint(self):
+        """{joint id: the link it moves}: the first body frame on each joint; the links welded to it follow."""
+        links = {}
+        for frame in self.m.frames:
+            if frame.type == pin.FrameType.BODY:
+                links.setdefault(frame.parentJoint, frame.name)
+        return links
+
     def _joint(self, name):
-        if not self.m.existJointName(name):
+        if name not in self._joints:
             raise ValueError(f"{self.path}: no joint named '{name}'")
-        return self.m.joints[self.m.getJointId(name)]
+        return self._joints[name]
 
     def _body_frame(self, body):
         if not self.m.existBodyName(body):
@@ -177,14 +225,33 @@ class PinocchioModel:
         if spec.kind != "com acceleration":
             return frame_id
         frame = self.m.frames[frame_id]
-        lever = self.m.inertias[frame.parentJoint].lever  # in the joint's frame
-        at_com = pin.SE3(frame.placement.rotation, lever)  # the link's axes, at its centre of mass
+        at_com = pin.SE3(frame.placement.rotation, self._own_com(frame_id))  # the link's axes, at its centre of mass
         return self.m.addFrame(pin.Frame(spec.body + "_com", frame.parentJoint, frame_id, at_com,
                                          pin.FrameType.OP_FRAME))
+
+    def _own_com(self, frame_id):
+        """The centre of mass of the link of body frame `frame_id` alone, in its joint's frame: Pinocchio's readers
+        merge welded links into the joint's inertia, and keep each welded link's own in the frame of its weld (the
+        body frame's parent)."""
+        frame = self.m.frames[frame_id]
+        if self._links.get(frame.parentJoint) != frame.name:  # a welded link: its weld's inertia is its own
+            weld = self.m.frames[frame.parentFrame]
+            return weld.placement.act(weld.inertia.lever)
+        return self._own[frame.parentJoint].lever
 
     def _body_joint(self, body):
         """Id of the joint that moves link `body` (URDF link frames are those joints' frames here)."""
         return self.m.frames[self._body_frame(body)].parentJoint
+
+    def _moved_joint(self, body, what):
+        """`_body_joint` of a link that a joint moves itself; ValueError naming `what` for a welded link, whose
+        mass and inertia Pinocchio's readers merge into the link it is welded to."""
+        joint = self._body_joint(body)
+        if self._links.get(joint) != body:
+            raise ValueError(f"{self.path}: {what} of body '{body}', which is welded to body '{self._links.get(joint, 'world')}':"
+                             " Pinocchio's reader merges its mass and inertia into that body's, and the Pinocchio side"
+                             " reads no force or value of the weld itself")
+        return joint
 
     def _slot(self, location):
         """(object, attribute) holding a binding location's value in the Pinocchio model."""
@@ -193,20 +260,33 @@ class PinocchioModel:
             return self.m.gravity, "linear"
         if element == "joint":
             return self.joint_values[attribute], name
-        joint = self._body_joint(name)
+        joint = self._moved_joint(name, f"a binding of {attribute}")
         if attribute == "pos":
             return self.m.jointPlacements[joint], "translation"
-        if attribute == "inertia_about_origin":
-            return self.m.inertias[joint], attribute
-        return self.m.inertias[joint], {"mass": "mass", "ipos": "lever"}[attribute]
+        if attribute in INERTIA_ATTRIBUTES:
+            return self._own[joint], attribute
+        return self._own[joint], {"mass": "mass", "ipos": "lever"}[attribute]
 
     def _write(self, location, value):
+        """Set a binding location's value; an inertia's in `_written` (set in the model once all are written)."""
         holder, key = self._slot(location)
         i = location.get("index", 0)
-        if key == "inertia_about_origin":  # about the body origin: less the parallel-axis term
-            lever, inertia = holder.lever, holder.inertia.copy()
-            inertia[i, i] = value - holder.mass * (lever @ lever - lever[i] ** 2)
-            self.m.inertias[self._body_joint(location["name"])] = pin.Inertia(holder.mass, lever, inertia)
+        if location["element"] == "body" and key != "translation":
+            self._touched.add(self._body_joint(location["name"]))
+        if key in INERTIA_ATTRIBUTES:
+            name = location["name"]
+            inertia = self._written.setdefault(name, self._inertia_of(name))  # about the com, in the body's frame
+            joint = self._body_joint(name)
+            if key == "inertia_about_origin":  # about the body origin (a ball joint's armature in it): less the
+                inertia[i, i] = (value - holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2)  # parallel
+                                 - self._ball_armature.get(joint, 0.0))  # axis term and the armature
+            elif key == "fullinertia":
+                inertia[scene_rules.FULL_INERTIA[i]] = inertia[scene_rules.FULL_INERTIA[i][::-1]] = value
+            else:  # in the inertial frame
+                frame = self._inertial_frame(name)
+                principal = frame.T @ inertia @ frame
+                principal[i, i] = value
+                inertia[:] = frame @ principal @ frame.T
         elif location["element"] == "joint":
             holder[key] = value
         elif np.ndim(getattr(holder, key)) == 0:
@@ -214,29 +294,53 @@ class PinocchioModel:
         else:  # Pinocchio's bindings return these arrays by reference
             getattr(holder, key)[i] = value
 
+    def _inertia_of(self, body):
+        """A moving body's inertia about its centre of mass in its frame, as the file writes it: without the
+        armature of a ball joint on the world that `_complete_mjcf` holds in it."""
+        joint = self._moved_joint(body, "the inertia")
+        return self._own[joint].inertia.copy() - self._armature_of(joint)
+
+    def _armature_of(self, joint):
+        return self._ball_armature.get(joint, 0.0) * np.eye(3)
+
+    def _inertial_frame(self, body):
+        """The rotation of a body's inertial frame in its frame (MJCF's <inertial> orientation, URDF's <inertial>
+        <origin rpy>), in which a binding of `inertia` is a diagonal entry (MJCF's diaginertia)."""
+        frame = self._inertial_frames.get(body)
+        if isinstance(frame, str):  # an orientation this adapter does not read
+            raise ValueError(f"{self.path}: body '{body}': {frame}")
+        return np.eye(3) if frame is None else frame
+
     def tree(self):
-        """The moving bodies as Pinocchio models them (see engines.scene.Body): one per joint, named after
-        the link it moves; a joint's axis is its motion subspace at the neutral configuration."""
-        link = {f.parentJoint: f.name for f in self.m.frames if f.type == pin.FrameType.BODY}
+        """The moving bodies as Pinocchio models them (see engines.scene.Body, engines.scene.moving_body): one per
+        joint, named after the link it moves (its welded links' mass and inertia merged into it by Pinocchio's
+        readers), a composite joint's parts a chain; a joint's axis is its motion subspace at the neutral
+        configuration."""
         bodies = []
         for j in range(1, self.m.njoints):
-            joint, placement, inertia = self.m.joints[j], self.m.jointPlacements[j], self.m.inertias[j]
+            placement, inertia = self.m.jointPlacements[j], self.m.inertias[j]
             # 6 x nv; eigenpy hands a one-column matrix (a scene of one joint) back as a vector
             jacobian = np.reshape(pin.computeJointJacobian(self.m, self.m.createData(), self.neutral, j), (6, -1))
-            motion = jacobian[:, joint.idx_v]
-            if joint.nv == 1:  # motion = (linear, angular) per unit rate, in the joint's frame
-                kind, axis = ("hinge", motion[3:]) if np.any(motion[3:]) else ("slide", motion[:3])
-            else:  # the root joint that the case names (spherical: the top)
-                kind, axis = "ball", np.zeros(3)
+            joints = []
+            for name, joint in self._parts(j):
+                motion = jacobian[:, joint.idx_v]
+                if joint.nv == 1:  # motion = (linear, angular) per unit rate, in the joint's frame
+                    kind, axis = ("hinge", motion[3:]) if np.any(motion[3:]) else ("slide", motion[:3])
+                else:  # a ball joint (spherical: the top)
+                    kind, axis = "ball", np.zeros(3)
+                joints.append((name, kind, axis.copy(), [self.joint_values["stiffness"].get(name, 0.0), 0.0, 0.0],
+                               self.joint_values["springref"].get(name, 0.0), self.joint_values["damping"].get(name, 0.0)))
             parent = self.m.parents[j]
-            bodies.append(Body(name=link[j], parent=link[parent] if parent else "world", joint=self.m.names[j],
-                               joint_type=kind, axis=axis.copy(), position=placement.translation.copy(),
-                               rotation=placement.rotation.copy(), mass=float(inertia.mass),
-                               com=inertia.lever.copy(), inertia=inertia.inertia.copy(),
-                               stiffness=np.array([self.joint_values["stiffness"].get(self.m.names[j], 0.0), 0.0, 0.0]),
-                               springref=self.joint_values["springref"].get(self.m.names[j], 0.0),
-                               damping=self.joint_values["damping"].get(self.m.names[j], 0.0)))
+            bodies += scene_rules.moving_body(self._links[j], self._links[parent] if parent else "world", joints,
+                                              placement.translation.copy(), placement.rotation.copy(),
+                                              float(inertia.mass), inertia.lever.copy(), inertia.inertia.copy())
         return bodies
+
+    def _parts(self, j):
+        """(name, joint model) of the case's joints that Pinocchio's joint j holds: itself, or a composite's parts."""
+        joint = self.m.joints[j]
+        return [(name, part) for name, part in self._joints.items()
+                if joint.idx_v <= part.idx_v < joint.idx_v + joint.nv]
 
     @property
     def gravity(self):
@@ -247,6 +351,11 @@ class PinocchioModel:
         i = location.get("index", 0)
         if key == "inertia_about_origin":
             return float(holder.inertia[i, i] + holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2))
+        if key == "fullinertia":
+            return float(self._inertia_of(location["name"])[scene_rules.FULL_INERTIA[i]])
+        if key == "inertia":
+            frame = self._inertial_frame(location["name"])
+            return float((frame.T @ self._inertia_of(location["name"]) @ frame)[i, i])
         if location["element"] == "joint":
             return float(holder.get(key, 0.0))
         return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
@@ -506,6 +615,26 @@ class PinocchioModel:
                              f"({', '.join(loop.name for loop in self.loops.loops)}) is not supported: its "
                              "coordinates' equations hold the loops' constraint forces, which RNEA does not give")
         config, velocity, acc, _ = self._dynamics(t, q, v)
+        if self._composite:
+            dtau_dq, dtau_dv, error = self._rnea_differences(config, velocity, acc)
+            method = ("Pinocchio RNEA differenced (centred, extrapolated, at the step of least estimated error): its"
+                      " analytic derivatives are wrong through a composite joint")
+        else:
+            dtau_dq, dtau_dv, error = self._rnea_derivatives(config, velocity, acc)
+            method = "Pinocchio computeRNEADerivatives (analytic)"
+        force_q, force_v = -dtau_dq, -dtau_dv
+        mass = pin.crba(self.m, self.d, config)[self._whole]  # `mass_matrix`'s to the bit (RNEA's rounds otherwise)
+        for _, iv, k, _, damping in self.passive:
+            force_q[iv, iv] -= k
+            force_v[iv, iv] -= damping
+        # the sums' rounding: half an ulp of each, within eps of the term added (RNEA's share is in its own)
+        error += EPS * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive), default=0.0)
+        layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
+        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
+                                              mass, force_q, force_v, error, method)
+
+    def _rnea_derivatives(self, config, velocity, acc):
+        """dtau/dq, dtau/dv of RNEA at the state's accelerations by computeRNEADerivatives, and their error."""
         derivatives = lambda c, w: [np.array(m) for m in pin.computeRNEADerivatives(self.m, self.d, c, w, acc)[:2]]
         dtau_dq, dtau_dv = derivatives(config, velocity)
         # RNEA's rounding is of RNEA's own entries: a stiff spring's -k, added here in one rounding, would make it
@@ -516,17 +645,40 @@ class PinocchioModel:
                     NOISE_MARGIN * scene_rules.rounding_noise(
                         lambda step_q, step_v: derivatives(pin.integrate(self.m, config, step_q), velocity + step_v),
                         (dtau_dq, dtau_dv), velocity))
-        force_q, force_v = -dtau_dq, -dtau_dv
-        mass = pin.crba(self.m, self.d, config)[self._whole]  # `mass_matrix`'s to the bit (RNEA's rounds otherwise)
-        for _, iv, k, _, damping in self.passive:
-            force_q[iv, iv] -= k
-            force_v[iv, iv] -= damping
-        # the sums' rounding: half an ulp of each, within eps of the term added (RNEA's share is in its own)
-        error += EPS * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive), default=0.0)
-        layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
-        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
-                                              mass, force_q, force_v, error,
-                                              "Pinocchio computeRNEADerivatives (analytic)")
+        return dtau_dq, dtau_dv, error
+
+    def _rnea_differences(self, config, velocity, acc):
+        """dtau/dq, dtau/dv of RNEA at the state's accelerations by centred differences (positions stepped in
+        Pinocchio's tangent space, pin.integrate, as MuJoCo's mj_integratePos), extrapolated at the step of least
+        estimated error (engines.scene.extrapolated_differences, difference_rounding: as MujocoModel's
+        `_inverse_derivatives`), and that error.  For a model with a composite joint (several joints of one MJCF
+        body), through which computeRNEADerivatives (Pinocchio 4.1) gives wrong derivatives: measured on a
+        spherical pendulum of two hinges, dtau/dq of the second hinge off by 1.58 N m/rad and dtau/dv by 0.085 N m s,
+        where differences of RNEA and MuJoCo's of its inverse dynamics agree (tests/test_scene_forms.py)."""
+        nv, tau = self.m.nv, lambda c, w: np.array(pin.rnea(self.m, self.d, c, w, acc))
+        relative = np.maximum(1.0, np.abs(velocity))
+
+        def centred(step):
+            dq, dv = np.zeros((nv, nv)), np.zeros((nv, nv))
+            for j, unit in enumerate(np.eye(nv)):
+                dq[:, j] = (tau(pin.integrate(self.m, config, step * unit), velocity)
+                            - tau(pin.integrate(self.m, config, -step * unit), velocity)) / (2 * step)
+                dv[:, j] = (tau(config, velocity + step * relative[j] * unit)
+                            - tau(config, velocity - step * relative[j] * unit)) / (2 * step * relative[j])
+            return [dq, dv]
+
+        # the largest term RNEA sums: M acc, the velocity terms or gravity's
+        inertial = pin.crba(self.m, self.d, config)[self._whole] @ acc
+        bias, gravity = (np.array(pin.nonLinearEffects(self.m, self.d, config, velocity)),
+                         np.array(pin.computeGeneralizedGravity(self.m, self.d, config)))
+        size = max(float(np.max(np.abs(x))) for x in (inertial, bias - gravity, gravity))
+        best = None
+        for step in scene_rules.DIFFERENCE_STEPS:
+            (dq, dv), truncation = scene_rules.extrapolated_differences(centred, step)
+            error = truncation + scene_rules.difference_rounding(size, step)
+            if best is None or error < best[2]:
+                best = dq, dv, error
+        return best
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state (`engine_state`)."""
@@ -609,6 +761,26 @@ def _is_mjcf(path):
     return str(path).endswith(".xml")
 
 
+# A body's inertia as a binding sets it: about the body origin (a diagonal entry), the principal moments in the
+# inertial frame (MJCF's diaginertia, index 0..2) or the full tensor about the centre of mass in the body's frame (MJCF's
+# fullinertia, a URDF <inertia> where its <origin> has no rpy: index 0..5, engines.scene.FULL_INERTIA)
+INERTIA_ATTRIBUTES = ("inertia_about_origin", "inertia", "fullinertia")
+
+
+def _urdf_text(path):
+    """The URDF at `path` with `NO_LIMIT` written into each revolute or prismatic joint without a <limit>, which
+    urdfdom rejects ("does not specify limits"): a joint without a limit has none.  ValueError for a file that
+    is not XML, saying where."""
+    try:
+        robot = ET.parse(path).getroot()
+    except ET.ParseError as error:
+        raise ValueError(f"not well-formed XML: {error}") from None
+    for joint in robot.iter("joint"):
+        if joint.get("type") in ("revolute", "prismatic") and joint.find("limit") is None:
+            ET.SubElement(joint, "limit", lower=f"{-NO_LIMIT:g}", upper=f"{NO_LIMIT:g}", effort="0", velocity="0")
+    return ET.tostring(robot, encoding="unicode")
+
+
 def _reader_error(path, error):
     """Pinocchio's reader's error in words: its message without the C++ file and function it comes from, and
     for an MJCF body that it finds no inertia of, which one and what to write."""
@@ -688,6 +860,8 @@ def _unmodelled(robot, scene):
     for joint in robot.iter("joint"):
         name, kind = joint.get("name"), joint.get("type")
         owner = f"joint '{name}'"
+        if kind == "fixed":  # a welded link: no coordinate, its mass and inertia merged into its parent's
+            continue
         if kind not in ("revolute", "continuous", "prismatic"):  # no coordinate, named in the case or not
             yield "joint", "type", owner, kind
         if name not in moved:

@@ -35,6 +35,70 @@ class Body:
     stiffness: np.ndarray  # (a, b, c) of the joint's spring force -(a x + b x^2 + c x^3), x = q - springref
     springref: float  # the joint position at which its spring is relaxed (rad or m; 0 for a ball joint)
     damping: float  # viscous damping of the joint's dofs, force -damping q' (N s/m, N m s/rad)
+    frame: bool = False  # a massless frame between the joints of one body of the file (`moving_body`), no body of it
+
+
+def joint_frame(body, joint):
+    """The name, in `tree`, of the frame of a body with several joints that its joint `joint` moves and its next joint
+    moves on (a massless Body: see `moving_body`)."""
+    return f"{body}/{joint}"
+
+
+def moving_body(name, parent, joints, position, rotation, mass, com, inertia):
+    """A moving body as the adapters' `tree` describes it: a Body per joint of `joints` ((joint, joint_type, axis,
+    stiffness, springref, damping) each, in the file's order).  Several joints on one body act in turn at the body's
+    origin (MuJoCo's kinematics, and Pinocchio's composite joint): each turns or slides the frame that the one before
+    leaves, about its axis in the body's frame; so they are a chain of massless frames (`joint_frame`), the first at
+    the body's placement, the others on it, and the body, with all its mass, on the last."""
+    bodies = []
+    for k, (joint, joint_type, axis, stiffness, springref, damping) in enumerate(joints):
+        first, last = k == 0, k == len(joints) - 1
+        bodies.append(Body(name=name if last else joint_frame(name, joint), parent=parent if first else bodies[-1].name,
+                           joint=joint, joint_type=joint_type, axis=np.asarray(axis, dtype=float),
+                           position=position if first else np.zeros(3), rotation=rotation if first else np.eye(3),
+                           mass=mass if last else 0.0, com=com if last else np.zeros(3),
+                           inertia=inertia if last else np.zeros((3, 3)), stiffness=np.asarray(stiffness, dtype=float),
+                           springref=springref, damping=damping, frame=not last))
+    return bodies
+
+
+def combined_inertia(parts):
+    """(mass, centre of mass, inertia about it) of rigidly joined parts, each (mass, centre of mass, inertia about its
+    centre of mass) in one frame: a body and the bodies welded to it."""
+    mass = sum(part_mass for part_mass, _, _ in parts)
+    com = sum(part_mass * np.asarray(part_com) for part_mass, part_com, _ in parts) / mass if mass else np.zeros(3)
+    inertia = np.zeros((3, 3))
+    for part_mass, part_com, part_inertia in parts:
+        lever = np.asarray(part_com) - com
+        inertia = inertia + part_inertia + part_mass * (lever @ lever * np.eye(3) - np.outer(lever, lever))
+    return float(mass), com, inertia
+
+
+# The six entries of a full inertia (MJCF fullinertia, URDF <inertia>: ixx iyy izz ixy ixz iyz) in the 3 x 3 tensor.
+FULL_INERTIA = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+
+
+def full_tensor(six):
+    """The symmetric 3 x 3 inertia of its six entries (FULL_INERTIA's order)."""
+    tensor = np.zeros((3, 3))
+    for value, (row, column) in zip(six, FULL_INERTIA):
+        tensor[row, column] = tensor[column, row] = value
+    return tensor
+
+
+# The principal moments of an inertia written by a binding are a rigid body's when each is positive and A + B >= C
+# to within their rounding: eigvalsh of a 3 x 3 tensor rounds each by a few eps of the largest; 1e-12 of C allows a
+# flat plate's A + B = C (as dyncheck's random parameter sets allow it).
+TRIANGLE_ROUNDING = 1e-12
+
+
+def unphysical(body, inertia):
+    """Why `inertia` (about the centre of mass) is no rigid body's, naming the body; None if it is one."""
+    moments = np.sort(np.linalg.eigvalsh(np.asarray(inertia, dtype=float)))
+    if moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - TRIANGLE_ROUNDING):
+        return None
+    return (f"body '{body}': principal moments of inertia about its centre of mass "
+            f"{', '.join(f'{x:.6g}' for x in moments)} kg m^2 are not a rigid body's (each > 0, A + B >= C)")
 
 
 @dataclass(frozen=True)
@@ -331,10 +395,14 @@ RULES = [
     Rule("MJCF", "tuple", "*", NO_EFFECT, "user data (custom)"),
     Rule("MJCF", "keyframe", "*", NO_EFFECT, "the harness never loads a keyframe: every state comes from case.toml"),
     Rule("MJCF", "body", "name", COMPARED, "the body's name: both files hold the same bodies"),
-    Rule("MJCF", "body", "(joints)", REFUSED,
-         "a body without a joint (welded) or with several: each URDF link hangs on one joint; a jointless body"
-         " welded to the world (a ground) is folded into it, as Pinocchio's MJCF reader does",
-         "give every body one joint"),
+    Rule("MJCF", "body", "(joints)", COMPARED,
+         "several joints on one body act in turn at its origin (MuJoCo's kinematics; Pinocchio's MJCF reader makes"
+         " them one composite joint): compared as a chain of massless frames named body/joint, the body on the last"
+         " (engines.scene.moving_body); Drake's parser puts all but the last on the parent's axes, so Drake refuses"
+         " them.  A body without a joint is welded: to the world (a ground, folded into it as Pinocchio's MJCF"
+         " reader folds it; its constant potential energy left out of MuJoCo's) or to the moving body above it,"
+         " whose mass and inertia it joins (as Pinocchio's readers merge it); a reaction on a welded body (the"
+         " weld's force) is refused, Pinocchio keeping no joint there"),
     Rule("MJCF", "body", "pos", COMPARED, "the placement in the parent body, with the orientation below"),
     *[Rule("MJCF", "body", orientation, COMPARED, "the body's orientation in its parent (a rotation matrix)")
       for orientation in ("quat", "axisangle", "xyaxes", "zaxis", "euler")],
@@ -343,7 +411,11 @@ RULES = [
     Rule("MJCF", "body", "*", NO_EFFECT, "defaults, sleeping policy (sleep is refused), fusing (bodies are compared)"
          " and user data"),
     Rule("MJCF", "body-inertial", "*", COMPARED,
-         "mass, centre of mass and the full inertia about it in the body frame (iquat, fullinertia rotate it)"),
+         "mass, centre of mass and the full inertia about it in the body frame (iquat, fullinertia rotate it);"
+         " bindable as body attributes mass, ipos, inertia (diaginertia: the principal moments in the inertial"
+         " frame, index 0..2; the Pinocchio side reads that frame from quat only) and fullinertia (ixx iyy izz ixy"
+         " ixz iyz in the body frame, index 0..5, read back from MuJoCo's principal moments and rotation); writes"
+         " that leave a body without positive moments or A + B >= C are refused, naming it"),
     Rule("MJCF", "body-joint", "name", COMPARED, "must be a joint that the case's [scene] names", "name it in the case"),
     Rule("MJCF", "body-joint", "type", COMPARED, "hinge, slide or ball (free is refused)"),
     Rule("MJCF", "body-joint", "axis", COMPARED, "the unit axis in the body frame"),
@@ -363,8 +435,8 @@ RULES = [
     Rule("MJCF", "body-joint", "range", NO_EFFECT, "acts only when limited, which is refused"),
     Rule("MJCF", "body-joint", "armature", REFUSED,
          "rotor inertia; allowed on prescribed joints, which it holds while MuJoCo steps (the evaluation model"
-         " drops it), and on the ball joint of a body on the world, where it is the isotropic inertia a I about"
-         " the joint and is compared as part of the body's inertia (the top)"),
+         " drops it), and on the ball joint of a body on the world that has no other joint, where it is the"
+         " isotropic inertia a I about the joint and is compared as part of the body's inertia (the top)"),
     Rule("MJCF", "body-joint", "*", NO_EFFECT, "solver settings of limits and friction (both refused), actuator"
          " force limits (no actuators), gravity compensation routing (gravcomp refused), group and user data"),
     Rule("MJCF", "body-freejoint", "*", REFUSED, "a free body; no scene has one and URDF floating joints are refused"),
@@ -429,20 +501,26 @@ RULES = [
     Rule("URDF", "link/inertial/origin", "xyz", COMPARED, "the centre of mass in the link frame"),
     Rule("URDF", "link/inertial/origin", "rpy", COMPARED, "rotates the inertia into the link frame"),
     Rule("URDF", "link/inertial/mass", "value", COMPARED, "the mass"),
-    Rule("URDF", "link/inertial/inertia", "*", COMPARED, "ixx ... izz: the inertia about the centre of mass"),
+    Rule("URDF", "link/inertial/inertia", "*", COMPARED,
+         "ixx ... izz: the inertia about the centre of mass; bindable as fullinertia (the tensor in the link frame,"
+         " index 0..5: these six numbers where the inertial <origin> has no rpy) and inertia (its diagonal in the"
+         " inertial frame, index 0..2), writes that leave a link unphysical refused, naming it"),
     Rule("URDF", "link/visual", "*", NO_EFFECT, "geometry: Pinocchio's dynamic model does not read it"),
     Rule("URDF", "link/collision", "*", NO_EFFECT, "geometry: Pinocchio's dynamic model does not read it"),
     Rule("URDF", "joint", "name", COMPARED, "must be a joint that the case's [scene] names", "name it in the case"),
     Rule("URDF", "joint", "type", COMPARED,
-         "revolute and continuous (hinge), prismatic (slide); fixed, floating and planar are refused",
-         "use revolute, continuous or prismatic"),
+         "revolute and continuous (hinge), prismatic (slide), fixed (welds the child link to its parent, whose"
+         " mass and inertia it joins, as the MJCF's body without a joint: a base link welded to the world, a tool"
+         " link to the last link); floating and planar are refused",
+         "use revolute, continuous, prismatic or fixed"),
     Rule("URDF", "joint/origin", "*", COMPARED, "xyz, rpy: the link's placement in its parent"),
     Rule("URDF", "joint/axis", "xyz", COMPARED, "the unit axis in the link frame"),
     Rule("URDF", "joint/parent", "link", COMPARED, "the parent body"),
     Rule("URDF", "joint/child", "link", COMPARED, "the body the joint moves"),
     Rule("URDF", "joint/limit", "lower", REFUSED,
-         "a joint limit: Pinocchio's dynamics ignore it and the MJCF has none; URDF cannot write 'no limit'"
-         " for revolute and prismatic joints (urdfdom refuses inf), so dyncheck reads |limit| >= 1e300 as none",
+         "a joint limit: Pinocchio's dynamics ignore it and the MJCF has none; a revolute or prismatic joint"
+         " without <limit> has none (urdfdom rejects it: the adapter writes |limit| = 1e300 into it), and since"
+         " urdfdom refuses inf, dyncheck reads |limit| >= 1e300 as none",
          'write lower="-1e300" upper="1e300", or use a continuous joint'),
     Rule("URDF", "joint/limit", "upper", REFUSED, "see lower", 'write lower="-1e300" upper="1e300"'),
     Rule("URDF", "joint/limit", "*", NO_EFFECT, "effort and velocity: Pinocchio's dynamics do not clamp"),
@@ -508,7 +586,7 @@ def markdown():
              " `<connect>`, without effect in one without.",
              "MJCF elements are the anchors of MuJoCo's XML reference (`body-joint` is `<joint>` in a `<body>`); a"
              " rule for an element covers the elements below it, `*` every attribute not listed.",
-             "The comparison's tolerances are in `dyncheck/case/folder.py` (`compare_scenes`).", "",
+             "The comparison's tolerances are in `dyncheck/case/scene.py` (`compare_scenes`).", "",
              "| file | element | attribute | status | why |", "|---|---|---|---|---|"]
     lines += [f"| {r.file} | {r.element} | {r.attribute} | {r.status}{' with a loop' * r.with_loops} | {r.why} |"
               for r in RULES]

@@ -204,9 +204,12 @@ Reference.accelerations = lambda self, t, q, v: _real(self, t, q, v) + (0 if t =
 
 @pytest.mark.parametrize("toml, message", [
     ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "__class__" }]',  # a KeyError before
-     "scene.bindings.m[0].attribute = '__class__' is not a bindable attribute of a body; those are mass, pos, ipos"),
+     "scene.bindings.m[0].attribute = '__class__' is not a bindable attribute of a body; those are mass, pos, ipos, "
+     "inertia_about_origin, inertia, fullinertia"),
     ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "pos", index = 99 }]',  # an IndexError
      "scene.bindings.m[0].index = 99 is not within 0..2 (body pos)"),
+    ('[scene.bindings]\nm = [{ element = "body", name = "bob", attribute = "fullinertia", index = 6 }]',
+     "scene.bindings.m[0].index = 6 is not within 0..5 (body fullinertia)"),
     ('[scene.bindings]\nm = []', "scene.bindings.m = [] binds the parameter to nothing"),
     ('[scene.bindings]\nm = "bob"', "scene.bindings.m = 'bob' is a string, not an array"),
     ('[scene.bindings]\nk = [{ element = "joint", name = "spring", attribute = "stiffness" }]',  # a KeyError
@@ -233,14 +236,16 @@ def test_a_number_in_prose_may_be_as_wide_and_precise_as_three_digits(tutorial):
 
 
 @pytest.mark.parametrize("params, given_by", [
-    ("", "equations.py's PARAMS gives m = 0.3"),  # the case.toml there gives no m: it said "case.toml gives m"
-    ('\n[params.m]\nvalue = 0.3\nunit = "kg"\nabout = "the bob"', "case.toml gives m = 0.3"),
+    ("", "equations.py's PARAMS gives M = 1.0"),  # the case.toml there gives no M: it said "case.toml gives M"
+    ('\n[params.M]\nvalue = 1.0\nunit = "kg"\nabout = "the cart"', "case.toml gives M = 1.0"),
 ])
 def test_a_scene_number_that_is_not_its_parameter_names_the_file_that_gives_it(tutorial, capsys, params, given_by):
-    (tutorial / "case.toml").write_text('[scene.bindings]\nm = [{ element = "body", name = "cart", attribute = "mass" }]'
-                                        + params + "\n")
+    """The two masses' bindings swapped (one scene number bound by two parameters is refused before: issue 37)."""
+    (tutorial / "case.toml").write_text('[scene.bindings]\n'
+                                        'm = [{ element = "body", name = "cart", attribute = "mass" }]\n'
+                                        'M = [{ element = "body", name = "bob", attribute = "mass" }]' + params + "\n")
     assert main(["run", "--cases", str(tutorial.parent)]) == 2
-    assert f"scene.xml of case 'cart_pendulum': body 'cart' mass[0] is 1.0, but {given_by}" in capsys.readouterr().err
+    assert f"scene.xml of case 'cart_pendulum': body 'bob' mass[0] is 0.3, but {given_by}" in capsys.readouterr().err
 
 
 def test_a_case_of_two_files_takes_more_states_where_its_equations_are_cheap(tutorial):

@@ -96,14 +96,22 @@ def test_a_body_pinocchio_finds_no_inertia_of_is_named_in_words(tmp_path):
     assert "inertiafromgeom" in message and ".cpp" not in message and "\n" not in message
 
 
-def test_a_urdf_fixed_joint_is_refused_for_its_type(tmp_path):
-    """Not told to be named in the case, which cannot make it a coordinate."""
+def test_a_urdf_fixed_joint_welds_its_link_and_its_mass_is_compared(tmp_path):
+    """Was refused for its type (issue 37): a fixed joint welds its link to its parent, whose mass it joins; a
+    massless tip loads, a tip of 0.1 kg that the MJCF has not is refused by the scene comparison, naming the mass."""
     folder = tmp_path / "rotating_pendulum"
     shutil.copytree(dyncheck.case.folder.CASES_DIR / "rotating_pendulum", folder)
-    edit(folder / "scene.urdf", "</robot>", '<link name="tip"/><joint name="weld" type="fixed"><parent link="pendulum"/>'
-         '<child link="tip"/></joint></robot>')
+    weld = '<joint name="weld" type="fixed"><parent link="pendulum"/><child link="tip"/></joint></robot>'
+    text = (folder / "scene.urdf").read_text()
+    edit(folder / "scene.urdf", "</robot>", '<link name="tip"/>' + weld)
+    loaded = Case(folder)
+    loaded.model("mujoco")
+    loaded.model("pinocchio")
+    (folder / "scene.urdf").write_text(text.replace("</robot>", '<link name="tip"><inertial><mass value="0.1"/>'
+                                                    '<inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/>'
+                                                    '</inertial></link>' + weld))
+    loaded = Case(folder)
+    loaded.model("mujoco")
     with pytest.raises(ValueError) as error:
-        Case(folder).model("pinocchio")
-    message = str(error.value)
-    assert "joint 'weld' <joint type=\"fixed\"> is not modelled by dyncheck" in message, message
-    assert "name it in the case" not in message
+        loaded.model("pinocchio")
+    assert "body 'pendulum' mass is " in str(error.value), error.value

@@ -61,8 +61,6 @@ REFUSALS = {
                                        '<flag sleep="enable">'),
     ("MJCF", "option-flag", "invdiscrete"): (OPTION, OPTION[:-2] + '><flag invdiscrete="enable"/></option>',
                                              '<flag invdiscrete="enable">'),
-    ("MJCF", "body", "(joints)"): (SITE, SITE + '<body name="extra"><inertial pos="0 0 0" mass="0.1"'
-                                   ' diaginertia="1e-3 1e-3 1e-3"/></body>', "body 'extra' <body> with joints = 0"),
     ("MJCF", "body", "gravcomp"): ('<body name="pendulum" ', '<body name="pendulum" gravcomp="1" ',
                                    "body 'pendulum' <body gravcomp=\"1\">"),
     ("MJCF", "body", "mocap"): ('<worldbody>', '<worldbody><body name="target" mocap="true"/>', '<body mocap="true">'),
@@ -177,6 +175,9 @@ COMPARED = {
     ("MJCF", "body", "pos"): ("scene.xml", 'pos="0 0.1 0.2"', 'pos="0.01 0.1 0.2"', "body 'pendulum' position"),
     ("MJCF", "body", "euler"): ("scene.xml", 'pos="0 0.1 0.2"', 'pos="0 0.1 0.2" euler="0 0 0.1"',
                                 "body 'pendulum' rotation"),
+    # a body welded to the pendulum in the MJCF only: its 0.1 kg joins the pendulum's
+    ("MJCF", "body", "(joints)"): ("scene.xml", SITE, SITE + '<body name="extra"><inertial pos="0 0 0" mass="0.1"'
+                                   ' diaginertia="1e-3 1e-3 1e-3"/></body>', "body 'pendulum' mass"),
     ("MJCF", "body-inertial", "*"): ("scene.xml", '<inertial pos="0 0 -0.1"', '<inertial pos="0.05 0 -0.1"',
                                      "body 'pendulum' centre of mass"),
     ("MJCF", "body-joint", "type"): ("scene.xml", 'name="psi" type="hinge"', 'name="psi" type="slide"',
@@ -269,7 +270,7 @@ def test_the_same_rotations_written_in_both_files_are_accepted(tmp_path):
     ("rotating_pendulum", "scene.xml", 'gravity="0 0 -9.81"', 'gravity="0.5 0 -9.81"', "gravity"),
     ("rotating_pendulum", "scene.xml", '<inertial pos="0 0 -0.1"', '<inertial pos="0.05 0 -0.1"', "centre of mass"),
     ("rotating_pendulum", "scene.xml", SITE, SITE + '<body name="stray" pos="0 0 -0.2"><inertial pos="0 0 0"'
-     ' mass="0.05" diaginertia="1e-5 1e-5 1e-5"/></body>', "body 'stray'"),
+     ' mass="0.05" diaginertia="1e-5 1e-5 1e-5"/></body>', "body 'pendulum' mass"),  # welded: its mass joins
     ("spinning_top", "scene.xml", '<inertial pos="0 0 0.0558"', '<inertial pos="0 0 0.0558" quat="0.99 0.14 0 0"',
      "body 'top' inertia"),
     ("spinning_top", "scene.xml", 'diaginertia="0.00113716152 0.00113716152 0.002268"',

@@ -310,7 +310,7 @@ def test_without_its_urdf_pinocchio_reads_the_mjcf(cases):
 @pytest.mark.parametrize("scene, text, message", [
     ("scene.xml", None, "scene.xml: no such scene file (case 'double_pendulum' needs it for mujoco)"),
     ("scene.xml", "<mujoco><worldbody><body", "scene.xml: XML parse error"),
-    ("scene.urdf", "<robot name='x'><link", "scene.urdf: The file"),
+    ("scene.urdf", "<robot name='x'><link", "scene.urdf: not well-formed XML: unclosed token: line 1"),
 ])
 def test_a_scene_file_that_fails_to_load_exits_2(cases, capsys, scene, text, message):
     path = cases / "double_pendulum" / scene

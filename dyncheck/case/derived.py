@@ -9,6 +9,7 @@ import numpy as np
 
 from dyncheck.common import expressions
 from dyncheck.common.messages import WithBlock, suggest
+from engines.scene import FULL_INERTIA
 
 EQUATIONS = "equations.py"
 SCENE = "scene.xml"
@@ -17,7 +18,8 @@ OPTIONAL = ("drive_power", "mass_matrix", "forces", "energy", "dependent")  # Eq
 # gravity), to within the decimal text's rounding: the MJCF's text and the module's float of one number.
 MATCH_RTOL = 4 * np.finfo(float).eps
 SIGNED = {"pos", "ipos", None}  # the attributes (None: gravity) a parameter may bind to with scale -1
-UNITS = {"mass": "kg", "pos": "m", "ipos": "m", "inertia_about_origin": "kg m^2", None: "m/s^2",
+UNITS = {"mass": "kg", "pos": "m", "ipos": "m", "inertia_about_origin": "kg m^2", "inertia": "kg m^2",
+         "fullinertia": "kg m^2", None: "m/s^2",
          ("stiffness", "slide"): "N/m", ("stiffness", "hinge"): "N m/rad",
          ("damping", "slide"): "N s/m", ("damping", "hinge"): "N m s/rad",
          ("springref", "slide"): "m", ("springref", "hinge"): "rad"}
@@ -25,9 +27,18 @@ JOINT_ATTRIBUTES = ("stiffness", "damping", "springref")  # whose unit depends o
 ABOUT = {"mass": "mass of body '{name}'", "pos": "position of body '{name}' in its parent, component {index}",
          "ipos": "centre of mass of body '{name}', component {index}", None: "gravity, component {index}",
          "inertia_about_origin": "moment of inertia of body '{name}' about its origin, axis {index}",
+         "inertia": "principal moment of inertia of body '{name}' about its centre of mass, axis {index}",
+         "fullinertia": "inertia of body '{name}' about its centre of mass, i{index} in the body frame",
          "stiffness": "stiffness of joint '{name}'", "damping": "viscous damping of joint '{name}'",
          "springref": "rest position of joint '{name}''s spring"}
 AXES = "xyz"
+
+
+def component(location):
+    """The name of a binding location's component in ABOUT: an axis, or a fullinertia's entry (xx ... yz)."""
+    index = location.get("index", 0)
+    return "".join(AXES[i] for i in FULL_INERTIA[index]) if location.get("attribute") == "fullinertia" else AXES[index]
+
 DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)  # of an output step into MuJoCo's steps: 1-2-5 steps
 # States of the pointwise check: a region of 5 % of the state space holds about 13 of 256 evenly spread states
 # (Case.sample_states), where a derivation wrong only there must fail; 256 evaluations of the slowest
@@ -405,8 +416,8 @@ def case_file(folder, module, scene, given, overrides=None):
         "coord_units": units,
         "params": {p: {"value": value, "unit": param_units[p],
                        "about": "in the applied forces (`scene.applied` of case.toml)" if p in forcing else
-                       ABOUT[bound[p][0].get("attribute")].format(
-                           name=bound[p][0]["name"], index=AXES[bound[p][0].get("index", 0)])}
+                       ABOUT[bound[p][0].get("attribute")].format(name=bound[p][0]["name"],
+                                                                  index=component(bound[p][0]))}
                    for p, value in params.items()},  # every other parameter is bound (bindings refuses the rest)
         "initial": {"q": q0.tolist(), "v": v0.tolist(), "t_end": t_end},
         "sample": {"count": SAMPLE_COUNT, "budget": SAMPLE_BUDGET, "seed": 1, "t": [0.0, 4 * t_end],
@@ -492,7 +503,7 @@ def scaffold(name, scene):
                  "ipos": f"{loc['name']}_com_{AXES[loc.get('index', 0)]}"}[attribute]
         scale = -1.0 if v.value < 0 and attribute in SIGNED else 1.0
         params[label] = (scale * v.value, {**loc, **({"scale": scale} if scale < 0 else {})},
-                         ABOUT[attribute].format(name=loc["name"], index=AXES[loc.get("index", 0)]))
+                         ABOUT[attribute].format(name=loc["name"], index=component(loc)))
     coords = [j.name for j in scalar]
     unpack = lambda names: ", ".join(names) + ("," if len(names) == 1 else "")
     rates = [f"{c}_rate" for c in coords]

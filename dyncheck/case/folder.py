@@ -46,6 +46,12 @@ INTERFACE = ("accelerations", "reactions", "energy", "drive_power", "mass_matrix
 # Scene values are parsed from decimal text by each loader; they must equal case.toml's to
 # within a few ulps (binding scales are exact: +-1).
 BINDING_RTOL = 4 * np.finfo(float).eps
+# A fullinertia entry comes back through MuJoCo's compiler, which turns the tensor into principal moments and a
+# rotation (mju_eig3, iterative) that `read` multiplies back: each entry to within 15 eps of the body's largest
+# moment (measured, tests/test_scene_forms.py), however small the entry itself (an off-diagonal 0 reads back as
+# 1e-19).  Allowed: 64 eps of the largest moment, 1.4e-14.  Its ceiling: a scene number that is not the case's
+# differs in a printed digit, 1e-12 of the largest moment for a tensor written to 12 significant digits.
+FULLINERTIA_RTOL = 64 * np.finfo(float).eps
 
 
 @dataclass(frozen=True)
@@ -441,10 +447,11 @@ class Case:
     def placeholders(self):
         """The bodies to which MuJoCo gives a placeholder where the scene means none (MuJoCo refuses a moving body
         without mass and inertia): {body: (placeholder mass?, placeholder inertia?)}, a mass of at most
-        PLACEHOLDER_MASS, an inertia of at most PLACEHOLDER_INERTIA."""
+        PLACEHOLDER_MASS, an inertia of at most PLACEHOLDER_INERTIA.  Not the frames between the joints of one
+        body (engines.scene.moving_body), massless in both engines and no body of MuJoCo's."""
         held = {body.name: (bool(body.mass <= PLACEHOLDER_MASS),
                             bool(np.max(np.abs(body.inertia)) <= PLACEHOLDER_INERTIA))
-                for body in self.model("pinocchio").tree()}
+                for body in self.model("pinocchio").tree() if not body.frame}
         return {name: pair for name, pair in held.items() if any(pair)}
 
     def _build(self, source):
@@ -543,7 +550,12 @@ class Case:
             for loc in locations:
                 expected = self.params[param] * loc.get("scale", 1.0)
                 found = model.read(loc)
-                if abs(found - expected) > BINDING_RTOL * max(abs(expected), abs(found)):
+                if loc.get("attribute") == "fullinertia":  # to within the rounding of the body's largest moment
+                    largest = max(abs(model.read({**loc, "index": i})) for i in range(3))
+                    allowed = FULLINERTIA_RTOL * max(abs(expected), largest)
+                else:
+                    allowed = BINDING_RTOL * max(abs(expected), abs(found))
+                if abs(found - expected) > allowed:
                     where = f"{loc['element']} '{loc['name']}' {loc.get('attribute', '')}[{loc.get('index', 0)}]"
                     raise ValueError(f"{path.name} of case '{self.name}': {where} is {found!r}, but "
                                      f"{self._given_by(param)} gives {param} = {self.params[param]!r}"

@@ -196,7 +196,8 @@ MEANINGS = {
     "scene.bindings.<name>[i].attribute": "The attribute: a body's " + ", ".join(
         a for e, a in BINDABLE if e == "body") + "; a joint's " + ", ".join(
         a for e, a in BINDABLE if e == "joint") + "; none for the option.",
-    "scene.bindings.<name>[i].index": "The component of a vector attribute.  Absent: 0.",
+    "scene.bindings.<name>[i].index": "The component of a vector attribute (of fullinertia: ixx, iyy, izz, ixy, "
+                                      "ixz, iyz).  Absent: 0.",
     "scene.bindings.<name>[i].scale": "The attribute is the parameter times this (e.g. -1 for gravity along -z).  "
                                       "Absent: 1.",
     "scene.bindings.<name>[i].depends": "Other parameters the attribute depends on (an inertia about the origin "

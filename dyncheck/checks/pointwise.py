@@ -12,6 +12,7 @@ from dyncheck.case.scene import PLACEHOLDER_INERTIA, PLACEHOLDER_MASS
 from dyncheck.common import ceilings
 from dyncheck.results.values import OWN_WORDS, Status, no_number, row
 from dyncheck.run.simulate import at_many_states, state_columns
+from engines import scene as scene_rules
 
 EPS = np.finfo(float).eps
 INTEGRATED = ("reference", "book", "pinocchio")  # sources driven by scipy's DOP853
@@ -299,44 +300,51 @@ def parameter_sets(case, count=None):
     return sets, count - len(sets)
 
 
-# MuJoCo's compiler refuses principal moments that break A + B >= C beyond its rounding; this much of their sum
-# is taken as rounding (a flat plate's A + B = C, to a few ulps).
-TRIANGLE_ROUNDING = 1e-12
+# What a binding may write of a body's mass and inertia (the schema's BINDABLE), which a drawn set can leave no rigid
+# body's.
+INERTIAL = ("mass", "ipos", "inertia_about_origin", "inertia", "fullinertia")
 
 
 def scene_breaks(case, drawn):
     """Why the scene has no rigid bodies at the parameters `drawn` over the case's, or None: the constraints its
-    bindings imply, which no bound of one parameter states.  A body whose mass, centre of mass or moment of
-    inertia about its origin is bound to parameters must keep a positive mass and, about its centre of mass,
-    principal moments that are positive and satisfy the triangle inequality A + B >= C: a moment about the origin,
-    I_o,i, leaves I_o,i - m (|c|^2 - c_i^2) about the centre of mass c, which a drawn mass or centre of mass (or
-    the moment itself) can make impossible (a Furuta pendulum's arm with its moments about the hub bound).  As the
-    engines write them (engines' `_write`): the moments about the origin are about the body's axes, the others
-    stay as the scene gives them about the centre of mass."""
+    bindings imply, which no bound of one parameter states.  A body whose mass, centre of mass or inertia is bound
+    to parameters must keep a positive mass and, about its centre of mass, principal moments that are positive and
+    satisfy the triangle inequality A + B >= C (engines.scene.unphysical): a moment about the origin, I_o,i, leaves
+    I_o,i - m (|c|^2 - c_i^2) about the centre of mass c, which a drawn mass or centre of mass (or the moment
+    itself) can make impossible (a Furuta pendulum's arm with its moments about the hub bound); bound principal
+    moments (inertia) or entries of the tensor (fullinertia) can break it themselves.  As the engines write them
+    (MujocoModel's `_write`): a moment about the origin is the principal moment of that axis less the parallel-axis
+    term and a ball joint's armature; the values no binding writes are the scene's, read from MuJoCo's model (a
+    welded body's too)."""
     bindings = case.spec["scene"].get("bindings", {})
     params = {**case.params, **drawn}
     bodies = {}  # name: {attribute: {index: value}}
     for param, locations in bindings.items():
         for location in locations:
-            if location["element"] == "body" and location.get("attribute") in ("mass", "ipos", "inertia_about_origin"):
+            if location["element"] == "body" and location.get("attribute") in INERTIAL:
                 bodies.setdefault(location["name"], {}).setdefault(location["attribute"], {})[
                     location.get("index", 0)] = params[param] * location.get("scale", 1.0)
     if not bodies:
         return None
-    tree = {body.name: body for body in case.model("mujoco").tree()}
+    model = case.model("mujoco")
     for name, written in bodies.items():
-        body = tree[name]
-        mass = written.get("mass", {}).get(0, body.mass)
-        com = np.array([written.get("ipos", {}).get(i, x) for i, x in enumerate(body.com)])
-        inertia = np.array(body.inertia, dtype=float)
-        for i, about_origin in written.get("inertia_about_origin", {}).items():
-            inertia[i, i] = about_origin - mass * (com @ com - com[i] ** 2)
+        scene = lambda attribute, i=0: model.read({"element": "body", "name": name, "attribute": attribute, "index": i})
+        value = lambda attribute, i=0: written.get(attribute, {}).get(i, scene(attribute, i))
+        mass, com = value("mass"), np.array([value("ipos", i) for i in range(3)])
         if not mass > 0:
             return f"body '{name}': mass {mass:.4g} kg is not positive"
-        moments = np.sort(np.linalg.eigvalsh(inertia))
-        if not (moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - TRIANGLE_ROUNDING)):
-            return (f"body '{name}': principal moments of inertia about its centre of mass "
-                    f"{', '.join(f'{x:.4g}' for x in moments)} kg m^2 are not a rigid body's (each > 0, A + B >= C)")
+        if "fullinertia" in written:  # the tensor in the body frame
+            inertia = scene_rules.full_tensor([value("fullinertia", i) for i in range(6)])
+        else:  # the principal moments, in the inertial frame
+            inertia = np.diag([value("inertia", i) for i in range(3)])
+        scene_com = np.array([scene("ipos", i) for i in range(3)])
+        for i, about_origin in written.get("inertia_about_origin", {}).items():
+            armature = scene("inertia_about_origin", i) - scene("inertia", i) - scene("mass") * (
+                scene_com @ scene_com - scene_com[i] ** 2)
+            inertia[i, i] = about_origin - mass * (com @ com - com[i] ** 2) - armature
+        why = scene_rules.unphysical(name, inertia)
+        if why:
+            return why
     return None
 
 
