@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from dyncheck.case.folder import Case
-from dyncheck.cli import main
 from dyncheck.case.scene import Coordinates, Point, Reaction, Scene, compare_scenes
+from dyncheck.cli import main
 from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
 

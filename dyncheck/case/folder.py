@@ -336,7 +336,7 @@ class Case:
                 call = lambda: getattr(model, function)(0.0, q0, v0)
                 start = time.perf_counter()
                 call()
-                engines += call_cost(call, time.perf_counter() - start)
+                engines += isolation.call_cost(call, time.perf_counter() - start)
         return self.derivation.cost + engines
 
     @property
@@ -530,7 +530,8 @@ class Case:
                     start = time.perf_counter()
                     answers[function] = getattr(model, function)(0.0, q0, v0)
                     if own is not None and name == "Reference" and function == "accelerations":
-                        own.cost = call_cost(lambda: model.accelerations(0.0, q0, v0), time.perf_counter() - start)
+                        own.cost = isolation.call_cost(lambda: model.accelerations(0.0, q0, v0),
+                                                       time.perf_counter() - start)
                         own.budget = self.spec.get("budget", {}).get(
                             "call", max(isolation.CALL_FLOOR, isolation.CALLS_PER_BUDGET * own.cost))
             except (ArithmeticError, np.linalg.LinAlgError):  # absurd parameters: the checks' rows say where
@@ -572,25 +573,6 @@ class Case:
 
     def __repr__(self):
         return f"Case({self.name!r}, overrides={self.overrides})"
-
-
-def call_cost(call, first):
-    """The cost of a call, s: the least of up to COST_CALLS more calls, within COST_TIME, after the first (which
-    took `first` s and pays for numpy's first use of each function it calls)."""
-    least, spent = first, first
-    for _ in range(COST_CALLS):
-        if spent > COST_TIME:
-            break
-        start = time.perf_counter()
-        call()
-        took = time.perf_counter() - start
-        least, spent = min(least, took), spent + took
-    return least
-
-
-# The calls that measure a derivation's cost: the least of 10 is within a few per cent of its steady cost, and 0.05 s
-# bounds what a slow derivation (a generated 7-dof arm, 2-6 ms a call) spends on it.
-COST_CALLS, COST_TIME = 10, 0.05
 
 
 class ProgramUpTo:
