@@ -9,7 +9,6 @@ import numpy as np
 
 from dyncheck.common import expressions
 from dyncheck.common.messages import WithBlock, suggest
-from engines.scene import FULL_INERTIA
 
 EQUATIONS = "equations.py"
 SCENE = "scene.xml"
@@ -37,6 +36,7 @@ AXES = "xyz"
 def component(location):
     """The name of a binding location's component in ABOUT: an axis, or a fullinertia's entry (xx ... yz)."""
     index = location.get("index", 0)
+    from engines.scene import FULL_INERTIA  # here, not above: rendering saved results imports no engine module
     return "".join(AXES[i] for i in FULL_INERTIA[index]) if location.get("attribute") == "fullinertia" else AXES[index]
 
 DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)  # of an output step into MuJoCo's steps: 1-2-5 steps

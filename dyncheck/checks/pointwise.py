@@ -12,7 +12,6 @@ from dyncheck.case.scene import PLACEHOLDER_INERTIA, PLACEHOLDER_MASS
 from dyncheck.common import ceilings
 from dyncheck.results.values import OWN_WORDS, Status, no_number, row
 from dyncheck.run.simulate import at_many_states, state_columns
-from engines import scene as scene_rules
 
 EPS = np.finfo(float).eps
 INTEGRATED = ("reference", "book", "pinocchio")  # sources driven by scipy's DOP853
@@ -316,6 +315,7 @@ def scene_breaks(case, drawn):
     (MujocoModel's `_write`): a moment about the origin is the principal moment of that axis less the parallel-axis
     term and a ball joint's armature; the values no binding writes are the scene's, read from MuJoCo's model (a
     welded body's too)."""
+    from engines import scene as scene_rules  # here, not above: rendering saved results imports no engine module
     bindings = case.spec["scene"].get("bindings", {})
     params = {**case.params, **drawn}
     bodies = {}  # name: {attribute: {index: value}}
