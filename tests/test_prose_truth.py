@@ -147,21 +147,9 @@ def test_a_measured_number_that_could_not_be_written_is_refused_on_load(tmp_path
 
 # -- the case files' prose --------------------------------------------------------------------------------
 
-def texts(spec, path=""):
-    """(field, text) of every text of a case file."""
-    if isinstance(spec, dict):
-        for key, value in spec.items():
-            yield from texts(value, f"{path}.{key}" if path else key)
-    elif isinstance(spec, list):
-        for i, value in enumerate(spec):
-            yield from texts(value, f"{path}[{i}]")
-    elif isinstance(spec, str):
-        yield path, spec
-
-
 def computed_at(case):
     """{(field, placeholder): its text} of every `{= ...}` of the case file at the case's parameters."""
-    return {(field, match[0]): case.prose(match[0], field) for field, text in texts(case.spec)
+    return {(field, match[0]): case.prose(match[0], field) for field, text in measured.texts(case.spec, None)
             for match in re.finditer(r"\{=[^{}]*\}", text)}
 
 
@@ -178,7 +166,7 @@ def stale_numbers(case, other, measured_book=(), measured_other=()):
     as_numbers = lambda texts_: {float(text) for text in texts_ if NUMBER.fullmatch(text)}
     values, measured_values = as_numbers(changed), as_numbers(changed | beside)
     found = []
-    for field, text in texts(case.spec):
+    for field, text in measured.texts(case.spec, None):
         if SHOWN.fullmatch(field):
             stale = measured_values if measured.FIELDS.fullmatch(field) else values
             for number in NUMBER.findall(PLACEHOLDER.sub(" ", text)):
@@ -206,7 +194,7 @@ def test_no_shown_sentence_keeps_a_number_of_the_book_s_parameters(folder, name)
 @pytest.mark.parametrize("folder, name", CASES, ids=[name for _, name in CASES])
 def test_no_shown_sentence_judges_a_size_but_by_a_rule(folder, name):
     spec = dyncheck.load_case(name, folder).spec
-    found = [f"{field}: {match[0]}" for field, text in texts(spec) if SHOWN.fullmatch(field)
+    found = [f"{field}: {match[0]}" for field, text in measured.texts(spec, None) if SHOWN.fullmatch(field)
              for match in JUDGED.finditer(PLACEHOLDER.sub(" ", text))]
     assert not found, found
 

@@ -83,18 +83,6 @@ PROSE_NUMBER = re.compile(r"\{=([^{}]*)\}")  # Case.prose
 PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # an override given as text
 
 
-def prose_fields(spec, path=""):
-    """(field, text) for every text of a case file that holds a `{= expression}` (Case.prose)."""
-    if isinstance(spec, dict):
-        for key, value in spec.items():
-            yield from prose_fields(value, f"{path}.{key}" if path else key)
-    elif isinstance(spec, list):
-        for i, value in enumerate(spec):
-            yield from prose_fields(value, f"{path}[{i}]")
-    elif isinstance(spec, str) and PROSE_NUMBER.search(spec):
-        yield path, spec
-
-
 def case_names(cases_dir=CASES_DIR):
     """The case folders in `cases_dir` (each a folder holding a case.toml), by name."""
     cases_dir = Path(cases_dir)
@@ -161,7 +149,7 @@ class Case:
         self.params = MappingProxyType({**self.defaults, **self.overrides})  # read-only: models get it too
         schema.check_params(self.spec, self.params, self.overrides, self.origin)
         schema.check_values(self.spec, self.origin, self.value)
-        for field, text in prose_fields(self.spec):  # a formula in the prose that does not evaluate: at load
+        for field, text in measured.texts(self.spec, PROSE_NUMBER):  # a formula that does not evaluate: at load
             self.prose(text, field)
         measured.check(self)  # and a measured number that could not be
         q0, v0, _ = self.initial

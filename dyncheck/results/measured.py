@@ -92,15 +92,16 @@ def check(case):
                              f"words {', '.join(words.WORDS)} (dyncheck.common.words)")
 
 
-def texts(spec, path=""):
-    """(field, text) of every text of a case file that holds a measured number."""
+def texts(spec, holding=MEASURED_NUMBER, path=""):
+    """(field, text) of every text of a case file that `holding` finds in (a measured number, by default; None:
+    every text), the field a dotted path such as `findings[2].measured`."""
     if isinstance(spec, dict):
         for key, value in spec.items():
-            yield from texts(value, f"{path}.{key}" if path else key)
+            yield from texts(value, holding, f"{path}.{key}" if path else key)
     elif isinstance(spec, list):
         for i, value in enumerate(spec):
-            yield from texts(value, f"{path}[{i}]")
-    elif isinstance(spec, str) and MEASURED_NUMBER.search(spec):
+            yield from texts(value, holding, f"{path}[{i}]")
+    elif isinstance(spec, str) and (holding is None or holding.search(spec)):
         yield path, spec
 
 
