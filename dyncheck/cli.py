@@ -239,8 +239,11 @@ def make_report(results, cases, out, no_studies, animations=True):
 def write_pages(results, out, animations):
     """dyncheck.pages.report.write_reports, as a stage with its progress (a minute or more, with the animations)."""
     from dyncheck.pages.report import write_reports
-    with Progress(f"pages to {out}/"):
-        return write_reports(results, out, animations)
+    with Progress(f"pages to {out}/", total=len(results), unit="case") as bar:
+        def written(name):
+            bar.step()
+            bar.note(f"{name} written")
+        return write_reports(results, out, animations, written)
 
 
 def report_saved(args, start):

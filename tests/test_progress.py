@@ -30,7 +30,11 @@ def quick_report(monkeypatch):
     monkeypatch.setattr(work_precision, "sweep", steps(pd.DataFrame(columns=work_precision.COLUMNS)))
     monkeypatch.setattr(stability, "studies", steps([]))
     monkeypatch.setattr(campbell, "sweep", steps(None))
-    monkeypatch.setattr(report, "write_reports", lambda results, out, animations=True: [])
+    def pages(results, out, animations=True, case_written=None):
+        for result in results:
+            case_written(result.name)
+        return []
+    monkeypatch.setattr(report, "write_reports", pages)
     monkeypatch.delenv("GITHUB_ACTIONS", raising=False)
 
 
@@ -61,7 +65,8 @@ def test_a_redirected_report_says_each_case_and_stage_on_stderr(quick_report, tm
         "dyncheck: studies of piston: Campbell diagram (T)",
         "dyncheck: studies of piston done (6 runs, T)",
         f"dyncheck: {pages} ...",
-        f"dyncheck: {pages} done (T)"]
+        f"dyncheck: {pages}: piston written (T)",
+        f"dyncheck: {pages} done (1/1 cases, T)"]
     assert "dyncheck: checks" not in out and "studies and pages: wrote 0 files" in out
 
 

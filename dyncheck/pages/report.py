@@ -31,9 +31,10 @@ from dyncheck.results.values import RESULTS_VERSION, case_json, load_result, sav
 from dyncheck.studies import work_precision
 
 
-def write_reports(results, out, animations=True):
+def write_reports(results, out, animations=True, case_written=lambda name: None):
     """Write the pages of `results` into the folder `out`, keeping what it holds of other cases, and
-    return the files written (relative to `out`); `animations`: with each case's GIF.
+    return the files written (relative to `out`); `animations`: with each case's GIF; `case_written(name)`
+    is told as each case's pages are done (a case's pages and GIF take tens of seconds: the progress).
 
     The new tree is a copy of `out` with this run's files written over it, and its index and errata
     are made from the summaries it holds; it is built beside `out` and exchanged with it in one
@@ -60,6 +61,7 @@ def write_reports(results, out, animations=True):
                 else:  # its checks did not finish (dyncheck.checks.runs.unfinished)
                     written.append(write_unfinished_page(result, case, tree))
                 written.append(write_summary(result, case, tree))
+                case_written(result.name)
             cases = summaries(tree, out)
             written.append(write_index(tree, cases))
             written += write_index_timing(tree, cases)
