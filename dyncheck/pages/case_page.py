@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from dyncheck.case.folder import CASES_DIR
+from dyncheck.checks.pointwise import ENGINES
 from dyncheck.common import expressions
 from dyncheck.common.expressions import evaluate
 from dyncheck.common.messages import plural, statuses_in_words
@@ -22,7 +23,9 @@ from dyncheck.results.values import OWN_WORDS, Status, consequences, format_rows
 from dyncheck.run.simulate import state_columns
 from dyncheck.studies import stability, work_precision
 
-ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
+# The sources that must agree everywhere, the reference named in a researcher's words too (a case of one
+# derivation calls it "derivation": dyncheck.checks.runs.in_own_words)
+AGREEING = {*ENGINES, OWN_WORDS["reference"]}
 CPU_TIME = ("A run's CPU time is the wall time it takes on an idle core: other processes' load on the machine,"
             " which stretches wall times by factors, leaves it out.")
 CPU_TIES = ("Each point ranks by its fastest run: what slows a run only adds time, and on a shared machine it adds it"
@@ -54,8 +57,8 @@ def size(error, spec=".3g"):
 
 
 def worst_engine_error(rows):
-    """Largest pointwise error among reference, MuJoCo and Pinocchio."""
-    errors = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= set(ENGINES)]
+    """Largest pointwise error among the reference (or derivation), MuJoCo and Pinocchio."""
+    errors = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= AGREEING]
     return max(errors, default=float("nan"))
 
 
@@ -65,7 +68,7 @@ def random_tried(result, case):
     were not compared: the case's checks did not finish)."""
     sample, params = case.spec["sample"], case.spec["sample"].get("params", {})
     engine_rows = [r for r in result.rows if r.check in ("pointwise", "random parameters")
-                   and set(r.sources) <= set(ENGINES)]
+                   and set(r.sources) <= AGREEING]
     return {"states": sample["count"], "seed": sample["seed"], "parameter_sets": params.get("sets", 0),
             "states_per_set": params.get("states", 0), "parameter_seed": params.get("seed"),
             "agreed": all(r.status == Status.PASS for r in engine_rows) if engine_rows else None}
