@@ -13,7 +13,7 @@ import pytest
 from dyncheck.case.scene import Driven
 from dyncheck.case.units import UNIT_REGISTRY
 from dyncheck.common.messages import statuses_in_words
-from dyncheck.pages.case_page import law_of_time, markdown_table, random_tried, worst_engine_error
+from dyncheck.pages.case_page import as_written, law_of_time, markdown_table, random_tried, worst_engine_error
 from dyncheck.results.values import OWN_WORDS, Row, Status
 from test_ci_contract import toy
 
@@ -114,3 +114,15 @@ def test_a_wrong_derivation_is_no_agreement_on_the_index():
 
 def row_of(check, quantity, sources, error, status):
     return Row(check, quantity, sources, error, 1e-9, 1e-6, status)
+
+
+def test_a_docstring_s_matrix_keeps_its_lines_and_its_prose_its_paragraphs():
+    text = ("A cart and a pendulum.\n"
+            "Lagrange's equations give\n\n"
+            "    M(q) = [[M + m,          m l cos(theta)],\n"
+            "            [m l cos(theta), m l^2         ]]\n\n"
+            "- x: the cart\n- theta: the rod\n")
+    assert as_written(text).split("\n\n") == [
+        "A cart and a pendulum. Lagrange's equations give",
+        "```text\nM(q) = [[M + m,          m l cos(theta)],\n        [m l cos(theta), m l^2         ]]\n```",
+        "- x: the cart\n- theta: the rod"]
