@@ -182,6 +182,7 @@ def test_the_subjects_pass_unmutated(tmp_path):
         assert [r for r in rows if r.status != Status.PASS] == [] and localisations == (), subject.name
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_four_planted_errors_in_the_tutorial_are_named(tmp_path):
     """One error of each kind in the cart-pendulum's force side, as the issue asks: each detected, and
     its wrong equation named with the term."""
@@ -193,6 +194,7 @@ def test_four_planted_errors_in_the_tutorial_are_named(tmp_path):
         assert verdict.named, (str(mutant), verdict.changed, verdict.failing, [str(l) for l in verdict.localisations])
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_an_entry_of_m_wrong_inside_closed_form_accelerations_is_named_as_m_s(tmp_path):
     """m left out of M + m (M11) inside accelerations written in closed form: the x equation's residual is
     -m x''_d, a term in the derivation's own acceleration, named with M's column; nothing else is named."""
