@@ -281,8 +281,7 @@ class DrakeModel:
         stiffness, springref, damping, option gravity.  A body's inertia is held in `_inertias` and set in Drake's
         context after all the writes: Drake refuses an inertia that no body can have, which one of several writes to
         a body may leave (the top's moments about its tip, written one axis after another)."""
-        element, name, attribute = location["element"], location.get("name"), location.get("attribute")
-        i = location.get("index", 0)
+        element, name, attribute, i = location.element, location.name, location.attribute, location.index
         if element == "option":
             gravity = self.plant.gravity_field().gravity_vector().copy()
             gravity[i] = value
@@ -325,8 +324,7 @@ class DrakeModel:
 
     def read(self, location):
         """The model's value at a binding location (as MujocoModel.read)."""
-        element, name, attribute = location["element"], location.get("name"), location.get("attribute")
-        i = location.get("index", 0)
+        element, name, attribute, i = location.element, location.name, location.attribute, location.index
         if element == "option":
             return float(self.plant.gravity_field().gravity_vector()[i])
         if element == "joint":

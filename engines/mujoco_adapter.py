@@ -243,27 +243,26 @@ class MujocoModel:
 
     def read(self, location):
         """The compiled model's value at a binding location (see `_write`)."""
-        element, name = location["element"], location.get("name")
-        index = location.get("index", 0)
+        element, name, index = location.element, location.name, location.index
         if element == "option":
             return float(getattr(self.m.opt, name)[index])
-        if element == "body" and location["attribute"] == "inertia_about_origin":
+        if element == "body" and location.attribute == "inertia_about_origin":
             body = self.body_id(name)
             ipos, mass = self.m.body_ipos[body], self.m.body_mass[body]
             ball = self.m.dof_armature[self.m.body_dofadr[body]:][:self.m.body_dofnum[body]]
             armature = ball[index] if len(ball) == 3 else 0.0
             return float(self.m.body_inertia[body][index] + mass * (ipos @ ipos - ipos[index] ** 2) + armature)
-        if element == "body" and location["attribute"] == "fullinertia":  # about the centre of mass, body frame
+        if element == "body" and location.attribute == "fullinertia":  # about the centre of mass, body frame
             body = self.body_id(name)
             frame = _matrix(self.m.body_iquat[body])
             return float((frame @ np.diag(self.m.body_inertia[body]) @ frame.T)[scene_rules.FULL_INERTIA[index]])
         if element == "body":
-            array = getattr(self.m, "body_" + location["attribute"])[self.body_id(name)]
+            array = getattr(self.m, "body_" + location.attribute)[self.body_id(name)]
         else:
             qadr, dof = self._joint(name)
             array = {"stiffness": lambda: self.m.jnt_stiffness[self._id(mujoco.mjtObj.mjOBJ_JOINT, name)],
                      "springref": lambda: self.m.qpos_spring[qadr], "damping": lambda: self.m.dof_damping[dof]
-                     }[location["attribute"]]()
+                     }[location.attribute]()
         return float(np.atleast_1d(array)[index])
 
     # -- state -------------------------------------------------------------
@@ -842,11 +841,11 @@ def _write_all(spec, writes):
     """`_write` each (location, value) into an MjSpec; then ValueError naming the body for an inertia they leave
     unphysical (several writes may pass through one: checked once all are written)."""
     # the inertial frame of a body that the file gives diaginertia, for a write of its fullinertia
-    compiled = spec.compile() if any(location.get("attribute") == "fullinertia" for location, _ in writes) else None
+    compiled = spec.compile() if any(location.attribute == "fullinertia" for location, _ in writes) else None
     written = set()
     for location, value in writes:
-        if location["element"] == "body" and location.get("attribute") in ("inertia", "fullinertia"):
-            written.add(location["name"])
+        if location.element == "body" and location.attribute in ("inertia", "fullinertia"):
+            written.add(location.name)
         _write(spec, location, value, compiled)
     for name in written:
         body = spec.body(name)
@@ -860,8 +859,7 @@ def _write(spec, location, value, compiled=None):
     """Set a scene value in an MjSpec: body pos/ipos/mass/inertia_about_origin/inertia (diaginertia, a body
     without fullinertia)/fullinertia (the body frame's, from `compiled`'s inertia where the file gives
     diaginertia), joint stiffness, damping, springref (a hinge's in rad), option gravity."""
-    element, name, attribute = location["element"], location.get("name"), location.get("attribute")
-    index = location.get("index", 0)
+    element, name, attribute, index = location.element, location.name, location.attribute, location.index
     if element == "option":
         target, attribute = spec.option, name
     elif element == "body":

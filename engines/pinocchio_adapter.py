@@ -255,7 +255,7 @@ class PinocchioModel:
 
     def _slot(self, location):
         """(object, attribute) holding a binding location's value in the Pinocchio model."""
-        element, name, attribute = location["element"], location.get("name"), location.get("attribute")
+        element, name, attribute = location.element, location.name, location.attribute
         if element == "option":
             return self.m.gravity, "linear"
         if element == "joint":
@@ -270,11 +270,11 @@ class PinocchioModel:
     def _write(self, location, value):
         """Set a binding location's value; an inertia's in `_written` (set in the model once all are written)."""
         holder, key = self._slot(location)
-        i = location.get("index", 0)
-        if location["element"] == "body" and key != "translation":
-            self._touched.add(self._body_joint(location["name"]))
+        i = location.index
+        if location.element == "body" and key != "translation":
+            self._touched.add(self._body_joint(location.name))
         if key in INERTIA_ATTRIBUTES:
-            name = location["name"]
+            name = location.name
             inertia = self._written.setdefault(name, self._inertia_of(name))  # about the com, in the body's frame
             joint = self._body_joint(name)
             if key == "inertia_about_origin":  # about the body origin (a ball joint's armature in it): less the
@@ -287,7 +287,7 @@ class PinocchioModel:
                 principal = frame.T @ inertia @ frame
                 principal[i, i] = value
                 inertia[:] = frame @ principal @ frame.T
-        elif location["element"] == "joint":
+        elif location.element == "joint":
             holder[key] = value
         elif np.ndim(getattr(holder, key)) == 0:
             setattr(holder, key, value)
@@ -348,17 +348,17 @@ class PinocchioModel:
 
     def read(self, location):
         holder, key = self._slot(location)
-        i = location.get("index", 0)
+        i = location.index
         if key == "inertia_about_origin":
             return float(holder.inertia[i, i] + holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2))
         if key == "fullinertia":
-            return float(self._inertia_of(location["name"])[scene_rules.FULL_INERTIA[i]])
+            return float(self._inertia_of(location.name)[scene_rules.FULL_INERTIA[i]])
         if key == "inertia":
-            frame = self._inertial_frame(location["name"])
-            return float((frame.T @ self._inertia_of(location["name"]) @ frame)[i, i])
-        if location["element"] == "joint":
+            frame = self._inertial_frame(location.name)
+            return float((frame.T @ self._inertia_of(location.name) @ frame)[i, i])
+        if location.element == "joint":
             return float(holder.get(key, 0.0))
-        return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
+        return float(np.atleast_1d(getattr(holder, key))[i])
 
     # -- state -------------------------------------------------------------
     def engine_state(self, t, q, v):
