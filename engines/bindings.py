@@ -77,28 +77,31 @@ def parallel_axis(mass, com, index):
     return mass * (com @ com - com[index] ** 2)
 
 
-def written_inertia(location, value, mass, com, inertia, frame, armature):
+def written_inertia(location, value, mass, com, inertia, armature, frame):
     """A body's inertia about its centre of mass in its frame (a new array) once a binding of one of
-    INERTIA_ATTRIBUTES writes `value` at `location`: its `inertia` before, its mass and centre of mass, the
-    rotation `frame` of its inertial frame in its frame, and the armature of a ball joint on the world that a moment
-    about the origin holds (MuJoCo's evaluation model counts it in the body's inertia)."""
+    INERTIA_ATTRIBUTES writes `value` at `location`: its `inertia` before, its mass and centre of mass, the armature
+    of a ball joint on the world that a moment about the origin holds (MuJoCo's evaluation model counts it in the
+    body's inertia), and `frame()`, the rotation of its inertial frame in its frame, asked of a principal moment only
+    (an orientation that an adapter does not read is refused there alone)."""
     i, inertia = location.index, np.array(inertia, dtype=float)
     if location.attribute == "inertia_about_origin":  # less the parallel-axis term and the armature
         inertia[i, i] = value - parallel_axis(mass, com, i) - armature
     elif location.attribute == "fullinertia":
         inertia[FULL_INERTIA[i]] = inertia[FULL_INERTIA[i][::-1]] = value
     else:  # a principal moment, in the inertial frame
-        principal = frame.T @ inertia @ frame
+        rotation = frame()
+        principal = rotation.T @ inertia @ rotation
         principal[i, i] = value
-        inertia = frame @ principal @ frame.T
+        inertia = rotation @ principal @ rotation.T
     return inertia
 
 
-def read_inertia(location, mass, com, inertia, frame, armature):
+def read_inertia(location, mass, com, inertia, armature, frame):
     """The number at `location` (one of INERTIA_ATTRIBUTES) of a body's inertia, as `written_inertia` writes it."""
     i = location.index
     if location.attribute == "inertia_about_origin":
         return float(inertia[i, i] + parallel_axis(mass, com, i) + armature)
     if location.attribute == "fullinertia":
         return float(inertia[FULL_INERTIA[i]])
-    return float((frame.T @ inertia @ frame)[i, i])
+    rotation = frame()
+    return float((rotation.T @ inertia @ rotation)[i, i])

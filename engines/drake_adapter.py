@@ -38,15 +38,13 @@ from pydrake.multibody.tree import (BallRpyJoint, BodyIndex, JacobianWrtVariable
                                     PrismaticJoint, RevoluteJoint, RotationalInertia, SpatialInertia, WeldJoint)
 
 from engines import euler, scene as scene_rules
+from engines.bindings import read_inertia, unphysical, written_inertia
 from engines.linalg import linear_solution
 from engines.loops import Loop, _continuation, _dependent_rates, _rates_map
-from engines.mjcf_joints import inertial_frames, joint_values
+from engines.mjcf_joints import NO_LIMIT, inertial_frame, inertial_frames, is_mjcf, joint_values
 from engines.scene import Body
 
-SCALAR_JOINTS = (RevoluteJoint, PrismaticJoint)
-# URDF cannot write an unlimited revolute or prismatic joint: limits at or beyond this are read as none (as by
-# Pinocchio's adapter); Drake's MJCF joints without a range have infinite ones.
-NO_LIMIT = 1e300
+SCALAR_JOINTS = (RevoluteJoint, PrismaticJoint)  # Drake's MJCF joints without a range have infinite limits
 
 # What Drake's MJCF parser says it ignores, and why that is no difference here (the other warnings are refused).
 IGNORED = {
@@ -95,7 +93,7 @@ class DrakeModel:
     @staticmethod
     def elements_in(path):
         """What the scene file holds of a case's bindings (as PinocchioModel.elements_in)."""
-        return {"body", "joint", "option"} if _is_mjcf(path) else {"body"}
+        return {"body", "joint", "option"} if is_mjcf(path) else {"body"}
 
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
@@ -120,7 +118,7 @@ class DrakeModel:
             if not any(known in message for known in IGNORED):
                 raise Refused(f"{self.path}: Drake's parser drops or changes what MuJoCo's compiler reads: "
                               f"{' '.join(message.split())}")
-        mjcf = _is_mjcf(self.path)
+        mjcf = is_mjcf(self.path)
         if mjcf:
             _refuse_misread(document, self.path)
             self.joint_values = joint_values(document, self.path)
@@ -143,7 +141,7 @@ class DrakeModel:
             self._write(location, value)
         for index in self._written:  # once all are written: Drake refuses an inertia no body can have
             mass, com, inertia = self._inertias[index]
-            why = scene_rules.unphysical(self.plant.get_body(BodyIndex(index)).name(), inertia)
+            why = unphysical(self.plant.get_body(BodyIndex(index)).name(), inertia)
             if why:
                 raise ValueError(f"{self.path}: {why}")
             self.plant.get_body(BodyIndex(index)).SetSpatialInertiaInBodyFrame(
@@ -303,17 +301,9 @@ class DrakeModel:
             elif attribute == "ipos":
                 com = com.copy()
                 com[i] = value
-            elif attribute == "inertia_about_origin":  # less the parallel-axis term and a ball joint's armature
-                inertia = inertia.copy()  # (as MuJoCo's)
-                inertia[i, i] = value - mass * (com @ com - com[i] ** 2) - self._ball_armature(name)
-            elif attribute == "fullinertia":  # about the centre of mass, in the body frame
-                inertia = inertia.copy()
-                inertia[scene_rules.FULL_INERTIA[i]] = inertia[scene_rules.FULL_INERTIA[i][::-1]] = value
-            else:  # inertia: a principal moment, in the inertial frame
-                frame = self._inertial_frame(name)
-                principal = frame.T @ inertia @ frame
-                principal[i, i] = value
-                inertia = frame @ principal @ frame.T
+            else:  # an inertia (engines.bindings)
+                inertia = written_inertia(location, value, mass, com, inertia, self._ball_armature(name),
+                                          lambda: inertial_frame(self._inertial_frames, name, self.path))
             self._inertias[int(self._body(name).index())] = mass, com, inertia
             self._written.add(int(self._body(name).index()))  # set in the context after the writes
         self._last = None, None
@@ -336,19 +326,8 @@ class DrakeModel:
             return mass
         if attribute == "ipos":
             return float(com[i])
-        if attribute == "fullinertia":
-            return float(inertia[scene_rules.FULL_INERTIA[i]])
-        if attribute == "inertia":
-            frame = self._inertial_frame(name)
-            return float((frame.T @ inertia @ frame)[i, i])
-        return float(inertia[i, i] + mass * (com @ com - com[i] ** 2) + self._ball_armature(name))
-
-    def _inertial_frame(self, body):
-        """As PinocchioModel._inertial_frame: the body's inertial frame in its frame (engines.mjcf_joints)."""
-        frame = self._inertial_frames.get(body)
-        if isinstance(frame, str):
-            raise ValueError(f"{self.path}: body '{body}': {frame}")
-        return np.eye(3) if frame is None else frame
+        return read_inertia(location, mass, com, inertia, self._ball_armature(name),
+                            lambda: inertial_frame(self._inertial_frames, name, self.path))
 
     def _inboard(self, body):
         """The joint (or weld) that carries body `body`."""
@@ -833,10 +812,6 @@ class DrakeLoops:
             for body, anchor, sign in ((body1, anchor1, 1.0), (body2, anchor2, -1.0)):
                 out.append((body.EvalPoseInWorld(self.context) @ anchor, int(body.index()), sign * force))
         return out
-
-
-def _is_mjcf(path):
-    return str(path).endswith(".xml")
 
 
 def _bodies(plant):

@@ -21,6 +21,7 @@ import mujoco.rollout
 import numpy as np
 
 from engines import euler, scene as scene_rules
+from engines.bindings import FULL_INERTIA, full_tensor, parallel_axis, unphysical
 from engines.linalg import linear_solution
 from engines.loops import MujocoLoops
 
@@ -251,11 +252,11 @@ class MujocoModel:
             ipos, mass = self.m.body_ipos[body], self.m.body_mass[body]
             ball = self.m.dof_armature[self.m.body_dofadr[body]:][:self.m.body_dofnum[body]]
             armature = ball[index] if len(ball) == 3 else 0.0
-            return float(self.m.body_inertia[body][index] + mass * (ipos @ ipos - ipos[index] ** 2) + armature)
+            return float(self.m.body_inertia[body][index] + parallel_axis(mass, ipos, index) + armature)
         if element == "body" and location.attribute == "fullinertia":  # about the centre of mass, body frame
             body = self.body_id(name)
             frame = _matrix(self.m.body_iquat[body])
-            return float((frame @ np.diag(self.m.body_inertia[body]) @ frame.T)[scene_rules.FULL_INERTIA[index]])
+            return float((frame @ np.diag(self.m.body_inertia[body]) @ frame.T)[FULL_INERTIA[index]])
         if element == "body":
             array = getattr(self.m, "body_" + location.attribute)[self.body_id(name)]
         else:
@@ -849,8 +850,7 @@ def _write_all(spec, writes):
         _write(spec, location, value, compiled)
     for name in written:
         body = spec.body(name)
-        why = scene_rules.unphysical(name, np.diag(body.inertia) if np.isnan(body.fullinertia[0])
-                                     else scene_rules.full_tensor(body.fullinertia))
+        why = unphysical(name, np.diag(body.inertia) if np.isnan(body.fullinertia[0]) else full_tensor(body.fullinertia))
         if why:
             raise ValueError(why)
 
@@ -877,7 +877,7 @@ def _write(spec, location, value, compiled=None):
         body = compiled.body(name)
         frame = _matrix(body.iquat)
         tensor = frame @ np.diag(body.inertia) @ frame.T
-        target.fullinertia = [tensor[entry] for entry in scene_rules.FULL_INERTIA]
+        target.fullinertia = [tensor[entry] for entry in FULL_INERTIA]
         target.inertia, target.iquat = np.zeros(3), [1.0, 0.0, 0.0, 0.0]
         target.ialt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
     if attribute == "inertia_about_origin":
@@ -885,7 +885,7 @@ def _write(spec, location, value, compiled=None):
         # parallel-axis term of the centre of mass and the body's ball-joint armature (see the top).
         ipos = np.array(target.ipos)
         armature = sum(j.armature for j in target.joints if j.type == mujoco.mjtJoint.mjJNT_BALL)
-        value = value - target.mass * (ipos @ ipos - ipos[index] ** 2) - armature
+        value = value - parallel_axis(target.mass, ipos, index) - armature
         attribute = "inertia"
     current = getattr(target, attribute)
     if np.ndim(current) == 0:

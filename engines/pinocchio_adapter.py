@@ -17,9 +17,10 @@ import numpy as np
 import pinocchio as pin
 
 from engines import euler, scene as scene_rules
+from engines.bindings import INERTIA_ATTRIBUTES, read_inertia, unphysical, written_inertia
 from engines.linalg import linear_solution
 from engines.loops import PinocchioLoops
-from engines.mjcf_joints import inertial_frames, joint_values
+from engines.mjcf_joints import NO_LIMIT, inertial_frame, inertial_frames, is_mjcf, joint_values
 
 ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
 
@@ -32,16 +33,16 @@ class PinocchioModel:
     def elements_in(path):
         """What the scene file at `path` holds of a case's bindings (the case writes the rest): an MJCF its
         bodies, joints and options, a URDF only its bodies (masses and lengths: no springs, no gravity)."""
-        return {"body", "joint", "option"} if _is_mjcf(path) else {"body"}
+        return {"body", "joint", "option"} if is_mjcf(path) else {"body"}
 
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
         root = scene.urdf_root_joint
         constraints = []  # the loops' (a URDF closes none: refused against the MJCF's, dyncheck.case.folder)
         try:
-            if _is_mjcf(self.path) and _equalities(self.path):
+            if is_mjcf(self.path) and _equalities(self.path):
                 self.m, constraints = pin.buildModelAndLegacyConstraintsFromMJCF(self.path)
-            elif _is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
+            elif is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
                 self.m = pin.buildModelFromMJCF(self.path)
             elif root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
                 self.m = pin.buildModelFromXML(_urdf_text(self.path), ROOT_JOINTS[root.type](), root.name)
@@ -57,7 +58,7 @@ class PinocchioModel:
         self._composite = any(joint.shortname() == "JointModelComposite" for joint in self.m.joints)
         self._ball_armature = {}  # joint id: the armature `_complete_mjcf` holds in its body's inertia
         self._joints = self._joints_by_name(document)
-        if _is_mjcf(self.path):
+        if is_mjcf(self.path):
             self._complete_mjcf(document, scene)
         else:
             # URDF has no springs: bindings set them; its dampers are Pinocchio's model.damping
@@ -79,7 +80,7 @@ class PinocchioModel:
         for location, value in writes:
             self._write(location, value)
         for body, inertia in self._written.items():  # once all are written: several may pass through an unphysical one
-            why = scene_rules.unphysical(body, inertia)
+            why = unphysical(body, inertia)
             if why:
                 raise ValueError(f"{self.path}: {why}")
             joint = self._body_joint(body)
@@ -104,7 +105,7 @@ class PinocchioModel:
         self.driven = [(self._joint(j), (law.angle, law.rate, law.acc)) for j, law in scene.driven.items()]
         # after the case's joints are found: a renamed joint is missing before it is extra.  An MJCF's
         # are refused by MuJoCo's adapter, on the same file.
-        unmodelled = None if _is_mjcf(self.path) else next(_unmodelled(document, scene), None)
+        unmodelled = None if is_mjcf(self.path) else next(_unmodelled(document, scene), None)
         if unmodelled:
             raise scene_rules.refusal(self.path, "URDF", *unmodelled)
         self.forces = [(self._joint(joint).idx_v, force) for joint, force in scene.applied.items()]
@@ -270,29 +271,20 @@ class PinocchioModel:
     def _write(self, location, value):
         """Set a binding location's value; an inertia's in `_written` (set in the model once all are written)."""
         holder, key = self._slot(location)
-        i = location.index
+        name = location.name
         if location.element == "body" and key != "translation":
-            self._touched.add(self._body_joint(location.name))
-        if key in INERTIA_ATTRIBUTES:
-            name = location.name
-            inertia = self._written.setdefault(name, self._inertia_of(name))  # about the com, in the body's frame
-            joint = self._body_joint(name)
-            if key == "inertia_about_origin":  # about the body origin (a ball joint's armature in it): less the
-                inertia[i, i] = (value - holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2)  # parallel
-                                 - self._ball_armature.get(joint, 0.0))  # axis term and the armature
-            elif key == "fullinertia":
-                inertia[scene_rules.FULL_INERTIA[i]] = inertia[scene_rules.FULL_INERTIA[i][::-1]] = value
-            else:  # in the inertial frame
-                frame = self._inertial_frame(name)
-                principal = frame.T @ inertia @ frame
-                principal[i, i] = value
-                inertia[:] = frame @ principal @ frame.T
+            self._touched.add(self._body_joint(name))
+        if key in INERTIA_ATTRIBUTES:  # about the com, in the body's frame
+            self._written[name] = written_inertia(location, value, holder.mass, holder.lever,
+                                                  self._written.get(name, self._inertia_of(name)),
+                                                  self._ball_armature.get(self._body_joint(name), 0.0),
+                                                  lambda: inertial_frame(self._inertial_frames, name, self.path))
         elif location.element == "joint":
             holder[key] = value
         elif np.ndim(getattr(holder, key)) == 0:
             setattr(holder, key, value)
         else:  # Pinocchio's bindings return these arrays by reference
-            getattr(holder, key)[i] = value
+            getattr(holder, key)[location.index] = value
 
     def _inertia_of(self, body):
         """A moving body's inertia about its centre of mass in its frame, as the file writes it: without the
@@ -302,14 +294,6 @@ class PinocchioModel:
 
     def _armature_of(self, joint):
         return self._ball_armature.get(joint, 0.0) * np.eye(3)
-
-    def _inertial_frame(self, body):
-        """The rotation of a body's inertial frame in its frame (MJCF's <inertial> orientation, URDF's <inertial>
-        <origin rpy>), in which a binding of `inertia` is a diagonal entry (MJCF's diaginertia)."""
-        frame = self._inertial_frames.get(body)
-        if isinstance(frame, str):  # an orientation this adapter does not read
-            raise ValueError(f"{self.path}: body '{body}': {frame}")
-        return np.eye(3) if frame is None else frame
 
     def tree(self):
         """The moving bodies as Pinocchio models them (see engines.scene.Body, engines.scene.moving_body): one per
@@ -348,17 +332,14 @@ class PinocchioModel:
 
     def read(self, location):
         holder, key = self._slot(location)
-        i = location.index
-        if key == "inertia_about_origin":
-            return float(holder.inertia[i, i] + holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2))
-        if key == "fullinertia":
-            return float(self._inertia_of(location.name)[scene_rules.FULL_INERTIA[i]])
-        if key == "inertia":
-            frame = self._inertial_frame(location.name)
-            return float((frame.T @ self._inertia_of(location.name) @ frame)[i, i])
+        name = location.name
+        if key in INERTIA_ATTRIBUTES:
+            return read_inertia(location, holder.mass, holder.lever, self._inertia_of(name),
+                                self._ball_armature.get(self._body_joint(name), 0.0),
+                                lambda: inertial_frame(self._inertial_frames, name, self.path))
         if location.element == "joint":
             return float(holder.get(key, 0.0))
-        return float(np.atleast_1d(getattr(holder, key))[i])
+        return float(np.atleast_1d(getattr(holder, key))[location.index])
 
     # -- state -------------------------------------------------------------
     def engine_state(self, t, q, v):
@@ -757,16 +738,6 @@ class BallJointCoordinates:
         return q, v
 
 
-def _is_mjcf(path):
-    return str(path).endswith(".xml")
-
-
-# A body's inertia as a binding sets it: about the body origin (a diagonal entry), the principal moments in the
-# inertial frame (MJCF's diaginertia, index 0..2) or the full tensor about the centre of mass in the body's frame (MJCF's
-# fullinertia, a URDF <inertia> where its <origin> has no rpy: index 0..5, engines.scene.FULL_INERTIA)
-INERTIA_ATTRIBUTES = ("inertia_about_origin", "inertia", "fullinertia")
-
-
 def _urdf_text(path):
     """The URDF at `path` with `NO_LIMIT` written into each revolute or prismatic joint without a <limit>, which
     urdfdom rejects ("does not specify limits"): a joint without a limit has none.  ValueError for a file that
@@ -846,11 +817,6 @@ def _misread(document):
         if element.tag == "include":
             yield (f'<include file="{element.get("file")}">: Pinocchio\'s MJCF parser skips included files; '
                    "write their elements into the scene")
-
-
-# URDF cannot write an unlimited revolute or prismatic joint (urdfdom requires <limit> and refuses inf):
-# limits at or beyond this are read as none.
-NO_LIMIT = 1e300
 
 
 def _unmodelled(robot, scene):

@@ -74,33 +74,6 @@ def combined_inertia(parts):
     return float(mass), com, inertia
 
 
-# The six entries of a full inertia (MJCF fullinertia, URDF <inertia>: ixx iyy izz ixy ixz iyz) in the 3 x 3 tensor.
-FULL_INERTIA = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
-
-
-def full_tensor(six):
-    """The symmetric 3 x 3 inertia of its six entries (FULL_INERTIA's order)."""
-    tensor = np.zeros((3, 3))
-    for value, (row, column) in zip(six, FULL_INERTIA):
-        tensor[row, column] = tensor[column, row] = value
-    return tensor
-
-
-# The principal moments of an inertia written by a binding are a rigid body's when each is positive and A + B >= C
-# to within their rounding: eigvalsh of a 3 x 3 tensor rounds each by a few eps of the largest; 1e-12 of C allows a
-# flat plate's A + B = C (as dyncheck's random parameter sets allow it).
-TRIANGLE_ROUNDING = 1e-12
-
-
-def unphysical(body, inertia):
-    """Why `inertia` (about the centre of mass) is no rigid body's, naming the body; None if it is one."""
-    moments = np.sort(np.linalg.eigvalsh(np.asarray(inertia, dtype=float)))
-    if moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - TRIANGLE_ROUNDING):
-        return None
-    return (f"body '{body}': principal moments of inertia about its centre of mass "
-            f"{', '.join(f'{x:.6g}' for x in moments)} kg m^2 are not a rigid body's (each > 0, A + B >= C)")
-
-
 @dataclass(frozen=True)
 class Rule:
     file: str  # "MJCF" | "URDF"
