@@ -37,7 +37,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import (BallRpyJoint, BodyIndex, JacobianWrtVariable, MultibodyForces, MultibodyForces_,
                                     PrismaticJoint, RevoluteJoint, RotationalInertia, SpatialInertia, WeldJoint)
 
-from engines import euler, scene as scene_rules
+from engines import coordinates, euler, scene as scene_rules
 from engines.bindings import read_inertia, unphysical, written_inertia
 from engines.linalg import linear_solution
 from engines.loops import Loop, _continuation, _dependent_rates, _rates_map
@@ -56,18 +56,6 @@ IGNORED = {
     "The attribute 'stiffness' found in a 'joint'": "corrected: this adapter applies the spring",
     "The attribute 'springref' found in a 'joint'": "corrected: this adapter applies the spring",
 }
-
-# The rounding error of Drake's AutoDiffXd derivatives, relative to their largest entry.  Forward-mode automatic
-# differentiation carries each derivative through the same operations as the value, exactly but for rounding: each
-# entry sums, over the chain's few bodies, products of poses, inertias, velocities and accelerations, a few dozen
-# operations rounding by eps of a term that cancellation (gyroscopic against gravity terms) may make a few times the
-# largest entry; 1e3 eps allows some ten times that.  Where the entries are far below the terms they sum (a
-# degenerate equilibrium) their rounding is measured instead (`DrakeModel._rounding`), NOISE_MARGIN times the
-# largest noise over a few ulps, the sample's allowance for missing the worst.
-EPS = np.finfo(float).eps
-ROUNDING = 1e3 * EPS
-NOISE_MARGIN = 10.0
-
 
 class Refused(ValueError):
     """A scene element that Drake does not model as MuJoCo and Pinocchio do, and that this adapter does not
@@ -160,6 +148,8 @@ class DrakeModel:
                                                                                               BallRpyJoint)):
                 raise ValueError(f"{self.path}: joint '{joint.name()}' is a Drake {joint.type_name()} joint, but the "
                                  f"case maps it as {'Euler angles' if kind == 'euler' else 'one coordinate'}")
+        # the joints as engines.coordinates takes them: (kind, first dof, coordinate indices)
+        self._dof_layout = [(kind, joint.velocity_start(), idx) for kind, joint, idx in self.layout]
         self.driven = [(self._joint(j), (law.angle, law.rate, law.acc)) for j, law in scene.driven.items()]
         self.dependent_joints = [(j, self._joint(j)) for j in scene.dependent]
         moved = scene_rules.named_joints(scene)
@@ -439,7 +429,7 @@ class DrakeModel:
 
     def _applied_at(self, t, q, v):
         """The applied generalized forces at the case's state, every dof's (nv,), in the body's axes."""
-        return scene_rules.applied_forces(self.forces, self.nv, t, q, v)
+        return coordinates.applied_forces(self.forces, self.nv, t, q, v)
 
     def _inverse(self, rotations, acc, external=None):
         """Drake's inverse dynamics at the context's state, in the dofs of the body's axes: the generalised forces
@@ -503,33 +493,21 @@ class DrakeModel:
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        return self._book_accelerations(q, v, self._dynamics(t, q, v)[3])
+        return coordinates.case_accelerations(self._dof_layout, q, v, self._dynamics(t, q, v)[3])
 
     def accelerations_many(self, t, q, v):
         """`accelerations` at many states, t (N,), q and v (N, n): an array (N, n), the same numbers."""
         return np.array([self.accelerations(*state) for state in zip(np.asarray(t, dtype=float), q, v)]).reshape(
             len(t), len(self.coords))
 
-    def _book_accelerations(self, q, v, acc):
-        q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
-        out = np.zeros(len(self.coords))
-        for kind, joint, idx in self.layout:
-            iv = joint.velocity_start()
-            if kind == "scalar":
-                out[idx[0]] = acc[iv]
-            else:
-                out[idx] = euler.euler_accelerations(q[idx], v[idx], acc[iv:iv + 3])
-        return out
-
     def mass_matrix(self, t, q, v):
-        """The mass matrix in the case's coordinates (engines.scene.case_mass_matrix); with loops N^T M N, N every
+        """The mass matrix in the case's coordinates (engines.coordinates.case_mass_matrix); with loops N^T M N, N every
         dof's rate per independent rate."""
         mass = self._mass(self._put(*self.engine_state(t, q, v)))
         if self.loops.loops:
             rates = self.loops.rates([joint.velocity_start() for _, joint, _ in self.layout])
             return rates.T @ mass @ rates
-        return scene_rules.case_mass_matrix(mass, [(kind, joint.velocity_start(), idx)
-                                                   for kind, joint, idx in self.layout], q)
+        return coordinates.case_mass_matrix(mass, self._dof_layout, q)
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state."""
@@ -647,11 +625,12 @@ class DrakeModel:
         return out
 
     def linearisation(self, t, q, v):
-        """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): Drake's inverse dynamics
+        """M q'' = f(t, q, q') linearised at the case's state (engines.coordinates.Linearisation): Drake's inverse dynamics
         differentiated by automatic differentiation (its AutoDiffXd plant, `_inverse_gradient`) at the state's
         accelerations, the prescribed joints' imposed, with the springs' -k on their dofs, in the case's coordinates
-        (engines.scene.case_linearisation, which differences applied laws of the state).  Its error: the rounding
-        of Drake's arithmetic (`_rounding`).  Refused for a scene with loops, as the other adapters refuse it."""
+        (engines.coordinates.case_linearisation, which differences applied laws of the state).  Its error: the rounding
+        of Drake's arithmetic (engines.coordinates.derivative_error: at the rotating pendulum's degenerate equilibrium
+        under g = 0 the noise is 5e-18, its df/dq 2.3e-11 and 4e-18 off MuJoCo's).  Refused for a scene with loops, as the other adapters refuse it."""
         if self.loops.loops:
             raise Refused(f"{self.path}: linearisation of a scene with closed loops "
                           f"({', '.join(loop.name for loop in self.loops.loops)}) is not supported: its coordinates' "
@@ -666,10 +645,11 @@ class DrakeModel:
         force_q, force_v = -dtau_dq, -dtau_dv  # Drake's dampers act in its inverse dynamics: they are in force_v
         for _, iv, k, _ in self.springs:
             force_q[iv, iv] -= k
-        error = self._rounding(at, (dtau_dq, dtau_dv), dofs)
-        error += EPS * max((abs(k) for _, _, k, _ in self.springs), default=0.0)  # the springs' sums, half an ulp
-        layout = [(kind, joint.velocity_start(), idx) for kind, joint, idx in self.layout]
-        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self._book_accelerations(q, v, acc), mass,
+        error = coordinates.derivative_error(at, (dtau_dq, dtau_dv), dofs)
+        # the springs' sums, half an ulp
+        error += np.finfo(float).eps * max((abs(k) for _, _, k, _ in self.springs), default=0.0)
+        return coordinates.case_linearisation(self._dof_layout, self.forces, t, q, v,
+                                              coordinates.case_accelerations(self._dof_layout, q, v, acc), mass,
                                               force_q, force_v, error, "Drake CalcInverseDynamics (AutoDiffXd)")
 
     def _inverse_gradient(self, positions, dofs, acc, tangent):
@@ -707,14 +687,6 @@ class DrakeModel:
         context.SetTimeStateAndParametersFrom(self.context)
         plant.mutable_gravity_field().set_gravity_vector(self.gravity)
         return plant, context
-
-    def _rounding(self, at, derivatives, dofs):
-        """The rounding error of Drake's derivatives `derivatives` (`at(0, 0)`): ROUNDING of their largest entry,
-        or, where they are far below the terms they sum, NOISE_MARGIN times their noise as measured over a few ulps
-        of each dof (engines.scene.rounding_noise, as Pinocchio's adapter measures its own; at the rotating
-        pendulum's degenerate equilibrium under g = 0 the noise is 5e-18, its df/dq 2.3e-11 and 4e-18 off MuJoCo's)."""
-        largest = max(float(np.max(np.abs(d), initial=0.0)) for d in derivatives)
-        return max(ROUNDING * largest, NOISE_MARGIN * scene_rules.rounding_noise(at, derivatives, dofs))
 
 
 class DrakeLoops:

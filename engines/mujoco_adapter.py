@@ -20,7 +20,7 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
-from engines import euler, scene as scene_rules
+from engines import coordinates, euler, scene as scene_rules
 from engines.bindings import FULL_INERTIA, full_tensor, parallel_axis, unphysical
 from engines.linalg import linear_solution
 from engines.loops import MujocoLoops
@@ -72,6 +72,8 @@ class MujocoModel:
         self.reaction_names = tuple(scene.reactions)
         self.layout = [(c.kind, self._joint(c.joint), list(c.indices)) for c in scene.layout]
         self.free = np.array([dof for _, (_, dof), idx in self.layout for dof in range(dof, dof + len(idx))], dtype=int)
+        # the joints as engines.coordinates takes them: (kind, first dof, coordinate indices)
+        self._dof_layout = [(kind, dof, idx) for kind, (_, dof), idx in self.layout]
         self.driven = [(self._joint(j), (law.angle, law.rate, law.acc)) for j, law in scene.driven.items()]
         # after the case's joints are found: a renamed joint is missing before it is extra
         unmodelled = next(_unmodelled(self.m, scene), None)
@@ -315,7 +317,7 @@ class MujocoModel:
 
     def _applied_at(self, t, q, v):
         """The applied generalized forces at the case's state (t, q, v): every dof's, (nv,)."""
-        return scene_rules.applied_forces(self.forces, self.m.nv, t, q, v)
+        return coordinates.applied_forces(self.forces, self.m.nv, t, q, v)
 
     def _applied_many(self, t, q, v):
         """`_applied_at` at one state or many (as in `_engine_states`): (..., nv)."""
@@ -377,32 +379,9 @@ class MujocoModel:
             self.d.qacc[:] = qacc
             mujoco.mj_inverse(self.m, self.d)
 
-    def _constant_applied(self, method):
-        """The applied forces of a scene where they are constant; ValueError where they are laws of the state."""
-        if self.varying:
-            raise ValueError(f"{self.path}: {method} needs constant applied forces; this scene's depend on the state")
-        return self.applied
-
-    def _ball_joint(self, method):
-        """(qpos address, dof address) of the ball joint of a scene that has no other joint."""
-        if [kind for kind, _, _ in self.layout] != ["euler"] or self.driven:
-            raise ValueError(f"{self.path}: {method} needs a scene whose only joint is a ball joint; this one "
-                             f"has {len(self.layout)} free joints and {len(self.driven)} driven")
-        return self.layout[0][1]
-
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        return self._case_accelerations(q, v, self._solve(t, q, v)[3])
-
-    def _case_accelerations(self, q, v, qacc):
-        """The case's accelerations from every dof's `qacc` at the case's state (q, v)."""
-        out = np.zeros(len(self.coords))
-        for kind, (_, dof), idx in self.layout:
-            if kind == "scalar":
-                out[idx[0]] = qacc[dof]
-            else:
-                out[idx] = euler.euler_accelerations(q[idx], v[idx], qacc[dof:dof + 3])
-        return out
+        return coordinates.case_accelerations(self._dof_layout, q, v, self._solve(t, q, v)[3])
 
     def reactions(self, t, q, v):
         self._inverse(t, q, v)
@@ -471,14 +450,14 @@ class MujocoModel:
                 {joint: float(qvel[dof]) for joint, (_, dof) in self.dependent_joints})
 
     def mass_matrix(self, t, q, v):
-        """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): mj_fullM's in
+        """The mass matrix in the case's coordinates at (t, q) (engines.coordinates.case_mass_matrix): mj_fullM's in
         the evaluation model, with the armature of a ball joint on the world, as `accelerations` solves it; with
         loops N^T M N, N the every dof's rate per independent rate on the closed state."""
         mass = self._solve(t, q, v)[1]
         if self.loops.loops:
             rates = self.loops.rates(self.d, [dof for _, (_, dof) in self.independent])
             return rates.T @ mass @ rates
-        return scene_rules.case_mass_matrix(mass, [(kind, dof, idx) for kind, (_, dof), idx in self.layout], q)
+        return coordinates.case_mass_matrix(mass, self._dof_layout, q)
 
     def energy(self, t, q, v):
         self._set_state(t, q, v)
@@ -528,7 +507,7 @@ class MujocoModel:
 
     def ball_joint_linearisation(self, quaternion, omega):
         """The state matrix A of (dtheta, dw) about the scene's ball joint's state (as `ball_joint_acceleration`),
-        engines.scene.ball_joint_state_matrix, and the estimated error of its entries.  dw' = -Ma^-1 (Dq dtheta +
+        engines.coordinates.ball_joint_state_matrix, and the estimated error of its entries.  dw' = -Ma^-1 (Dq dtheta +
         Dv dw) from the derivatives of the inverse dynamics F(x, w, w') = applied (`_inverse_derivatives`:
         continuous time, where mjd_transitionFD would give one step's), Ma the mass matrix; their error goes
         through Ma^-1: |Ma^-1|_inf times it."""
@@ -537,23 +516,24 @@ class MujocoModel:
         mujoco.mj_fullM(self.m, self.d, mass)
         inverse_mass = np.linalg.inv(mass[dofs, dofs])
         force_q, force_v, error = self._inverse_derivatives()
-        matrix = scene_rules.ball_joint_state_matrix(omega, -inverse_mass @ force_q[dofs, dofs],
+        matrix = coordinates.ball_joint_state_matrix(omega, -inverse_mass @ force_q[dofs, dofs],
                                                      -inverse_mass @ force_v[dofs, dofs])
         return matrix, float(np.max(np.sum(np.abs(inverse_mass), axis=1)) * error)
 
     def _ball_joint_state(self, method, quaternion, omega):
         """The ball joint's dofs (a slice), with self.d at its quaternion (w, x, y, z) and angular velocity and
         their acceleration under the scene's applied forces (qacc); ValueError where `method` cannot apply."""
-        qadr, dof = self._ball_joint(method)
+        qadr, dof = coordinates.lone_ball_joint(self.path, self.layout, self.driven, method)
+        coordinates.constant_forces(self.path, self.varying, method)
         self.d.qpos[qadr:qadr + 4], self.d.qvel[dof:dof + 3] = quaternion, omega
-        self.d.qfrc_applied[:] = self._constant_applied(method)
+        self.d.qfrc_applied[:] = self.applied
         mujoco.mj_forward(self.m, self.d)
         return slice(dof, dof + 3)
 
     def linearisation(self, t, q, v):
-        """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): MuJoCo's inverse
+        """M q'' = f(t, q, q') linearised at the case's state (engines.coordinates.Linearisation): MuJoCo's inverse
         dynamics differenced (`_inverse_derivatives`) at the state's accelerations, the prescribed joints'
-        imposed, in the case's coordinates (engines.scene.case_linearisation, which differences applied laws of
+        imposed, in the case's coordinates (engines.coordinates.case_linearisation, which differences applied laws of
         the state).  f = applied - qfrc_inverse, qfrc_inverse = M qacc + bias - springs - dampers.  The
         evaluation model holds no armature on the prescribed joints, which are no coordinates: only the free
         rows and columns are used, and its M is `mass_matrix`'s.  ValueError for a scene with loops."""
@@ -564,17 +544,17 @@ class MujocoModel:
         _, mass, _, qacc = self._solve(t, q, v)  # leaves self.d at the state
         self.d.qacc[:] = qacc
         force_q, force_v, error = self._inverse_derivatives()
-        layout = [(kind, dof, idx) for kind, (_, dof), idx in self.layout]
         method = "MuJoCo mjd_inverseFD (centred differences, extrapolated, at the step of least estimated error)"
-        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self._case_accelerations(q, v, qacc),
+        return coordinates.case_linearisation(self._dof_layout, self.forces, t, q, v,
+                                              coordinates.case_accelerations(self._dof_layout, q, v, qacc),
                                               mass, -force_q, -force_v, error, method)
 
     def _inverse_derivatives(self):
         """d(qfrc_inverse)/dqpos and /dqvel (nv, nv, a row per force) at self.d's state and qacc, the positions
         perturbed by mj_integratePos (a ball joint's quaternion * exp(dtheta)), and the estimated error of their
         entries.  mjd_inverseFD takes forward differences only, and a negative eps the backward ones: their mean
-        is the centred difference, extrapolated (engines.scene.extrapolated_differences) with its truncation
-        error, plus rounding (engines.scene.difference_rounding) of the largest term of qfrc_inverse (M qacc, the
+        is the centred difference, extrapolated (engines.coordinates.extrapolated_differences) with its truncation
+        error, plus rounding (engines.coordinates.difference_rounding) of the largest term of qfrc_inverse (M qacc, the
         bias, the passive forces)."""
         nv = self.m.nv
 
@@ -590,15 +570,7 @@ class MujocoModel:
         mujoco.mj_inverse(self.m, self.d)
         inertial = self.d.qfrc_inverse - self.d.qfrc_bias + self.d.qfrc_passive  # M qacc
         size = max(np.max(np.abs(x)) for x in (inertial, self.d.qfrc_bias, self.d.qfrc_passive))
-        # the step whose estimate, truncation (falling as step^4) plus rounding (growing as 1/step), is least:
-        # a fast spin curves the forces on a shorter scale than the default step's
-        best = None
-        for step in scene_rules.DIFFERENCE_STEPS:
-            (force_q, force_v), truncation = scene_rules.extrapolated_differences(centred, step)
-            error = truncation + scene_rules.difference_rounding(size, step)
-            if best is None or error < best[2]:
-                best = force_q, force_v, error
-        return best
+        return coordinates.least_error_differences(centred, size)
 
     def points(self, t, q):
         """World positions of the traced bodies' centres of mass, and the chain of body origins."""
@@ -658,7 +630,7 @@ class MujocoModel:
     def ball_joint_quaternions(self, q0, v0, t_end, dt, integrator):
         """The (w, x, y, z) quaternion of the scene's ball joint at every step of `step`'s run from (q0, v0),
         the start included: MuJoCo's own orientation, free of the Euler angles' singularity."""
-        qadr, _ = self._ball_joint("ball_joint_quaternions")
+        qadr, _ = coordinates.lone_ball_joint(self.path, self.layout, self.driven, "ball_joint_quaternions")
         return self._rollout(q0, v0, t_end, dt, integrator)[1][:, qadr:qadr + 4]
 
     def _rollout(self, q0, v0, t_end, dt, integrator):

@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pinocchio as pin
 
-from engines import euler, scene as scene_rules
+from engines import coordinates, euler, scene as scene_rules
 from engines.bindings import INERTIA_ATTRIBUTES, read_inertia, unphysical, written_inertia
 from engines.linalg import linear_solution
 from engines.loops import PinocchioLoops
@@ -130,6 +130,8 @@ class PinocchioModel:
                              "upper=\"1e300\"")
         # (nq, idx_q, idx_v) of the joints, read once: each of Pinocchio's attributes is a call.
         self._coord_joints = [(kind, (joint.nq, joint.idx_q, joint.idx_v), idx) for kind, joint, idx in self.layout]
+        # the joints as engines.coordinates takes them: (kind, first dof, coordinate indices)
+        self._dof_layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
         self._driven_joints = [((joint.nq, joint.idx_q, joint.idx_v), motion) for joint, motion in self.driven]
         self._independent = [(c.kind, self.m.getJointId(c.joint), list(c.indices)) for c in scene.layout if c.kind == "scalar"]
         self.dependent_joints = [(j, self._joint(j)) for j in scene.dependent]
@@ -408,7 +410,7 @@ class PinocchioModel:
 
     def _applied_at(self, t, q, v):
         """The applied generalized forces at the case's state (t, q, v): every dof's, (nv,)."""
-        return scene_rules.applied_forces(self.forces, self.m.nv, t, q, v)
+        return coordinates.applied_forces(self.forces, self.m.nv, t, q, v)
 
     def engine_dynamics(self, config, velocity, applied):
         """Pinocchio alone, on its own configuration and velocity under the applied generalized forces
@@ -467,14 +469,7 @@ class PinocchioModel:
         at many, q and v (N, n)."""
         if not self._balls:  # the case's coordinates are one-dof joints' positions (take: a third of indexing's cost)
             return acc.take(self._coord_dofs, axis=-1)
-        q, v = np.asarray(q), np.asarray(v)
-        out = np.zeros(q.shape)
-        for kind, (_, _, iv), idx in self._coord_joints:
-            if kind == "scalar":
-                out[..., idx[0]] = acc[..., iv]
-            else:
-                out[..., idx] = euler.euler_accelerations(q[..., idx], v[..., idx], acc[..., iv:iv + 3])
-        return out
+        return coordinates.case_accelerations(self._dof_layout, q, v, acc)
 
     def _dynamics_of_states(self, t, q, v):
         """`_dynamics` of many states, t (N,), q and v (N, n), one after another (an iterator), the same numbers: the
@@ -558,38 +553,30 @@ class PinocchioModel:
 
     def ball_joint_linearisation(self, quaternion, omega):
         """The state matrix A of (dtheta, dw) about the scene's ball joint's state (as `ball_joint_acceleration`),
-        engines.scene.ball_joint_state_matrix, with dw' from Pinocchio's analytic derivatives of ABA
+        engines.coordinates.ball_joint_state_matrix, with dw' from Pinocchio's analytic derivatives of ABA
         (computeABADerivatives: tangent perturbations quaternion * exp(dtheta), as dtheta's); and the estimated
-        error of its entries, rounding (ROUNDING)."""
+        error of its entries, rounding (engines.coordinates.DERIVATIVE_ROUNDING)."""
         dofs, config, velocity = self._ball_joint_state("ball_joint_linearisation", quaternion, omega)
         acc_q, acc_v, _ = pin.computeABADerivatives(self.m, self.d, config, velocity, self.applied)
-        matrix = scene_rules.ball_joint_state_matrix(omega, acc_q[dofs, dofs], acc_v[dofs, dofs])
-        return matrix, ROUNDING * np.max(np.abs(matrix))
+        matrix = coordinates.ball_joint_state_matrix(omega, acc_q[dofs, dofs], acc_v[dofs, dofs])
+        return matrix, coordinates.DERIVATIVE_ROUNDING * np.max(np.abs(matrix))
 
     def _ball_joint_state(self, method, quaternion, omega):
         """The ball joint's dofs (a slice), and Pinocchio's configuration and velocity at its quaternion (w, x, y,
-        z) and angular velocity; ValueError where `method` cannot apply (`_ball_joint`, laws of the state)."""
-        joint = self._ball_joint(method)
+        z) and angular velocity; ValueError where `method` cannot apply (another joint, laws of the state)."""
+        joint = coordinates.lone_ball_joint(self.path, self.layout, self.driven, method)
+        coordinates.constant_forces(self.path, self.varying, method)
         config, velocity = self.neutral.copy(), np.zeros(self.m.nv)
         config[joint.idx_q:joint.idx_q + 4] = np.roll(quaternion, -1)  # Pinocchio's order: (x, y, z, w)
         velocity[joint.idx_v:joint.idx_v + 3] = omega
-        if self.varying:
-            raise ValueError(f"{self.path}: {method} needs constant applied forces; this scene's depend on the state")
         return slice(joint.idx_v, joint.idx_v + 3), config, velocity
 
-    def _ball_joint(self, method):
-        """The ball (spherical) joint of a scene that has no other joint."""
-        if [kind for kind, _, _ in self.layout] != ["euler"] or self.driven:
-            raise ValueError(f"{self.path}: {method} needs a scene whose only joint is a ball joint; this one "
-                             f"has {len(self.layout)} free joints and {len(self.driven)} driven")
-        return self.layout[0][1]
-
     def linearisation(self, t, q, v):
-        """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): Pinocchio's analytic
+        """M q'' = f(t, q, q') linearised at the case's state (engines.coordinates.Linearisation): Pinocchio's analytic
         derivatives of RNEA (computeRNEADerivatives) at the state's accelerations, the prescribed joints' imposed,
         with the springs' -k and the dampers' -d on their dofs, in the case's coordinates
-        (engines.scene.case_linearisation, which differences applied laws of the state).  Its error: RNEA's
-        rounding (ROUNDING of its largest entry), and the rounding of the springs' and dampers' sums with it.
+        (engines.coordinates.case_linearisation, which differences applied laws of the state).  Its error: RNEA's
+        rounding (engines.coordinates.derivative_error), and the rounding of the springs' and dampers' sums with it.
         ValueError for a scene with loops."""
         if self.loops.loops:
             raise ValueError(f"{self.path}: linearisation of a scene with closed loops "
@@ -609,9 +596,9 @@ class PinocchioModel:
             force_q[iv, iv] -= k
             force_v[iv, iv] -= damping
         # the sums' rounding: half an ulp of each, within eps of the term added (RNEA's share is in its own)
-        error += EPS * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive), default=0.0)
-        layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
-        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
+        error += np.finfo(float).eps * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive),
+                                           default=0.0)
+        return coordinates.case_linearisation(self._dof_layout, self.forces, t, q, v, self.accelerations(t, q, v),
                                               mass, force_q, force_v, error, method)
 
     def _rnea_derivatives(self, config, velocity, acc):
@@ -621,17 +608,16 @@ class PinocchioModel:
         # RNEA's rounding is of RNEA's own entries: a stiff spring's -k, added here in one rounding, would make it
         # 1e3 eps of k on every entry (k = 4929 N/m on a spring pendulum's length row put 2e-6 on its angle's row,
         # whose entries are about 10, and its mode rows were inconclusive); or, where its entries are far below the
-        # terms they sum, its noise as measured (engines.scene.rounding_noise)
-        error = max(ROUNDING * max(np.max(np.abs(dtau_dq)), np.max(np.abs(dtau_dv))),
-                    NOISE_MARGIN * scene_rules.rounding_noise(
-                        lambda step_q, step_v: derivatives(pin.integrate(self.m, config, step_q), velocity + step_v),
-                        (dtau_dq, dtau_dv), velocity))
+        # terms they sum, its noise as measured (engines.coordinates.derivative_error)
+        error = coordinates.derivative_error(
+            lambda step_q, step_v: derivatives(pin.integrate(self.m, config, step_q), velocity + step_v),
+            (dtau_dq, dtau_dv), velocity)
         return dtau_dq, dtau_dv, error
 
     def _rnea_differences(self, config, velocity, acc):
         """dtau/dq, dtau/dv of RNEA at the state's accelerations by centred differences (positions stepped in
         Pinocchio's tangent space, pin.integrate, as MuJoCo's mj_integratePos), extrapolated at the step of least
-        estimated error (engines.scene.extrapolated_differences, difference_rounding: as MujocoModel's
+        estimated error (engines.coordinates.least_error_differences, as MujocoModel's
         `_inverse_derivatives`), and that error.  For a model with a composite joint (several joints of one MJCF
         body), through which computeRNEADerivatives (Pinocchio 4.1) gives wrong derivatives: measured on a
         spherical pendulum of two hinges, dtau/dq of the second hinge off by 1.58 N m/rad and dtau/dv by 0.085 N m s,
@@ -653,13 +639,7 @@ class PinocchioModel:
         bias, gravity = (np.array(pin.nonLinearEffects(self.m, self.d, config, velocity)),
                          np.array(pin.computeGeneralizedGravity(self.m, self.d, config)))
         size = max(float(np.max(np.abs(x))) for x in (inertial, bias - gravity, gravity))
-        best = None
-        for step in scene_rules.DIFFERENCE_STEPS:
-            (dq, dv), truncation = scene_rules.extrapolated_differences(centred, step)
-            error = truncation + scene_rules.difference_rounding(size, step)
-            if best is None or error < best[2]:
-                best = dq, dv, error
-        return best
+        return coordinates.least_error_differences(centred, size)
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state (`engine_state`)."""
@@ -670,14 +650,14 @@ class PinocchioModel:
                 {name: float(velocity[joint.idx_v]) for name, joint in self.dependent_joints})
 
     def mass_matrix(self, t, q, v):
-        """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): CRBA's, whose
+        """The mass matrix in the case's coordinates at (t, q) (engines.coordinates.case_mass_matrix): CRBA's, whose
         upper triangle is read for the whole."""
         config = self.engine_state(t, q, v)[0]
         mass = pin.crba(self.m, self.d, config)[self._whole]
         if self.loops.loops:  # N^T M N, N every dof's rate per independent rate (as MujocoModel.mass_matrix)
             rates = self.loops.rates(config, [self.m.joints[j].idx_v for _, j, _ in self._independent])
             return rates.T @ mass @ rates
-        return scene_rules.case_mass_matrix(mass, [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints], q)
+        return coordinates.case_mass_matrix(mass, self._dof_layout, q)
 
     def energy(self, t, q, v):
         return self._energy_of(*self.engine_state(t, q, v))
@@ -773,18 +753,6 @@ def _equalities(path):
         return []
     return [element for equality in root.iter("equality") for element in equality]
 
-
-# The rounding error of Pinocchio's analytic derivatives, relative to their largest entry: each entry sums, over
-# the chain's few bodies, products of placements, inertias, velocities and accelerations, a few dozen operations
-# that each round by eps of a term that cancellation (gyroscopic against gravity terms) may make a few times the
-# largest entry; 1e3 eps allows some ten times that.  Nothing measured contradicts it: Pinocchio's linearisation
-# agrees with MuJoCo's to 1e-14 to 1e-12 of the largest entry (the top, the cart-pendulum: no placeholders),
-# MuJoCo's own rounding (tests/test_engine_linearisation.py).
-EPS = np.finfo(float).eps
-ROUNDING = 1e3 * EPS
-# The rounding noise measured over a few ulps (engines.scene.rounding_noise) samples the rounding of one evaluation: the error
-# of Pinocchio's A at the degenerate equilibrium there was 3 times it; 10 times allows for a sample that misses.
-NOISE_MARGIN = 10.0
 
 DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>
 

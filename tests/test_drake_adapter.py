@@ -27,6 +27,7 @@ import dyncheck  # noqa: E402
 from dyncheck.checks import linear  # noqa: E402
 from dyncheck.case.scene import Coordinates, Driven, Reaction, Scene  # noqa: E402
 from engines.bindings import SceneLocation  # noqa: E402
+from engines.coordinates import case_accelerations  # noqa: E402
 from engines.drake_adapter import DrakeModel, Refused  # noqa: E402
 from engines.mujoco_adapter import MujocoModel  # noqa: E402
 from engines.pinocchio_adapter import PinocchioModel  # noqa: E402
@@ -300,7 +301,7 @@ def test_the_bare_drake_step_gives_the_adapters_accelerations(name):
     states = case.sample_states()[:5]
     bare = drake_steps(model, [model.engine_state(*state) for state in states])
     for (t, q, v), (acc, _, _) in zip(states, bare):
-        np.testing.assert_array_equal(model._book_accelerations(q, v, acc), model.accelerations(t, q, v))
+        np.testing.assert_array_equal(case_accelerations(model._dof_layout, q, v, acc), model.accelerations(t, q, v))
 
 
 # -- linearisation -----------------------------------------------------------------------------------
@@ -313,7 +314,7 @@ LINEAR += [("rotating_pendulum", ROOT / "cases", {"g": 0.0})]
 
 
 # The least error of MuJoCo's linearisation, relative to its largest entry: centred differences of mj_inverse at the
-# step of least estimated error (1e-3 to 3e-5) round by ~1.5 g eps |F| / h (engines.scene.difference_rounding), |F|
+# step of least estimated error (1e-3 to 3e-5) round by ~1.5 g eps |F| / h (engines.coordinates.difference_rounding), |F|
 # the largest term summed, a few times the entries: at h = 1e-3 some 1e-12 of them (1.0e-12 measured, above), and
 # 1e-11 allows ten times that.
 MUJOCO_FLOOR = 1e-11

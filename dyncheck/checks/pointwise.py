@@ -339,7 +339,8 @@ def scene_breaks(case, drawn):
             inertia = np.diag([value("inertia", i) for i in range(3)])
         scene_com = np.array([scene("ipos", i) for i in range(3)])
         for i, about_origin in written.get("inertia_about_origin", {}).items():
-            armature = scene("inertia_about_origin", i) - scene("inertia", i) - parallel_axis(scene("mass"), scene_com, i)
+            armature = (scene("inertia_about_origin", i) - scene("inertia", i)
+                        - parallel_axis(scene("mass"), scene_com, i))
             inertia[i, i] = about_origin - parallel_axis(mass, com, i) - armature
         why = unphysical(name, inertia)
         if why:
