@@ -15,7 +15,6 @@ from pydrake.multibody.tree import (BallRpyJoint, BodyIndex, PrismaticJoint, Rev
 from engines import scene as scene_rules
 from engines.bindings import read_inertia, unphysical, written_inertia
 from engines.mjcf_joints import NO_LIMIT, inertial_frame, inertial_frames, is_mjcf, joint_values
-from engines.scene import Body
 
 SCALAR_JOINTS = (RevoluteJoint, PrismaticJoint)  # Drake's MJCF joints without a range have infinite limits
 
@@ -258,10 +257,11 @@ class DrakeScene:
         return self.plant.gravity_field().gravity_vector().copy()
 
     def tree(self):
-        """The moving bodies as Drake models them (see engines.scene.Body): one per joint, named after its child;
-        a body welded to the world (MJCF's ground) folded into it, a body welded to a moving body into that body
-        (its mass and inertia joined, engines.scene.combined_inertia), as the other adapters fold them; a ball
-        joint's armature counted in its body's inertia, as MujocoModel.tree counts it."""
+        """The moving bodies as Drake models them (see engines.scene.Body, engines.scene.moving_body): one per joint
+        (several on one body are refused), named after its child; a body welded to the world (MJCF's ground) folded
+        into it, a body welded to a moving body into that body (its mass and inertia joined,
+        engines.scene.combined_inertia), as the other adapters fold them; a ball joint's armature counted in its
+        body's inertia, as MujocoModel.tree counts it."""
         bodies = []
         roots = {int(body.index()): self._weld_root(body) for body in plant_bodies(self.plant)[1:]}
         for name, joint in self._joints().items():
@@ -280,13 +280,12 @@ class DrakeScene:
                     else "ball")
             axis = (joint.revolute_axis() if kind == "hinge" else joint.translation_axis() if kind == "slide"
                     else np.zeros(3))
-            bodies.append(Body(name=joint.child_body().name(), parent="world" if welded else parent.name(), joint=name,
-                               joint_type=kind, axis=np.array(axis), position=pose.translation().copy(),
-                               rotation=pose.rotation().matrix().copy(), mass=float(mass), com=com.copy(),
-                               inertia=inertia + self._ball_armature(joint.child_body().name()) * np.eye(3),
-                               stiffness=np.array([self.joint_values["stiffness"].get(name, 0.0), 0.0, 0.0]),
-                               springref=self.joint_values["springref"].get(name, 0.0),
-                               damping=self.joint_values["damping"].get(name, 0.0)))
+            spring = ([self.joint_values["stiffness"].get(name, 0.0), 0.0, 0.0],
+                      self.joint_values["springref"].get(name, 0.0), self.joint_values["damping"].get(name, 0.0))
+            bodies += scene_rules.moving_body(child.name(), "world" if welded else parent.name(),
+                                              [(name, kind, np.array(axis), *spring)], pose.translation().copy(),
+                                              pose.rotation().matrix().copy(), float(mass), com.copy(),
+                                              inertia + self._ball_armature(child.name()) * np.eye(3))
         return bodies
 
     def _weld_root(self, body):

@@ -373,8 +373,8 @@ def case_file(folder, module, scene, given, overrides=None):
     units = ["rad" if kinds[joints[c]] == "hinge" else "m" for c in coords]
     given_bindings = given.get("scene", {}).get("bindings", {})
     forcing = applied_parameters(params, given, file) - set(given_bindings)
-    bound, param_units, places = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds, file,
-                                  given_bindings, declared_units(module, params, file))
+    bound, param_units, places = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds,
+                                          file, given_bindings, declared_units(module, params, file))
     for p in forcing:
         param_units[p] = given["params"][p]["unit"]
     length = max(scene.length, 0.1)
