@@ -208,6 +208,20 @@ def test_an_entry_of_m_wrong_inside_closed_form_accelerations_is_named_as_m_s(tm
     assert "m x''" in localisation.text and "entry in its column x lacks + m" in localisation.text, localisation.text
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
+def test_a_wrong_determinant_is_not_explained_by_the_engines_whole_equation(tmp_path):
+    """m11 m22 dropped from det M scales both accelerations: with q''_d among the candidates, the theta equation's
+    residual m l cos(theta) x''_d + m l^2 theta''_d + m g l sin(theta) is three terms, the engine's whole equation,
+    which fits the residual of any wrong accelerations and names nothing: it is not given as the term."""
+    subject = closed_form_subject(tmp_path / "original")
+    mutant = next(m for m in planting.mutants(subject.source, subject.functions, per_kind=50, seed=1)
+                  if m.kind == "drop" and m.term == "m11 * m22")
+    verdict = judge(subject, mutant, tmp_path / "mutant")
+    assert verdict.detected
+    whole = [l.text for l in verdict.localisations if l.exact and "m l^2 theta''" in l.text and "x''" in l.text]
+    assert whole == [], whole
+
+
 @pytest.mark.slow
 def test_campaign(tmp_path):
     """>= 100 seeded planted errors over the four book cases with coordinates, the tutorial and its closed form
