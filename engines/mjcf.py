@@ -10,6 +10,8 @@ import numpy as np
 
 from engines.bindings import SceneLocation
 
+PLACEHOLDER_INERTIA = 1e-14  # kg m^2: the placeholder of docs/own-case.md (dyncheck.case.scene holds cases to it)
+
 
 @dataclass(frozen=True)
 class Joint:
@@ -64,6 +66,11 @@ def describe(path):
             array = getattr(m, "body_" + attribute)[b]
             values += [Value(SceneLocation("body", body, attribute, i), float(array[i]))
                        for i in range(3) if array[i]]
+        # The principal moments about the centre of mass, where their axes are the body's (a diaginertia, or a
+        # fullinertia that is diagonal): a placeholder's (at most PLACEHOLDER_INERTIA) means no inertia.
+        if np.allclose(m.body_iquat[b], [1.0, 0.0, 0.0, 0.0], rtol=0.0, atol=1e-12):
+            values += [Value(SceneLocation("body", body, "inertia", i), float(m.body_inertia[b][i]))
+                       for i in range(3) if m.body_inertia[b][i] > PLACEHOLDER_INERTIA]
     for j, joint in enumerate(joints):
         scalar = joint.kind in ("hinge", "slide")
         for attribute, value in (("stiffness", m.jnt_stiffness[j]), ("damping", m.dof_damping[m.jnt_dofadr[j]]),

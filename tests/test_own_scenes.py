@@ -9,6 +9,7 @@ import pytest
 import dyncheck
 from dyncheck.case.folder import Case
 from dyncheck.cli import main
+from dyncheck.results.values import Status
 from test_scene_options import edit, tutorial
 
 THETA = '<joint name="theta" type="hinge" axis="0 -1 0"/>'
@@ -117,3 +118,45 @@ def test_a_urdf_fixed_joint_welds_its_link_and_its_mass_is_compared(tmp_path):
     with pytest.raises(ValueError) as error:
         loaded.model("pinocchio")
     assert "body 'pendulum' mass is " in str(error.value), error.value
+
+
+ROD_SCENE = """<mujoco model="rod">
+  <worldbody>
+    <body name="rod">
+      <joint name="theta" type="hinge" axis="0 1 0"/>
+      <inertial pos="0 0 -0.25" mass="0.4" diaginertia="0.0031 0.0025 0.0007"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+ROD_EQUATIONS = '''"""A rigid rod on a hinge, its inertia about its centre of mass a parameter."""
+import numpy as np
+
+COORDS = ["theta"]
+PARAMS = {"m": 0.4, "c": 0.25, "Iyy": 0.0025, "g": 9.81}
+
+
+def accelerations(t, q, v, p):
+    (theta,) = q
+    return np.array([-p["m"] * p["g"] * p["c"] * np.sin(theta) / (INERTIA)])
+'''
+
+
+@pytest.mark.parametrize("inertia, wrong", [('p["Iyy"] + p["m"] * p["c"] ** 2', False), ('p["m"] * p["c"] ** 2', True)],
+                         ids=["right", "without Iyy"])
+def test_an_inertia_about_the_centre_of_mass_is_a_parameter_of_two_files(inertia, wrong, tmp_path):
+    """PARAMS' Iyy binds to the body's diaginertia by its value (no case.toml), is varied with the others, and a
+    derivation that leaves it out has its equation named with it."""
+    from test_planted_errors import equations
+    folder = tmp_path / "rod"
+    folder.mkdir()
+    (folder / "scene.xml").write_text(ROD_SCENE)
+    (folder / "equations.py").write_text(ROD_EQUATIONS.replace("INERTIA", inertia))
+    case = Case(folder)
+    (binding,) = [b for b in case.bindings if b.param == "Iyy"]
+    assert (binding.location.element, binding.location.name, binding.location.attribute, binding.location.index) \
+        == ("body", "rod", "inertia", 1)
+    assert "Iyy" in case.spec["sample"]["params"]["ranges"]
+    _, rows, localisations = equations(case)
+    assert any(r.status != Status.PASS for r in rows) == wrong
+    assert [l.text for l in localisations if "Iyy theta''" in l.text and l.exact] != [] if wrong else localisations == ()

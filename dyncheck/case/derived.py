@@ -302,7 +302,8 @@ def binding_refusal(file, scene, params, unbound, ambiguous, unit, declared):
     problems = [f"PARAMS['{name}'] = {params[name]!r} matches {len(found)} numbers{unit_of(name)}: "
                 + ", ".join(where(*match) for match in found) for name, found in ambiguous.items()]
     problems += [f"PARAMS['{name}'] = {params[name]!r} is no number{unit_of(name)} of the scene (a body's mass, "
-                 "position or centre of mass, a joint's stiffness, damping or spring rest position, gravity)"
+                 "position, centre of mass or principal inertia about it, a joint's stiffness, damping or spring rest "
+                 "position, gravity)"
                  for name in unbound]
     verb = "does not bind" if len(problems) == 1 else "do not each bind"
     message = (f"{file}: {len(problems)} of PARAMS' values {verb} to one number of {scene.path}, so the "
@@ -503,8 +504,8 @@ def scaffold(name, scene):
             continue
         name = location.name
         label = {"mass": f"m_{name}", "stiffness": f"k_{name}", "damping": f"c_{name}", "springref": f"{name}_rest",
-                 None: "g", "pos": f"{name}_pos_{AXES[location.index]}", "ipos": f"{name}_com_{AXES[location.index]}"
-                 }[attribute]
+                 None: "g", "pos": f"{name}_pos_{AXES[location.index]}", "ipos": f"{name}_com_{AXES[location.index]}",
+                 "inertia": f"I{AXES[location.index] * 2}_{name}"}[attribute]
         scale = -1.0 if v.value < 0 and attribute in SIGNED else 1.0
         params[label] = (scale * v.value, binding_table(location, scale),
                          ABOUT[attribute].format(name=name, index=component(location)))
