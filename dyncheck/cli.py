@@ -23,7 +23,7 @@ import pandas as pd
 from dyncheck.case import isolation
 from dyncheck.case.folder import CASES_DIR, SOURCES, case_names, load_case
 from dyncheck.checks.pointwise import validate_placeholders
-from dyncheck.checks.runs import run_case, unfinished
+from dyncheck.checks.runs import QUICK_LEAVES_OUT, run_case, unfinished
 from dyncheck.common.messages import suggest
 from dyncheck.common.progress import Progress
 from dyncheck.results import ci
@@ -94,6 +94,10 @@ def command(argv):
         sub.add_argument("--cases", type=Path, default=CASES_DIR, metavar="DIR", dest="cases_dir",
                          help="the folder of case folders (default: the checkout's cases/)")
     run.add_argument("--json", type=Path, metavar="PATH", help="also write the results as JSON")
+    run.add_argument("--quick", action="store_true",
+                     help="the checks at states alone, in seconds: pointwise, equations, printed rows, random "
+                          "parameter sets, the terms a wrong equation lacks; leaves out every run along time "
+                          f"(the rows of {', '.join(QUICK_LEAVES_OUT)})")
     run.add_argument("--results", type=Path, metavar="DIR",
                      help="also save the results (rows, runs, findings) for `dyncheck report --from DIR`")
     report.add_argument("--out", type=Path, metavar="DIR",
@@ -134,6 +138,9 @@ def command(argv):
         if args.command == "run" and args.json:
             check_file_path("--json", args.json)
         if args.command == "run" and args.results:
+            if args.quick:  # the pages that report --from renders draw the runs along time
+                raise ValueError(f"--results {args.results}: saves what `report --from` renders pages from, with the "
+                                 "runs along time that --quick leaves out; give one or the other")
             check_results_folder(args.results, [case.name for case in cases])
     except ValueError as error:
         return error_exit(error)
@@ -147,13 +154,16 @@ def command(argv):
         return 0
     try:
         # The findings' localisation (seconds each) only where it is shown: in JSON, results, pages.
-        results, interrupted = run_cases(cases, args.command == "report" or bool(args.json or args.results))
+        quick = args.command == "run" and args.quick
+        results, interrupted = run_cases(cases, args.command == "report" or bool(args.json or args.results),
+                                         quick=quick)
         writing = f"--out {args.out}" if args.command == "report" else None  # for a write that fails
         if args.command == "run":
-            print_results(results)
+            print_results(results, quick=quick)
             if args.json:
                 writing = f"--json {args.json}"
-                write_json(to_json(results, ci.tool_versions(), interrupted), args.json)
+                write_json(to_json(results, ci.tool_versions(), interrupted, QUICK_LEAVES_OUT if quick else ()),
+                           args.json)
             if args.results and not interrupted:
                 writing = f"--results {args.results}"
                 save_results(results, args.results)
@@ -161,7 +171,7 @@ def command(argv):
             results = make_report(results, cases, args.out, args.no_studies, not args.no_animations)
         if not interrupted:  # a JUnit file has no word for "some cases did not run": it would pass for all
             writing = f"--junit {args.junit}"  # the one file that close() writes
-            close(results, args.junit, start)
+            close(results, args.junit, start, quick)
     except OSError as error:  # the output passed its checks before the run but failed now (a full disk)
         return error_exit(f"{writing}: cannot write it: {error.strerror or error}")
     if interrupted:
@@ -184,9 +194,9 @@ def error_exit(error):
     return 2
 
 
-def run_cases(cases, localise=True, workers=None):
-    """The results of the cases, in their order, and the name of the first case that did not finish because of
-    Ctrl-C (None if all did).  Each case runs in a forked process of its own (it inherits its Case, whose engine
+def run_cases(cases, localise=True, workers=None, quick=False):
+    """The results of the cases (with `quick`, of their checks at states: run_case), in their order, and the name of
+    the first case that did not finish because of Ctrl-C (None if all did).  Each case runs in a forked process of its own (it inherits its Case, whose engine
     models cannot be pickled), one per core, the longest first (expected_cost) so that no long case starts last;
     a process that dies or overruns its budget gives its case one failing row saying so (dyncheck.case.isolation)."""
     workers = min(len(cases), workers or os.cpu_count() or 1)
@@ -199,12 +209,12 @@ def run_cases(cases, localise=True, workers=None):
                 bar.note(f"{result.name} done, {result.status}")
             if "fork" not in multiprocessing.get_all_start_methods():  # no process to isolate a case in
                 for index, case in enumerate(cases):
-                    done(index, run_case(case, localise))
+                    done(index, run_case(case, localise, quick))
             else:
                 longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
                 memory = isolation.machine_memory() // workers
                 budget = lambda case: replace(case.budget, memory=case.budget.memory or memory)
-                each = isolation.run_each([cases[i] for i in longest_first], lambda case: run_case(case, localise),
+                each = isolation.run_each([cases[i] for i in longest_first], lambda case: run_case(case, localise, quick),
                                           workers, budget)
                 with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
                     for position, (kind, value) in each:
@@ -255,15 +265,15 @@ def report_saved(args, start):
     return exit_code(results)
 
 
-def close(results, junit, start):
+def close(results, junit, start, quick=False):
     """What every finished run and report ends with: the JUnit file (with --junit), an annotation per
-    failing row on GitHub Actions, the failing rows and the summary line."""
+    failing row on GitHub Actions, the failing rows and the summary line (which says `quick`: run --quick's)."""
     if junit:
         write_file(ci.junit_xml(results), junit)
     if os.environ.get("GITHUB_ACTIONS") == "true":  # GitHub sets it in every step of a workflow
         for line in ci.github_annotations(results):
             print(line)
-    for line in ci.recap(results, time.perf_counter() - start):
+    for line in ci.recap(results, time.perf_counter() - start, quick):
         print(line)
 
 
@@ -417,7 +427,9 @@ def select_cases(names, set_pairs, cases_dir=CASES_DIR):
     return cases
 
 
-def print_results(results, table=True):
+def print_results(results, table=True, quick=False):
+    """Each case's table of rows (with `table`), where its random states lie, and with `quick` what the quick tier
+    left out; its wrong equations and its summary line."""
     for result in results:
         spec, rows = result.spec, result.rows
         if table:
@@ -425,6 +437,9 @@ def print_results(results, table=True):
                   + (f", with {result.overrides_text}" if result.overrides else ""))
             print(format_rows(rows).to_string(index=False))
             print(ci.states_covered(result))
+            if quick:
+                print(f"{result.name}: quick tier, the checks at states alone: left out every run along time, the rows "
+                      f"of {', '.join(QUICK_LEAVES_OUT)} (`dyncheck run` without --quick has them)")
         for line in ci.wrong_equations(result):
             print(line)
         print(f"{result.name}: {result.status}: {ci.tally(rows)} ({result.wall:.1f} s)")

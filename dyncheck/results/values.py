@@ -320,14 +320,15 @@ def localisations_json(localisations):
     return [asdict(loc) for loc in localisations]
 
 
-def to_json(results, tool=None, interrupted=None):
+def to_json(results, tool=None, interrupted=None, left_out=()):
     """The `dyncheck run --json` file of `results`: with `tool` (dyncheck.results.ci.tool_versions()), what ran
     them; with `interrupted`, the case that Ctrl-C stopped (the results are then of the cases before it,
-    and the run does not pass)."""
+    and the run does not pass); with `left_out`, the checks that `run --quick` left out."""
     rows = [r for result in results for r in result.rows]
     return {"version": RESULTS_VERSION, "status": "fail" if interrupted else verdict(rows),
             "counts": status_counts(rows), **({"tool": tool} if tool else {}),
             **({"incomplete": f"interrupted (Ctrl-C) during case {interrupted}"} if interrupted else {}),
+            **({"quick": list(left_out)} if left_out else {}),
             "cases": [case_json(r) for r in results]}
 
 
