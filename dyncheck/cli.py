@@ -18,8 +18,6 @@ from dataclasses import replace
 from importlib.metadata import version
 from pathlib import Path
 
-import pandas as pd
-
 from dyncheck.case import isolation
 from dyncheck.case.folder import CASES_DIR, SOURCES, case_names, load_case
 from dyncheck.checks.pointwise import validate_placeholders
@@ -27,7 +25,7 @@ from dyncheck.checks.runs import QUICK_LEAVES_OUT, run_case, unfinished
 from dyncheck.common.messages import suggest
 from dyncheck.common.progress import Progress
 from dyncheck.results import ci
-from dyncheck.results.values import format_rows, heading, load_results, save_results, to_json
+from dyncheck.results.values import heading, load_results, rows_text, save_results, to_json
 from dyncheck.run import cache
 from dyncheck.run.simulate import fastest_frequency
 
@@ -133,7 +131,7 @@ def command(argv):
             check_out_folder(args.out)
             if args.saved:
                 return report_saved(args, start)
-        cases = select_cases(args.cases, args.set, args.cases_dir)
+        cases = select_cases(args.cases, args.set, args.cases_dir, args.command == "run" and args.quick)
         cache.enabled = not getattr(args, "no_cache", False)
         if args.command == "run" and args.json:
             check_file_path("--json", args.json)
@@ -146,6 +144,7 @@ def command(argv):
         return error_exit(error)
     isolation.RECORD.loading = False
     if args.command == "bench":
+        import pandas as pd
         from dyncheck.bench import bench_case, bench_runs
         table = pd.concat([bench_case(case) for case in cases] + ([bench_runs(cases, run_cases)] if args.runs else []),
                           ignore_index=True)
@@ -404,9 +403,10 @@ def parse_overrides(pairs):
     return overrides
 
 
-def select_cases(names, set_pairs, cases_dir=CASES_DIR):
-    from dyncheck.studies import stability, work_precision
-    from dyncheck.checks import linear
+def select_cases(names, set_pairs, cases_dir=CASES_DIR, quick=False):
+    """The cases named (default: all of cases_dir), with the overrides of `set_pairs`, loaded and checked: ValueError
+    (bad input) where one is.  `quick`: for `run --quick`, whose checks at states need none of the settings of the
+    runs along time and the studies, which are then not checked (nor their modules imported)."""
     names = list(dict.fromkeys(names)) or case_names(cases_dir)  # a case named twice runs once
     defaults = {name: load_case(name, cases_dir).defaults for name in names}  # an unknown case name is named here
     overrides = parse_overrides(set_pairs)
@@ -417,14 +417,23 @@ def select_cases(names, set_pairs, cases_dir=CASES_DIR):
                              f"(cases: {', '.join(names)})")
     cases = [load_case(name, cases_dir, **{k: v for k, v in overrides.items() if k in defaults[name]})
              for name in names]
-    for case in cases:  # load every model and study setting now: a scene that disagrees with its case,
+    for case in cases:  # load every model and setting now: a scene that disagrees with its case,
         for source in SOURCES:  # or a setting that is vacuous or runs away, is bad input
             case.model(source)
-        stability.validate(case)
-        linear.validate(case)
         validate_placeholders(case)
-        work_precision.settings(case)
+        if not quick:
+            validate_studies(case)
     return cases
+
+
+def validate_studies(case):
+    """A case's settings of its vibration analysis and its studies checked: ValueError where one is vacuous or runs
+    away."""
+    from dyncheck.checks import linear
+    from dyncheck.studies import stability, work_precision
+    stability.validate(case)
+    linear.validate(case)
+    work_precision.settings(case)
 
 
 def print_results(results, table=True, quick=False):
@@ -435,7 +444,7 @@ def print_results(results, table=True, quick=False):
         if table:
             print(f"\n== {result.name}: {heading(spec)}"
                   + (f", with {result.overrides_text}" if result.overrides else ""))
-            print(format_rows(rows).to_string(index=False))
+            print(rows_text(rows))
             print(ci.states_covered(result))
             if quick:
                 print(f"{result.name}: quick tier, the checks at states alone: left out every run along time, the rows "

@@ -5,12 +5,17 @@ Data flows one way: case -> models -> checks and studies -> these results -> sav
 file) carries RESULTS_VERSION; docs/results.md describes it.
 """
 
+from __future__ import annotations  # unevaluated: they name pandas's types without importing pandas
+
 import enum
 import math
 from dataclasses import asdict, dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:  # imported where a table is made (format_rows): `run --quick` prints its rows without it (0.4 s)
+    import pandas as pd
 
 from dyncheck.results import measured, store
 
@@ -335,13 +340,25 @@ def to_json(results, tool=None, interrupted=None, left_out=()):
 TABLE_COLUMNS = ["check", "quantity", "sources", "error", "tolerance", "status"]
 
 
-def format_rows(rows):
-    """The rows as a table of strings, as `dyncheck run` prints them and the pages list them."""
+def row_cells(rows):
+    """The rows as strings, {column: text} for each, as `dyncheck run` prints them and the pages list them."""
     number = lambda x: "-" if x is None else f"{x:.2e}"
-    return pd.DataFrame([{"check": r.check, "quantity": r.quantity, "sources": r.comparison,
-                          "error": inside_or_outside(r) if r.yes_or_no else number(r.error),
-                          "tolerance": "-" if r.yes_or_no else number(r.tolerance), "status": str(r.status)}
-                         for r in rows], columns=TABLE_COLUMNS)
+    return [{"check": r.check, "quantity": r.quantity, "sources": r.comparison,
+             "error": inside_or_outside(r) if r.yes_or_no else number(r.error),
+             "tolerance": "-" if r.yes_or_no else number(r.tolerance), "status": str(r.status)} for r in rows]
+
+
+def format_rows(rows):
+    """The rows as a table of strings, as the pages list them."""
+    import pandas as pd
+    return pd.DataFrame(row_cells(rows), columns=TABLE_COLUMNS)
+
+
+def rows_text(rows):
+    """The rows as `dyncheck run` prints them: each column right-aligned under its heading, one space apart."""
+    lines = [dict(zip(TABLE_COLUMNS, TABLE_COLUMNS))] + row_cells(rows)
+    widths = {column: max(len(line[column]) for line in lines) for column in TABLE_COLUMNS}
+    return "\n".join(" ".join(line[column].rjust(widths[column]) for column in TABLE_COLUMNS) for line in lines)
 
 
 def inside_or_outside(row):
