@@ -78,7 +78,8 @@ def command(argv):
     bench.add_argument("cases", nargs="*", metavar="CASE", help="cases to measure (default: all)")
     bench.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help=argparse.SUPPRESS)
     bench.add_argument("--runs", action="store_true",
-                       help="also whole runs: the tight solutions' cache, and the cases in parallel (minutes)")
+                       help="also whole runs: the tight solutions' cache, the command `run --quick` against `run`, "
+                            "and the cases in parallel (minutes)")
     listing.add_argument("cases", nargs="*", metavar="CASE", help="cases to list (default: all)")
     for sub in (run, report):
         sub.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
