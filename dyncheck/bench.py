@@ -92,6 +92,27 @@ def _measure(source, entries, repeat):
             for (what, count, _, against), t in zip(entries, times)]
 
 
+def bench_table(cases, run_all=None):
+    """`dyncheck bench`'s table of `cases`: their throughput rows (bench_case) and, with `run_all` (the command line's
+    run_cases), their whole runs (bench_runs).  A case whose applied forces vary has no throughput rows (no bare loop
+    evaluates a law of the state: engines.bench), which a line under the table says; its whole runs are timed."""
+    frames, without = [], []
+    for case in cases:
+        if case.model("mujoco").varying:
+            without.append(case.name)
+        else:
+            frames.append(bench_case(case))
+    if run_all is not None:
+        frames.append(bench_runs(cases, run_all))
+    untimed = (f"no throughput rows of {', '.join(without)}: its applied forces vary, which no bare engine loop "
+               "evaluates (--runs times its whole runs)") if without else ""
+    if not frames:
+        return untimed
+    table = pd.concat(frames, ignore_index=True)
+    table["ratio to bare"] = table["ratio to bare"].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")  # no bare loop
+    return "\n".join(filter(None, (table.to_string(index=False, float_format=lambda x: f"{x:.3g}"), untimed)))
+
+
 def bench_case(case, steps=2000, repeat=5):
     """Rows: source, what, count, median seconds, per second, the ratio per item to the bare row
     `against` (1 for a bare row itself)."""

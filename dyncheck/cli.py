@@ -145,12 +145,8 @@ def command(argv):
         return error_exit(error)
     isolation.RECORD.loading = False
     if args.command == "bench":
-        import pandas as pd
-        from dyncheck.bench import bench_case, bench_runs
-        table = pd.concat([bench_case(case) for case in cases] + ([bench_runs(cases, run_cases)] if args.runs else []),
-                          ignore_index=True)
-        table["ratio to bare"] = table["ratio to bare"].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")  # no bare loop
-        print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+        from dyncheck.bench import bench_table
+        print(bench_table(cases, run_cases if args.runs else None))
         return 0
     try:
         # The findings' localisation (seconds each) only where it is shown: in JSON, results, pages.
