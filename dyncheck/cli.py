@@ -110,6 +110,7 @@ def command(argv):
                         help="render the pages from results saved in DIR (a report's results/ folder, or "
                              "`run --results DIR`) instead of running anything; needs neither engine")
     args = parser.parse_args(argv)
+    quick = args.command == "run" and args.quick
     if args.command == "report" and args.out is None:
         args.out = Path("reports" + "".join(f"-{pair.strip().replace('/', '_')}" for pair in args.set))
     if args.command == "campaign" and args.out is None:
@@ -132,12 +133,12 @@ def command(argv):
             check_out_folder(args.out)
             if args.saved:
                 return report_saved(args, start)
-        cases = select_cases(args.cases, args.set, args.cases_dir, args.command == "run" and args.quick)
+        cases = select_cases(args.cases, args.set, args.cases_dir, quick)
         cache.enabled = not getattr(args, "no_cache", False)
         if args.command == "run" and args.json:
             check_file_path("--json", args.json)
         if args.command == "run" and args.results:
-            if args.quick:  # the pages that report --from renders draw the runs along time
+            if quick:  # the pages that report --from renders draw the runs along time
                 raise ValueError(f"--results {args.results}: saves what `report --from` renders pages from, with the "
                                  "runs along time that --quick leaves out; give one or the other")
             check_results_folder(args.results, [case.name for case in cases])
@@ -150,7 +151,6 @@ def command(argv):
         return 0
     try:
         # The findings' localisation (seconds each) only where it is shown: in JSON, results, pages.
-        quick = args.command == "run" and args.quick
         results, interrupted = run_cases(cases, args.command == "report" or bool(args.json or args.results),
                                          quick=quick)
         writing = f"--out {args.out}" if args.command == "report" else None  # for a write that fails
@@ -192,9 +192,10 @@ def error_exit(error):
 
 def run_cases(cases, localise=True, workers=None, quick=False):
     """The results of the cases (with `quick`, of their checks at states: run_case), in their order, and the name of
-    the first case that did not finish because of Ctrl-C (None if all did).  Each case runs in a forked process of its own (it inherits its Case, whose engine
-    models cannot be pickled), one per core, the longest first (expected_cost) so that no long case starts last;
-    a process that dies or overruns its budget gives its case one failing row saying so (dyncheck.case.isolation)."""
+    the first case that did not finish because of Ctrl-C (None if all did).  Each case runs in a forked process of
+    its own (it inherits its Case, whose engine models cannot be pickled), one per core, the longest first
+    (expected_cost) so that no long case starts last; a process that dies or overruns its budget gives its case one
+    failing row saying so (dyncheck.case.isolation)."""
     workers = min(len(cases), workers or os.cpu_count() or 1)
     finished = {}  # index -> result
     try:
@@ -210,8 +211,8 @@ def run_cases(cases, localise=True, workers=None, quick=False):
                 longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
                 memory = isolation.machine_memory() // workers
                 budget = lambda case: replace(case.budget, memory=case.budget.memory or memory)
-                each = isolation.run_each([cases[i] for i in longest_first], lambda case: run_case(case, localise, quick),
-                                          workers, budget)
+                each = isolation.run_each([cases[i] for i in longest_first],
+                                          lambda case: run_case(case, localise, quick), workers, budget)
                 with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
                     for position, (kind, value) in each:
                         index = longest_first[position]

@@ -72,7 +72,8 @@ def test_saving_results_for_pages_is_refused(tutorial, tmp_path, capsys):
 def test_it_imports_none_of_what_only_runs_along_time_need(tutorial):
     """Its start-up is most of its time: it imports neither pandas nor scipy.integrate, scipy.optimize, scipy.stats
     nor pint (seconds between them), in its own process or the case's (-X importtime reports both)."""
-    code = f"import sys\nfrom dyncheck.cli import main\nsys.exit(main(['run', '--quick', '--cases', {str(tutorial.parent)!r}]))\n"
+    code = ("import sys\nfrom dyncheck.cli import main\n"
+            f"sys.exit(main(['run', '--quick', '--cases', {str(tutorial.parent)!r}]))\n")
     done = subprocess.run([sys.executable, "-X", "importtime", "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout[-2000:]
     imported = {line.rpartition("|")[2].strip() for line in done.stderr.splitlines() if line.startswith("import time:")}
