@@ -8,7 +8,6 @@ alone, without the engines."""
 import argparse
 import contextlib
 import json
-import multiprocessing
 import os
 import sys
 import tempfile
@@ -204,24 +203,25 @@ def run_cases(cases, localise=True, workers=None, quick=False):
                 finished[index] = result
                 bar.step()
                 bar.note(f"{result.name} done, {result.status}")
-            if "fork" not in multiprocessing.get_all_start_methods():  # no process to isolate a case in
-                for index, case in enumerate(cases):
-                    done(index, run_case(case, localise, quick))
-            else:
-                longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
-                memory = isolation.machine_memory() // workers
-                budget = lambda case: replace(case.budget, memory=case.budget.memory or memory)
-                each = isolation.run_each([cases[i] for i in longest_first],
-                                          lambda case: run_case(case, localise, quick), workers, budget)
-                with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
-                    for position, (kind, value) in each:
-                        index = longest_first[position]
-                        if kind != "interrupted":  # an interrupted case is named as such, not given a row
-                            done(index, value if kind == "result" else unfinished(cases[index], value))
+            longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
+            each = isolation.each_forked([cases[i] for i in longest_first],
+                                         lambda case: run_case(case, localise, quick), workers, shared_memory(workers))
+            with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
+                for position, (kind, value) in each:
+                    index = longest_first[position]
+                    if kind != "interrupted":  # an interrupted case is named as such, not given a row
+                        done(index, value if kind == "result" else unfinished(cases[index], value))
     except KeyboardInterrupt:
         pass
     unfinished_names = [case.name for index, case in enumerate(cases) if index not in finished]
     return [finished[index] for index in sorted(finished)], (unfinished_names[0] if unfinished_names else None)
+
+
+def shared_memory(workers):
+    """A case's budget (isolation.Budget) with, where its case file sets none, an equal share of the machine's
+    memory among `workers` processes at once."""
+    memory = isolation.machine_memory() // workers
+    return lambda case: replace(case.budget, memory=case.budget.memory or memory)
 
 
 def expected_cost(case):
@@ -234,9 +234,7 @@ def make_report(results, cases, out, no_studies, animations=True):
     the results."""
     from dyncheck.pages.report import write_reports
     start = time.perf_counter()
-    # a case whose checks did not finish (no runs: dyncheck.checks.runs.unfinished) has no studies either
-    results = [result if no_studies or not result.runs else result.with_studies(study_case(case))
-               for result, case in zip(results, cases)]
+    results = results if no_studies else studied(results, cases)
     written = write_pages(results, out, animations)
     print(f"studies and pages: wrote {len(written)} files to {out}/ in {time.perf_counter() - start:.1f} s")
     print_results(results, table=False)
@@ -246,8 +244,11 @@ def make_report(results, cases, out, no_studies, animations=True):
 def write_pages(results, out, animations):
     """dyncheck.pages.report.write_reports, as a stage with its progress (a minute or more, with the animations)."""
     from dyncheck.pages.report import write_reports
-    with Progress(f"pages to {out}/"):
-        return write_reports(results, out, animations)
+    with Progress(f"pages to {out}/", total=len(results), unit="case") as bar:
+        def written(name):
+            bar.step()
+            bar.note(f"{name} written")
+        return write_reports(results, out, animations, written)
 
 
 def report_saved(args, start):
@@ -274,18 +275,39 @@ def close(results, junit, start, quick=False):
         print(line)
 
 
+def studied(results, cases):
+    """The results with each case's studies (study_case), a case per forked process, one per core, the longest
+    first, as run_cases runs the checks (the studies take minutes).  A case whose checks did not finish (no runs:
+    dyncheck.checks.runs.unfinished) has no studies; one whose studies did not finish keeps its checks, and
+    stderr says why."""
+    todo = sorted((i for i, result in enumerate(results) if result.runs), key=lambda i: -expected_cost(cases[i]))
+    out = list(results)
+    with Progress("studies", total=len(todo), unit="case") as bar:
+        workers = min(len(todo), os.cpu_count() or 1) or 1
+        each = isolation.each_forked([cases[i] for i in todo], study_case, workers, shared_memory(workers))
+        with contextlib.closing(each):
+            for position, (kind, value) in each:
+                index = todo[position]
+                if kind == "interrupted":
+                    raise KeyboardInterrupt
+                bar.step()
+                if kind == "result":
+                    out[index] = results[index].with_studies(value)
+                    bar.note(f"{cases[index].name} done")
+                else:
+                    bar.say(f"dyncheck: the studies of {cases[index].name} did not finish, its page has none: {value}")
+    return out
+
+
 def study_case(case):
-    """The case's work-precision sweep, stability studies and Campbell diagram, with their progress (they take
-    minutes)."""
+    """The case's work-precision sweep, stability studies and Campbell diagram."""
     from dyncheck.studies import campbell, stability, work_precision
-    with Progress(f"studies of {case.name}") as bar:
-        bar.note("work-precision sweep")
-        sweep = work_precision.sweep(case, bar.step)
-        bar.note("stability studies")
-        studies = stability.studies(case, bar.step)
-        bar.note("Campbell diagram")
-        diagram = campbell.sweep(case, bar.step)
-    return {"work_precision": sweep, "stability": studies, "vibration": diagram}
+    return {"work_precision": work_precision.sweep(case, step), "stability": stability.studies(case, step),
+            "vibration": campbell.sweep(case, step)}
+
+
+def step(text=""):
+    """A study's step, in a process of its own: the stage's progress counts whole cases."""
 
 
 def campaign_command(args):

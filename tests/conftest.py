@@ -12,10 +12,13 @@ WHOLE_RUNS = {"results", "example_results", "rendered"}  # the session fixtures 
 
 
 def pytest_collection_modifyitems(items):
-    """A test that takes a whole run of every case is `full`: the default run leaves it to `pytest -m full`."""
+    """A test that takes a whole run of every case is `full`: the default run leaves it to `pytest -m full`.
+    Under pytest-xdist (`-n`: pyproject.toml) such tests share one worker (`--dist loadgroup`), where the session
+    fixtures run once; every other test goes to whichever worker is free."""
     for item in items:
         if WHOLE_RUNS & set(item.fixturenames):
             item.add_marker(pytest.mark.full)
+            item.add_marker(pytest.mark.xdist_group("whole_runs"))
 
 
 @pytest.fixture(scope="session")

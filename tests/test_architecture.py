@@ -157,6 +157,7 @@ def test_rendering_saved_results_needs_no_engine(results, tmp_path):
     assert not differ, differ
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_loading_the_cases_for_a_run_imports_no_matplotlib():
     """What `dyncheck run` does before its checks start (the command line and the checks imported, every case
     of cases/ and examples/ loaded with its models, studies and own study module) imports no matplotlib: only

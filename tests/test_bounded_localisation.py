@@ -47,6 +47,7 @@ def equations(case):
     return rows, localisations, peak
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("n, searched", [(5, "candidates of one position factor each"), (7, "not searched")])
 def test_a_chain_s_wrong_equation_is_named_within_the_budget(tmp_path, n, searched):
     """An n-link pendulum: its derivation passes; with one planted error in the third joint's equation the rows
@@ -65,6 +66,7 @@ def test_a_chain_s_wrong_equation_is_named_within_the_budget(tmp_path, n, search
     assert peak < terms.MEMORY / 4, f"{peak / 1e6:.0f} MB"
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_search_that_fails_keeps_the_rows_and_says_where(tmp_path, monkeypatch):
     """Whatever the term search raises, the case's rows stay and each failing equation is named with the error."""
     subject = tutorial_subject(tmp_path)

@@ -39,6 +39,7 @@ def test_the_spring_pendulums_sweep_ends_just_below_sqrt_k_over_m(k):
     assert brackets["k"][0] < k_crit < brackets["k"][1]
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_at_k_500_the_boundary_is_found_inside_its_bracket_and_confirmed_by_runs():
     case, table, scene = spring(k=500.0)
     (boundary, stable_above), sentences = campbell.boundary_search(case, scene, table, table["boundary"][0], None)
@@ -127,6 +128,7 @@ def test_a_scale_is_checked_for_its_names_on_load_and_evaluated_where_the_study_
         linear.validate(case)
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_the_pages_load_a_saved_sweep_without_running_anything():
     """`dyncheck report --from` imports the pages alone: the Sweep's classes must be registered by them (a saved
     Campbell diagram was 'not registered with dyncheck.results.store' once it had a module of its own)."""

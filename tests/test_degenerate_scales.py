@@ -2,6 +2,8 @@
 where MuJoCo's scene cannot model it: no false failure where a force vanishes, a spring is stiff, or a body is a
 placeholder's size."""
 
+import pytest
+
 from dyncheck.case.folder import Case
 from dyncheck.checks import runs as checks, residuals
 from dyncheck.cli import main
@@ -14,6 +16,7 @@ def equation_rows(folder, **overrides):
     return [r for r in checks.run_case(case, localise=False).rows if r.check == residuals.CHECK], case
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_without_gravity_the_theta_equation_is_judged_against_its_terms_not_its_vanishing_force(tmp_path):
     """At g = 0 the theta equation's force is 0 at every state (the engines give 3.8e-15 of rounding) while its
     M q'' terms are of the order of 1 N m: against the force its residual was 1.0, against its terms' sizes 7e-14
@@ -24,6 +27,7 @@ def test_without_gravity_the_theta_equation_is_judged_against_its_terms_not_its_
     assert theta and all(r.error < 1e-12 for r in theta)
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_without_gravity_a_wrong_term_still_fails(tmp_path):
     """The scale is the terms' sizes, no more: the cart's centrifugal term with its sign flipped fails as before."""
     subject = tutorial_subject(tmp_path)
@@ -37,6 +41,7 @@ def test_without_gravity_a_wrong_term_still_fails(tmp_path):
     assert "x residual" in failing and "theta residual" not in failing, failing
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_stiff_spring_s_equations_pass(tmp_path):
     """k = 1e9 N/m: the spring's k x (5e7 N) drives x'', whose M q'' terms in the theta row (7.5e6 N m) cancel to
     its 1.5 N m of force; the rounding and MuJoCo's placeholder inertia times theta'' (1e-6 N m) failed four rows

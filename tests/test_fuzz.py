@@ -295,6 +295,7 @@ def _quiet_mujoco():
 @examples(60)
 @given(name=st.sampled_from(SCENE_CASES), kind=st.sampled_from(["refused", "compared", "other", "stray"]),
        file=st.sampled_from(["MJCF", "URDF"]), pick=st.integers(0, 1000), value=VALUES, index=st.integers(0, 10))
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_mutated_scene_file_is_refused_or_loads_what_the_checks_compare(name, kind, file, pick, value, index):
     outcome, what = scene_outcome(name, kind, file, pick, value, index)
     record("scene", outcome, what)

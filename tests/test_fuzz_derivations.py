@@ -72,6 +72,7 @@ MISCHIEF = [
 ]
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("name, action, said", MISCHIEF, ids=[m[0] for m in MISCHIEF])
 def test_a_derivation_misbehaving_in_a_small_region_fails_saying_what_it_did(name, action, said, tmp_path):
     folder = make_case(tmp_path, misbehaving(action), BUDGETED)
@@ -92,6 +93,7 @@ def test_the_state_of_a_misbehaving_call_is_in_its_row(tmp_path):
     assert re.search(r"accelerations at t = \S+ s, q = \[\S+, -?2\.[5-9]\d*\], v = \[", row.detail), row.detail
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_derivation_that_exits_at_import_or_on_load_is_bad_input_for_the_command(tmp_path):
     """Through the console command, whose supervisor sees the process end: exit 2 while loading, never 0."""
     for where, source in (("import", "import os\nos._exit(0)\n" + FILES["equations.py"]),
@@ -109,6 +111,7 @@ def command(folder, timeout=120):
                           timeout=timeout)
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_forged_end_is_no_end(tmp_path):
     """Code that marks dyncheck's record done (with a token of its own making) and ends the process with 0 ends
     dyncheck with exit 2: only the supervisor's token signs an end."""
@@ -119,6 +122,7 @@ def test_a_forged_end_is_no_end(tmp_path):
     assert "a case's own code ended dyncheck" in done.stderr and "Traceback" not in done.stderr
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_derivation_that_changes_the_current_folder_does_not_move_the_files_written(tmp_path):
     """Relative paths of the command line are the caller's: taken from the current folder before a case's code runs
     (here an import that moves to another folder, and a call that moves again in the case's process)."""
@@ -142,6 +146,7 @@ def test_a_derivation_that_changes_the_current_folder_does_not_move_the_files_wr
     ("os.write(os.open(os.environ['DYNCHECK_TEST_PID'], os.O_WRONLY | os.O_CREAT | os.O_APPEND),"
      " b'%d\\n' % os.getpid())\nos.kill(os.getppid(), signal.SIGKILL)",
      1, "killed by signal SIGKILL")], ids=["stops its parent", "forks", "kills its parent"])
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_derivation_acting_on_processes_ends_the_run_as_one_run(action, code, said, tmp_path, monkeypatch):
     pid_file = tmp_path / "pid"
     monkeypatch.setenv("DYNCHECK_TEST_PID", str(pid_file))
@@ -167,6 +172,7 @@ def alive(pid, within):
     return True
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_ctrl_c_during_a_run_exits_130_without_a_traceback(tmp_path):
     folder = make_case(tmp_path, misbehaving("time.sleep(1e6)", where="True"), "[budget]\ncall = 100\n")
     process = subprocess.Popen(["dyncheck", "run", "--cases", str(folder)], stdout=subprocess.PIPE,
@@ -209,6 +215,7 @@ def region_variant(where, wrong):
                      f"    return accelerations_right(t, q, v, p)\n")
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("count", [int(os.environ.get("DYNCHECK_FUZZ_EXAMPLES", "20"))])
 def test_a_derivation_wrong_only_in_a_region_of_5_percent_fails(count, tmp_path):
     right = dyncheck.load_case("cart_pendulum", make_case(tmp_path / "right", FILES["equations.py"]))
@@ -244,6 +251,7 @@ def test_a_message_about_a_case_of_two_files_names_its_folder_not_a_case_toml(ov
     assert str(refused.value).startswith(f"{folder / 'cart_pendulum'}: override "), str(refused.value)
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_derivation_writing_into_its_arguments_changes_no_state_of_the_checks(tmp_path):
     """The guide's correct equations, which zero q, v and t's arrays after computing their answer: they pass."""
     source = FILES["equations.py"].replace("def accelerations(", "def _accelerations(")

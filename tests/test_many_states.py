@@ -85,12 +85,14 @@ def test_reactions_energy_and_paths_of_many_states_are_those_of_each(name, sourc
         assert "reactions" in many and "energy" in many  # the models that have them: not a test of nothing
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("name", ["slider_crank", "forced_cart_pendulum"])  # a closed loop; applied laws of the state
 def test_pinocchio_accelerations_of_many_states_in_the_examples(name):
     case = dyncheck.load_case(name, EXAMPLES)
     assert_many_is_each(case, *columns(case.sample_states()))
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("name", ["slider_crank", "forced_cart_pendulum"])
 def test_pinocchio_reactions_and_energy_of_many_states_in_the_examples(name):
     case = dyncheck.load_case(name, EXAMPLES)

@@ -47,6 +47,7 @@ def test_the_guide_runs_as_written(tmp_path, capsys):
     assert outputs == 2
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_new_scaffolds_a_case_that_runs_once_written(tmp_path, capsys):
     scene = next(text for kind, path, text in steps() if kind == "file" and path.endswith("scene.xml"))
     (tmp_path / "scene.xml").write_text(scene)

@@ -183,6 +183,7 @@ def test_equations_that_return_complex_numbers_after_the_start_fail_their_rows(t
            "ValueError: accelerations(t, q, v, p) returned array([" in out and "complex128" in out, out
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_class_of_the_case_s_own_that_returns_complex_numbers_fails_its_rows(tmp_path, capsys):
     """The book's rotating pendulum as a class of the case's own folder (derivation = "own.py"), its Reference's q''
     complex away from the start: its rows fail naming the method and the dtype, as a plain module's do (numpy would

@@ -27,12 +27,14 @@ def with_hinge_spring(folder, rest='p["theta0"]', rest_value=math.radians(30)):
     return case
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_hinge_spring_relaxed_at_30_degrees_passes_dyncheck_run(tmp_path, capsys):
     """Was refused: the Pinocchio side read springref="30" as 30 rad, MuJoCo as 30 degrees."""
     with_hinge_spring(tmp_path)
     assert main(["run", "--cases", str(tmp_path)]) == 0, capsys.readouterr()
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_a_derivation_whose_hinge_spring_is_relaxed_at_0_fails(tmp_path, capsys):
     """The spring's rest position acts in both engines: a derivation without it fails against each."""
     with_hinge_spring(tmp_path, rest="0.0")

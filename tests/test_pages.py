@@ -4,6 +4,8 @@ bracket reference that links nowhere, no relative link to a file the tree lacks,
 "16 finding" (issue 16).  Each failure names the page and the line."""
 
 import re
+from dataclasses import replace
+from types import SimpleNamespace
 
 import pandas as pd
 import pytest
@@ -11,7 +13,9 @@ import pytest
 from dyncheck.case.scene import Driven
 from dyncheck.case.units import registry
 from dyncheck.common.messages import statuses_in_words
-from dyncheck.pages.case_page import law_of_time, markdown_table
+from dyncheck.pages.case_page import as_written, law_of_time, markdown_table, random_tried, worst_engine_error
+from dyncheck.results.values import OWN_WORDS, Row, Status
+from test_ci_contract import toy
 
 # The nouns the pages count, singular and plural, for "1 cases" and "16 finding".
 NOUNS = "case|row|finding|check|state|set|parameter|run|edit|quantity|source|method|figure|runaway|step|mode"
@@ -95,3 +99,30 @@ def test_a_table_shows_text_as_written_and_nothing_as_a_dash():
 def test_counts_agree_with_their_nouns():
     assert statuses_in_words({"pass": 1, "finding": 16, "fail": 0, "runaway": 1}) == "1 pass, 16 findings, 1 runaway"
     assert law_of_time(Driven(0.8, 0.3, -0.1)) == "0.8 + 0.3 t - 0.05 t^2" and law_of_time(Driven(0.0, 1.5, 0.0)) == "1.5 t"
+
+
+def test_a_wrong_derivation_is_no_agreement_on_the_index():
+    """A researcher's case names its reference "derivation" (in_own_words): its failing pointwise rows are the
+    index's disagreement and its worst engine error, not left out as a source that is no engine."""
+    wrong = row_of("pointwise", "theta''", (OWN_WORDS["reference"], "mujoco"), 0.3, Status.FAIL)
+    agreeing = row_of("pointwise", "theta''", ("mujoco", "pinocchio"), 1e-15, Status.PASS)
+    result = replace(toy("own", failing=False), rows=(wrong, agreeing))
+    case = SimpleNamespace(spec=result.spec)
+    assert random_tried(result, case)["agreed"] is False
+    assert worst_engine_error(result.rows) == 0.3
+
+
+def row_of(check, quantity, sources, error, status):
+    return Row(check, quantity, sources, error, 1e-9, 1e-6, status)
+
+
+def test_a_docstring_s_matrix_keeps_its_lines_and_its_prose_its_paragraphs():
+    text = ("A cart and a pendulum.\n"
+            "Lagrange's equations give\n\n"
+            "    M(q) = [[M + m,          m l cos(theta)],\n"
+            "            [m l cos(theta), m l^2         ]]\n\n"
+            "- x: the cart\n- theta: the rod\n")
+    assert as_written(text).split("\n\n") == [
+        "A cart and a pendulum. Lagrange's equations give",
+        "```text\nM(q) = [[M + m,          m l cos(theta)],\n        [m l cos(theta), m l^2         ]]\n```",
+        "- x: the cart\n- theta: the rod"]

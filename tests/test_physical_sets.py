@@ -25,6 +25,7 @@ def cart_with_bound_inertia(tmp_path):
     return folder
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_sets_that_break_a_body_s_triangle_inequality_are_not_drawn(tmp_path, capsys):
     """Before: `dyncheck run` raised MuJoCo's 'inertia must satisfy A + B >= C' out of the run."""
     folder = cart_with_bound_inertia(tmp_path)

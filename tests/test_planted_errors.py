@@ -83,6 +83,36 @@ def tutorial_subject(where, functions=TUTORIAL_FUNCTIONS):
     return Subject(TUTORIAL, folder, "equations.py", (folder / "equations.py").read_text(), functions)
 
 
+# The tutorial's cart-pendulum as a derivation that gives its accelerations only, solved in closed form from M and
+# f written entry by entry (as a symbolic package prints them): an error in an entry of M shows only through q''.
+CLOSED_FORM = '''"""Cart on a spring with a hanging pendulum, its accelerations in closed form."""
+import numpy as np
+
+COORDS = ["x", "theta"]
+PARAMS = {"M": 1.0, "m": 0.3, "l": 0.5, "k": 20.0, "g": 9.81}
+
+
+def accelerations(t, q, v, p):
+    x, theta = q
+    x_rate, theta_rate = v
+    M, m, l, k, g = p["M"], p["m"], p["l"], p["k"], p["g"]
+    m11 = M + m
+    m12 = m * l * np.cos(theta)
+    m22 = m * l**2
+    f1 = m * l * np.sin(theta) * theta_rate**2 - k * x
+    f2 = -m * g * l * np.sin(theta)
+    det = m11 * m22 - m12 * m12
+    return np.array([(m22 * f1 - m12 * f2) / det, (m11 * f2 - m12 * f1) / det])
+'''
+
+
+def closed_form_subject(where):
+    """The tutorial's scene with CLOSED_FORM as its derivation; errors planted in its entries of M and f."""
+    folder = tutorial_subject(where).folder
+    (folder / "equations.py").write_text(CLOSED_FORM)
+    return Subject(f"{TUTORIAL}_closed_form", folder, "equations.py", CLOSED_FORM, ("accelerations",))
+
+
 @dataclass(frozen=True)
 class Verdict:
     case: str
@@ -152,6 +182,7 @@ def test_the_subjects_pass_unmutated(tmp_path):
         assert [r for r in rows if r.status != Status.PASS] == [] and localisations == (), subject.name
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_four_planted_errors_in_the_tutorial_are_named(tmp_path):
     """One error of each kind in the cart-pendulum's force side, as the issue asks: each detected, and
     its wrong equation named with the term."""
@@ -163,13 +194,28 @@ def test_four_planted_errors_in_the_tutorial_are_named(tmp_path):
         assert verdict.named, (str(mutant), verdict.changed, verdict.failing, [str(l) for l in verdict.localisations])
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
+def test_an_entry_of_m_wrong_inside_closed_form_accelerations_is_named_as_m_s(tmp_path):
+    """m left out of M + m (M11) inside accelerations written in closed form: the x equation's residual is
+    -m x''_d, a term in the derivation's own acceleration, named with M's column; nothing else is named."""
+    subject = closed_form_subject(tmp_path / "original")
+    mutant = next(m for m in planting.mutants(subject.source, subject.functions, per_kind=50, seed=1)
+                  if m.kind == "drop" and m.term == "m" and "m11 =" in subject.source.splitlines()[m.line - 1])
+    verdict = judge(subject, mutant, tmp_path / "mutant")
+    assert verdict.named, (str(mutant), verdict.changed, verdict.failing, [str(l) for l in verdict.localisations])
+    (localisation,) = verdict.localisations
+    assert "m x''" in localisation.text and "entry in its column x lacks + m" in localisation.text, localisation.text
+
+
 @pytest.mark.slow
 def test_campaign(tmp_path):
-    """>= 100 seeded planted errors over the four book cases with coordinates and the tutorial: a table
+    """>= 100 seeded planted errors over the four book cases with coordinates, the tutorial and its closed form
+    (accelerations only, CLOSED_FORM): a table
     per case and kind (printed, and saved to /tmp/dyncheck_planted/).  Every error that changes an
     equation is detected; the hit rate named / detected is measured, not asserted."""
     start = time.perf_counter()
-    subjects = [book_subject(name) for name in BOOK] + [tutorial_subject(tmp_path / "original")]
+    subjects = [book_subject(name) for name in BOOK] + [tutorial_subject(tmp_path / "original"),
+                                                        closed_form_subject(tmp_path / "closed form")]
     verdicts = []
     for subject in subjects:
         for mutant in planting.mutants(subject.source, subject.functions, per_kind=8, seed=2024):

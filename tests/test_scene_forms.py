@@ -416,6 +416,7 @@ def test_drake_refuses_several_joints_on_one_body(tmp_path):
 SPHERICAL_CASE = Path(__file__).resolve().parent / "scene_forms" / "spherical_pendulum"
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("planted, status", [(None, 0), ("IZZ * np.sin(b)**2", 1)])
 def test_a_spherical_pendulum_of_two_hinges_on_one_body_passes_dyncheck_run(tmp_path, capsys, planted, status):
     """scene.xml and equations.py only (tests/scene_forms/spherical_pendulum): green (51 rows, 8 s here); with the

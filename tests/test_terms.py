@@ -7,7 +7,7 @@ r = -T, and the fit names +T, the term to add.  States and parameter sets are ra
 import numpy as np
 import pytest
 
-from dyncheck.checks.terms import fit, library
+from dyncheck.checks.terms import fit, library, library_size
 
 NOISE, FLOOR = 1e-12, 1e-10
 CART = (["x", "theta"], ["m", "rad"], ["M", "m", "l", "k", "g"])  # a cart on a spring, a pendulum hung from it
@@ -136,3 +136,27 @@ def test_bad_input_is_named():
     del data[1][0]["k"]
     with pytest.raises(ValueError, match=r"samples\[1\]: no value for parameter\(s\) k"):
         fit(*CART, data, FLOOR)
+
+
+def test_a_wrong_mass_matrix_entry_is_named_from_the_accelerations():
+    """A derivation of accelerations only, its M11 short of m2 l1^2: its residual is -m2 l1^2 theta1''_d, fitted
+    as a term in its own acceleration (given with the samples) and named as M's; without the accelerations no
+    term of the library fits it."""
+    rng = np.random.default_rng(3)
+    with_accelerations = [(params, q, v, residual, a) for (params, q, v, residual), a in zip(
+        samples(ARMS, lambda p, q, v: np.zeros(len(q))),
+        [rng.uniform(-20.0, 20.0, (100, 2)) for _ in range(6)])]
+    data = [(params, q, v, residual + params["m2"] * params["l1"] ** 2 * a[:, 0], a)
+            for params, q, v, residual, a in with_accelerations]
+    result = fit(*ARMS[:2], ARMS[2], data, FLOOR)
+    assert result.identified and [term.text for term in result.terms] == ["-m2 l1^2 theta1''"], result.text
+    assert "this equation's entry in its column theta1 lacks + m2 l1^2" in result.text
+    assert not fit(*ARMS[:2], ARMS[2], [sample[:4] for sample in data], FLOOR).exact
+
+
+def test_a_cyclic_angle_enters_no_candidate():
+    parts = library(*ARMS[:2], cyclic=("theta1",))
+    assert parts and not any("theta1" in factor.of for part in parts for factor in part
+                             if factor.function in ("sin", "cos"))
+    assert len(parts) == library_size(*ARMS[:2], cyclic=("theta1",)) < library_size(*ARMS[:2])
+    assert len(library(*ARMS[:2], accelerations=True)) == library_size(*ARMS[:2], accelerations=True)

@@ -98,11 +98,13 @@ def write_case(cases_dir, equations):
     (case / "equations.py").write_text(equations)
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_the_derivation_runs_green(tmp_path):
     write_case(tmp_path, EQUATIONS)
     assert main(["run", "--cases", str(tmp_path)]) == 0
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("old, new, named", PLANTED.values(), ids=PLANTED.keys())
 def test_a_planted_error_is_named(tmp_path, capsys, old, new, named):
     assert EQUATIONS.count(old) == 1
@@ -111,6 +113,7 @@ def test_a_planted_error_is_named(tmp_path, capsys, old, new, named):
     assert named in capsys.readouterr().out
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_without_energy_the_derivation_s_energy_rows_are_not_applicable(tmp_path, capsys):
     """energy() is optional: the derivation's energy rows say there is nothing to check, the engines'
     own energy rows stay, and a study that needs the derivation's energy is refused before any work."""

@@ -73,6 +73,7 @@ def test_a_shooting_whose_steps_do_nothing_stops_after_stall_iterations(monkeypa
     assert runs.count(case.integration["tight_rtol"]) == floquet.STALL + 1
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_an_orbit_that_shooting_misses_from_the_guess_is_continued_from_the_book_s():
     # At 4 times the book's arm rate Newton-Raphson from the case file's guess stalls at |x(T) - x(0)| = 1.7 (and
     # the row said no orbit existed); continued from the book's orbit it converges, to the orbit that
@@ -85,6 +86,7 @@ def test_an_orbit_that_shooting_misses_from_the_guess_is_continued_from_the_book
     assert states[0] == pytest.approx([0.648064, 0.0], abs=1e-6)
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_each_step_of_the_continuation_shoots_at_its_own_period(monkeypatch):
     # The disk's rate sets the period (2 pi / |beta'|): shot at the case's period, the book's orbit "converged" at
     # T = 10.47 s on the book's 8 s system, and the continuation then failed (found in review)
@@ -101,6 +103,7 @@ def test_each_step_of_the_continuation_shoots_at_its_own_period(monkeypatch):
     assert all(period == pytest.approx(2 * math.pi / at["beta_rate"]) for at, period in periods[1:])
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_the_eigensolver_s_rounding_is_measured_not_bounded_by_the_matrix_s_norm():
     # At 2.3 times the book's disk rate the spring-mass pendulum's mode shapes agree to 5e-11 in all three sources,
     # but eps |A| (the stiffness over a mass, 6,200 1/s^2, where the shapes' coordinates are 1/74 of their rates)
@@ -112,6 +115,7 @@ def test_the_eigensolver_s_rounding_is_measured_not_bounded_by_the_matrix_s_norm
     assert all(1e3 * r.error < r.tolerance < r.ceiling for r in shapes)
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_the_samples_of_a_are_doubled_while_the_monodromy_s_estimate_is_the_interpolation_s(monkeypatch):
     # The estimate is the twin's, from every other sample: off the book's numbers (arm and disk at -5 and -2.8 rad/s)
     # A's harmonics reached past the twin's resolution, and every Floquet row was inconclusive from 64 samples whose
@@ -136,6 +140,7 @@ def test_the_samples_of_a_are_doubled_while_the_monodromy_s_estimate_is_the_inte
     assert len(floquet.resolved_monodromy(case, states, period, rows)[0]) == 2 * len(states) - 1
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 def test_an_orbit_shooting_misses_but_mujoco_finds_is_shot_from_mujoco_s(monkeypatch):
     # The arm and disk at -3.77 and 3.55 rad/s (tests/test_vibration.py analyses its orbit): the derivation's
     # Newton-Raphson from the guess ran off, and so did the continuation; MuJoCo's converged (on AVX-512 kernels), and
@@ -174,6 +179,7 @@ def test_dop853_s_error_on_a_linear_motion_is_its_stability_function_s(lam):
     assert 5e-12 < measured / abs(lam) < 8e-12
 
 
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("overrides", [{"m1": 0.05, "m2": 2.0}, {"m1": 0.0533416, "l1": 0.0789191, "m2": 0.713027}])
 def test_newton_finds_the_hanging_state_where_the_mass_matrix_is_nearly_singular(overrides):
     # A light inner mass makes M's condition 1,000: q'' = M^-1 f is far from linear near the hanging state, and

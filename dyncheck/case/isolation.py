@@ -22,7 +22,7 @@ import sys
 import threading
 import time
 from dataclasses import dataclass
-from multiprocessing import connection, get_context
+from multiprocessing import connection, get_all_start_methods, get_context
 from pathlib import Path
 
 import numpy as np
@@ -264,6 +264,14 @@ class Guarded:
 
 
 # -- whole processes --------------------------------------------------------------------------------------------
+
+def each_forked(items, work, workers, budget_of):
+    """run_each where processes can be forked; elsewhere work(item) for each item in this process, one after
+    another, as (index, ("result", value)) (an exception is raised as it is)."""
+    if "fork" in get_all_start_methods():
+        return run_each(items, work, workers, budget_of)
+    return ((index, ("result", work(item))) for index, item in enumerate(items))
+
 
 def run_each(items, work, workers, budget_of):
     """work(item) for each item, each in a forked process of its own, `workers` at a time, in the order given:

@@ -216,6 +216,7 @@ def _localised(case, failing, found, drawn):
             except Exception:  # a set where a source fails: the random-parameters rows say so
                 continue
         named = {name: place for name, place, _ in places(case, samples[0][2])}
+        cyclic = cyclic_angles(case, source, samples[0][2])
         wrong = [(name, named[name]) for s, name in sorted(failing) if s == source and name in named]
         # the coordinates whose given M or f is wrong: their residual is explained there, not refitted
         explained = {i for _, place in wrong if place[0] != "residual" for i in place[1:]}
@@ -227,7 +228,7 @@ def _localised(case, failing, found, drawn):
             fits = []
             try:
                 for form, where in forms:
-                    fit = fit_at(case, samples, (form, *place[1:]), units, driven)
+                    fit = fit_at(case, samples, (form, *place[1:]), units, driven, cyclic)
                     if fit is not None:
                         fits.append((fit, where.format(c=case.coords[i])))
                         if fit.identified or fit.unsearched:  # the other forms' libraries are as large
@@ -256,15 +257,46 @@ def _place(case, kind, i, name):
     return f"equation {case.coords[i]}" if kind != "M" else name
 
 
-def fit_at(case, samples, place, units, driven):
+def fit_at(case, samples, place, units, driven, cyclic=()):
     """The terms that explain the residual at `place` over the sets `samples` ((params, case, Residuals));
-    None where no set gives finite residuals."""
-    fitted = [(params, with_driven(other, r.t, r.q, r.v), r.v, *r.of(place)) for params, other, r in samples]
-    usable = [(params, q, v, residual) for params, q, v, residual, _ in fitted if np.all(np.isfinite(residual))]
+    None where no set gives finite residuals.  A derivation that gives its accelerations only may have its
+    mass matrix wrong: in its force side's residual, dM q''_d, the terms in its accelerations are candidates."""
+    in_accelerations = place[0] == "residual" and samples[0][2].given_mass is None
+    fitted = [(params, with_driven(other, r.t, r.q, r.v), r.v, *r.of(place), r.derived_acc)
+              for params, other, r in samples]
+    usable = [(params, q, v, residual, a if in_accelerations else None)
+              for params, q, v, residual, _, a in fitted if np.all(np.isfinite(residual))]
     if not usable:
         return None
     floor = case.tolerance["pointwise"]["value"] * fitted[0][4]
-    return terms.fit(case.coords, units, list(case.params), usable, floor, driven)
+    return terms.fit(case.coords, units, list(case.params), usable, floor, driven, cyclic)
+
+
+SHIFT = 1.0  # rad: not a divisor of 2 pi, so that no term of the library (periods 2 pi and pi) is unchanged by it
+SHIFTED_STATES = 32  # random states: a residual that depends on the angle changes at nearly all of them
+
+
+def cyclic_angles(case, source, r):
+    """The angles that no equation's residual depends on (a Furuta pendulum's arm, a free chain's first
+    link): each shifted by SHIFT at SHIFTED_STATES of the states of `r`, every residual stays within the
+    pointwise tolerance of its size; terms in them are not candidates (they could only fit rounding)."""
+    units = case.spec["coord_units"]
+    first = r.first(SHIFTED_STATES)
+    tolerance = case.tolerance["pointwise"]["value"]
+    out = []
+    for i, (name, unit) in enumerate(zip(case.coords, units)):
+        if unit != "rad":
+            continue
+        shifted = first.q.copy()
+        shifted[:, i] += SHIFT
+        try:
+            moved = residuals(case, source, "mujoco", list(zip(first.t, shifted, first.v)))
+        except Exception:  # the derivation fails there: its rows say so; the angle stays a candidate
+            continue
+        if all(np.max(np.abs(moved.of(("residual", k))[0] - first.of(("residual", k))[0]))
+               <= tolerance * first.of(("residual", k))[1] for k in range(len(case.coords))):
+            out.append(name)
+    return tuple(out)
 
 
 def parameter_cases(case, drawn):

@@ -6,7 +6,10 @@ r_i = -T, so the terms fitted here are those of -r, the terms to ADD to the deri
 
 The candidates are built from the derivation's own coordinates: position factors (sin and cos of an
 angle, a length itself, sin and cos of the difference and of the sum of two angles), products of up
-to two of them, times the velocities to degree 0, 1 or 2 (as Lagrange's equations are).  The support is chosen jointly
+to two of them, times the velocities to degree 0, 1 or 2 (as Lagrange's equations are).  Where the
+derivation gives its accelerations only, a wrong mass matrix is a term too: r = dM q''_d, so the position
+parts times each of the derivation's accelerations are candidates, and a term in x'' names M's column x.
+A coordinate the residual does not depend on (a cyclic angle) enters no position factor.  The support is chosen jointly
 over the parameter sets (the same terms in every set): every single term, every pair, then the best
 pairs extended greedily to three; each candidate support is verified by least squares and is exact
 when what it leaves is under the noise floor.  Each term's coefficient, one per set, is then identified
@@ -35,13 +38,16 @@ DEPENDENT = 1e-9
 SAME = 1e-6
 SIMPLE = 12  # numbers written as fractions: numerator and denominator up to 12 (1/2, 4/3, 1/12)
 ENUMERATED = 200_000  # exponent combinations tried when the sets are too few for least squares
+# A closest fit that is not exact is named only where it leaves at most this share of the residual: one that
+# leaves more explains too little of it to point a reader at its terms.
+CLOSEST = 0.1
 
 
 @dataclass(frozen=True)
 class Factor:
     """One function of the state to a power: sin or cos of an angle or of two angles' difference,
-    a coordinate itself, or a velocity."""
-    function: str  # "sin", "cos", "coordinate" or "velocity"
+    a coordinate itself, a velocity, or the derivation's acceleration."""
+    function: str  # "sin", "cos", "coordinate", "velocity" or "acceleration"
     of: tuple[str, ...]  # a coordinate, or two angles (sin(of[0] - of[1]), or with `sum` of[0] + of[1])
     power: int = 1
     sum: bool = False  # of two angles: their sum (the absolute angle of a link hung from another), not their difference
@@ -50,13 +56,16 @@ class Factor:
     def text(self):
         argument = (" + " if self.sum else " - ").join(self.of)
         base = {"sin": f"sin({argument})", "cos": f"cos({argument})", "coordinate": argument,
-                "velocity": argument + "'"}[self.function]
+                "velocity": argument + "'", "acceleration": argument + "''"}[self.function]
         return base if self.power == 1 else f"{base}^{self.power}"
 
-    def value(self, q, v, index):
-        """The factor at states q, v (N, n); `index` gives each coordinate's column."""
+    def value(self, q, v, a, index):
+        """The factor at states q, v (N, n) with the derivation's accelerations a (N, n, or None where none is a
+        candidate); `index` gives each coordinate's column."""
         if self.function == "velocity":
             base = v[:, index[self.of[0]]]
+        elif self.function == "acceleration":
+            base = a[:, index[self.of[0]]]
         elif self.function == "coordinate":
             base = q[:, index[self.of[0]]]
         else:
@@ -136,9 +145,12 @@ class TermFit:
         if self.exact:
             words = (f"add {_signed(self.terms)} to {where} to agree with the engines "
                      f"(residual left {self.left:.1e} of {self.before:.2g})")
-        else:
+        elif self.left <= CLOSEST * self.before:
             words = (f"no sum of up to {MAX_TERMS} candidate terms explains its residual (the closest, "
                      f"{_signed(self.terms)}, leaves {self.left:.2g} of {self.before:.2g})")
+        else:
+            words = (f"no sum of up to {MAX_TERMS} candidate terms explains its residual (up to {self.before:.2g}; "
+                     f"the closest leaves {self.left / self.before:.0%} of it)")
         return words + "".join(f" ({note})" for note in self._notes())
 
     def _notes(self):
@@ -148,6 +160,9 @@ class TermFit:
             return ["one parameter set: numbers only"] + ([self.narrowed] if self.narrowed else [])
         notes = [f"the coefficient of {_state_text(term)} is no product of parameters' powers: its value at "
                  "the first set" for term in self.terms if not term.identified]
+        notes += [f"a term in {term.state[-1].text} is M's: this equation's entry in its column {term.state[-1].of[0]} lacks "
+                  f"{'-' if term.number > 0 else '+'} {' '.join([replace(term, state=term.state[:-1]).magnitude_text])}"
+                  for term in self.terms if term.state and term.state[-1].function == "acceleration"]
         if self.unvaried and any(term.identified for term in self.terms):
             notes.append(f"{', '.join(self.unvaried)} the same in every set: inside the numbers")
         notes += [f"as well explained by {_signed(other)}" for other in self.alternatives[:2]]
@@ -189,36 +204,38 @@ def _simple(number):
     return None
 
 
-def library(coords, units, driven=(), products=2):
+def library(coords, units, driven=(), products=2, accelerations=False, cyclic=()):
     """The candidate terms' state parts, fewest factors first, each a tuple of Factors: products of up
-    to `products` (2 or 1) position factors times velocities to degree 0 to 2.  `driven`: (name, unit) of
-    prescribed motions, whose positions (functions of time) enter as position factors (their rates are
-    parameters), and (name, FORCE) of applied forces that are laws of time and state, each a candidate on its
-    own.  As many as library_size counts."""
-    positions, velocities, forces = _factors(coords, units, driven)
+    to `products` (2 or 1) position factors times velocities to degree 0 to 2, and with `accelerations` times
+    each acceleration.  `driven`: (name, unit) of prescribed motions, whose positions (functions of time) enter
+    as position factors (their rates are parameters), and (name, FORCE) of applied forces that are laws of time
+    and state, each a candidate on its own.  `cyclic`: coordinates in no position factor.  As many as
+    library_size counts."""
+    positions, velocities, forces = _factors(coords, units, driven, cyclic)
     # cos^2 = 1 - sin^2 of the same angle: with all three, a constant plus sin^2 would fit three ways
     position_parts = [()] + [(factor,) for factor in positions] + ([
         _product(a, b) for a, b in combinations_with_replacement(positions, 2)
         if not (a == b and a.function == "cos")] if products == 2 else [])
     velocity_parts = [()] + [(factor,) for factor in velocities] + [
         _product(a, b) for a, b in combinations_with_replacement(velocities, 2)]
-    parts = [position + velocity for position in position_parts for velocity in velocity_parts] + forces
+    acceleration_parts = [(Factor("acceleration", (name,)),) for name in coords] if accelerations else []
+    parts = [position + rest for position in position_parts for rest in velocity_parts + acceleration_parts] + forces
     return sorted(parts, key=lambda part: sum(factor.power for factor in part))
 
 
-def library_size(coords, units, driven=(), products=2):
+def library_size(coords, units, driven=(), products=2, accelerations=False, cyclic=()):
     """len(library(...)), counted without building it: the full library grows as n^6 in n angles (1,810 terms
-    at 3, 27,321 at 5, 176,436 at 7)."""
-    positions, velocities, forces = _factors(coords, units, driven)
+    at 3, 27,321 at 5, 176,436 at 7, without accelerations)."""
+    positions, velocities, forces = _factors(coords, units, driven, cyclic)
     p, n = len(positions), len(velocities)
     cosines = sum(factor.function == "cos" for factor in positions)
     position_parts = 1 + p + ((p * (p + 1) // 2 - cosines) if products == 2 else 0)
-    return position_parts * (1 + n + n * (n + 1) // 2) + len(forces)
+    return position_parts * (1 + n + n * (n + 1) // 2 + (n if accelerations else 0)) + len(forces)
 
 
-def _factors(coords, units, driven):
-    """The library's position factors, velocity factors and applied forces' candidates; ValueError for a unit
-    the terms do not know."""
+def _factors(coords, units, driven, cyclic=()):
+    """The library's position factors (none of a `cyclic` coordinate), velocity factors and applied forces'
+    candidates; ValueError for a unit the terms do not know."""
     if len(units) != len(coords):
         raise ValueError(f"units: {len(units)} given for {len(coords)} coordinates {', '.join(coords)}")
     forces = [(Factor("coordinate", (name,)),) for name, unit in driven if unit == FORCE]
@@ -226,6 +243,7 @@ def _factors(coords, units, driven):
     for name, unit in every:
         if unit not in ("rad", "m"):
             raise ValueError(f"coordinate {name}: unit {unit!r}; the candidate terms know 'rad' and 'm'")
+    every = [(name, unit) for name, unit in every if name not in cyclic]
     angles = [name for name, unit in every if unit == "rad"]
     positions = [Factor(function, (name,)) for name, unit in every
                  for function in (("sin", "cos") if unit == "rad" else ("coordinate",))]
@@ -261,39 +279,42 @@ def _product(a, b):
     return (replace(a, power=2),) if a == b else (a, b)
 
 
-def fit(coords, units, param_names, samples, floor, driven=()):
+def fit(coords, units, param_names, samples, floor, driven=(), cyclic=()):
     """The fewest candidate terms (up to MAX_TERMS) that, added to the force side of one equation of
     the derivation, explain its residual r = (M_e (q''_d - q''_e))_i in every parameter set.
 
     coords, units: the derivation's coordinates and their units ('rad' or 'm'); param_names: its
     parameters, in the order the terms write them; samples: one (params {name: value}, q (N, n),
-    v (N, n), residual (N,)) per parameter set; floor: the absolute residual that is noise (the
-    engines' rounding), under which a fit is exact.  `driven`: (name, unit) of prescribed motions, whose
-    positions at each state follow the coordinates in q (library)."""
+    v (N, n), residual (N,)) per parameter set, or (params, q, v, residual, a) with the derivation's
+    accelerations a (N, n), whose terms are then candidates too (a wrong M); floor: the absolute residual that
+    is noise (the engines' rounding), under which a fit is exact.  `driven`: (name, unit) of prescribed motions,
+    whose positions at each state follow the coordinates in q (library); `cyclic`: coordinates the residual
+    does not depend on."""
     if not samples:
         raise ValueError("samples: none given; a fit needs at least one parameter set")
     positions = list(coords) + [name for name, _ in driven]
     sets = [_sample(number, sample, coords, positions, param_names) for number, sample in enumerate(samples)]
     params = [values for values, *_ in sets]
-    targets = [-residual for *_, residual in sets]  # what the derivation's force side lacks
+    targets = [-residual for *_, residual, _ in sets]  # what the derivation's force side lacks
+    accelerations = all(a is not None for *_, a in sets)
     unvaried = tuple(name for name in param_names if len({values[name] for values in params}) == 1)
     before = max(float(np.max(np.abs(target))) for target in targets)
     if before <= floor:
         return TermFit((), before, before, True, len(sets), unvaried, ())
-    full = library_size(coords, units, driven)
-    products = next((products for products in (2, 1)
-                     if within_budget(library_size(coords, units, driven, products), len(sets))), None)
+    size_of = lambda products: library_size(coords, units, driven, products, accelerations, cyclic)
+    full = size_of(2)
+    products = next((products for products in (2, 1) if within_budget(size_of(products), len(sets))), None)
     if products is None:
-        size = library_size(coords, units, driven, products=1)
+        size = size_of(1)
         memory, work = cost(size, len(sets))
         return TermFit((), before, before, False, len(sets), unvaried, (), unsearched=(
             f"even {size:,} candidate terms of one position factor each, over {len(sets)} parameter sets, would take "
             f"{memory / 1e9:.3g} GB and {work:.2g} set-pairs, beyond the budget of {MEMORY / 1e9:g} GB and {WORK:g}"))
     narrowed = "" if products == 2 else (f"candidates of one position factor each: the {full:,} of up to two "
                                          f"would not fit the budget of {MEMORY / 1e9:g} GB")
-    parts = library(coords, units, driven, products)
+    parts = library(coords, units, driven, products, accelerations, cyclic)
     index = {name: i for i, name in enumerate(positions)}
-    raw = [_columns(parts, q, v, index) for _, q, v, _ in sets]
+    raw = [_columns(parts, q, v, a, index) for _, q, v, _, a in sets]
     scales = np.array([np.linalg.norm(columns, axis=0) for columns in raw])
     # a candidate zero at every state of a set (no velocity sampled, say) can fit nothing there
     usable = np.flatnonzero(np.all(scales > 1e-12 * scales.max(axis=1, keepdims=True), axis=0))
@@ -321,14 +342,17 @@ def fit(coords, units, param_names, samples, floor, driven=()):
 
 
 def _sample(number, sample, coords, positions, param_names):
-    """One parameter set's (params, q, v, residual), checked; ValueError names what is wrong.  q holds
-    the `positions`: the coordinates, then the prescribed motions' positions."""
+    """One parameter set's (params, q, v, residual, a or None), checked; ValueError names what is wrong.  q
+    holds the `positions`: the coordinates, then the prescribed motions' positions."""
     where = f"samples[{number}]"
-    params, q, v, residual = sample
+    params, q, v, residual, a = (*sample, None) if len(sample) == 4 else sample
     q, v, residual = (np.asarray(array, dtype=float) for array in (q, v, residual))
-    if q.ndim != 2 or q.shape[1] != len(positions) or v.shape != (len(q), len(coords)) or residual.shape != (len(q),):
-        raise ValueError(f"{where}: q {q.shape}, v {v.shape}, residual {residual.shape}; expected "
-                         f"(N, {len(positions)}), (N, {len(coords)}), (N,)")
+    a = None if a is None else np.asarray(a, dtype=float)
+    if q.ndim != 2 or q.shape[1] != len(positions) or v.shape != (len(q), len(coords)) or residual.shape != (len(q),) \
+            or (a is not None and a.shape != v.shape):
+        raise ValueError(f"{where}: q {q.shape}, v {v.shape}, residual {residual.shape}"
+                         f"{'' if a is None else f', a {a.shape}'}; expected "
+                         f"(N, {len(positions)}), (N, {len(coords)}), (N,){'' if a is None else ', (N, n)'}")
     # MAX_TERMS coefficients fit any MAX_TERMS states exactly: an exact fit says something only on many more
     if len(q) < 4 * MAX_TERMS:
         raise ValueError(f"{where}: {len(q)} states; a fit of up to {MAX_TERMS} terms needs at least "
@@ -338,16 +362,16 @@ def _sample(number, sample, coords, positions, param_names):
         raise ValueError(f"{where}: no value for parameter(s) {', '.join(missing)}")
     values = {name: float(params[name]) for name in param_names}
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v)) and np.all(np.isfinite(residual))
-            and np.all(np.isfinite(list(values.values())))):
-        raise ValueError(f"{where}: a state, residual or parameter value is not finite")
-    return values, q, v, residual
+            and (a is None or np.all(np.isfinite(a))) and np.all(np.isfinite(list(values.values())))):
+        raise ValueError(f"{where}: a state, acceleration, residual or parameter value is not finite")
+    return values, q, v, residual, a
 
 
-def _columns(parts, q, v, index):
+def _columns(parts, q, v, a, index):
     """The candidates evaluated at the states: (N, len(parts)), each factor computed once."""
     values = {}
     for factor in {factor for part in parts for factor in part}:
-        values[factor] = factor.value(q, v, index)
+        values[factor] = factor.value(q, v, a, index)
     ones = np.ones(len(q))
     return np.column_stack([np.prod([values[factor] for factor in part], axis=0) if part else ones
                             for part in parts])

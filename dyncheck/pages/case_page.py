@@ -3,12 +3,14 @@ analysis, and its timing page; the page of a case whose run did not finish (`wri
 
 import math
 import os
+import textwrap
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from dyncheck.case.folder import CASES_DIR
+from dyncheck.checks.pointwise import ENGINES
 from dyncheck.common import expressions
 from dyncheck.common.expressions import evaluate
 from dyncheck.common.messages import plural, statuses_in_words
@@ -22,7 +24,9 @@ from dyncheck.results.values import OWN_WORDS, Status, consequences, format_rows
 from dyncheck.run.simulate import state_columns
 from dyncheck.studies import stability, work_precision
 
-ENGINES = ("reference", "mujoco", "pinocchio")  # the sources that must agree everywhere
+# The sources that must agree everywhere, the reference named in a researcher's words too (a case of one
+# derivation calls it "derivation": dyncheck.checks.runs.in_own_words)
+AGREEING = {*ENGINES, OWN_WORDS["reference"]}
 CPU_TIME = ("A run's CPU time is the wall time it takes on an idle core: other processes' load on the machine,"
             " which stretches wall times by factors, leaves it out.")
 CPU_TIES = ("Each point ranks by its fastest run: what slows a run only adds time, and on a shared machine it adds it"
@@ -54,8 +58,8 @@ def size(error, spec=".3g"):
 
 
 def worst_engine_error(rows):
-    """Largest pointwise error among reference, MuJoCo and Pinocchio."""
-    errors = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= set(ENGINES)]
+    """Largest pointwise error among the reference (or derivation), MuJoCo and Pinocchio."""
+    errors = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= AGREEING]
     return max(errors, default=float("nan"))
 
 
@@ -65,7 +69,7 @@ def random_tried(result, case):
     were not compared: the case's checks did not finish)."""
     sample, params = case.spec["sample"], case.spec["sample"].get("params", {})
     engine_rows = [r for r in result.rows if r.check in ("pointwise", "random parameters")
-                   and set(r.sources) <= set(ENGINES)]
+                   and set(r.sources) <= AGREEING]
     return {"states": sample["count"], "seed": sample["seed"], "parameter_sets": params.get("sets", 0),
             "states_per_set": params.get("states", 0), "parameter_seed": params.get("seed"),
             "agreed": all(r.status == Status.PASS for r in engine_rows) if engine_rows else None}
@@ -77,6 +81,22 @@ def random_sentence(tried):
         text += (f" and {plural(tried['parameter_sets'], 'random parameter set')} (seed {tried['parameter_seed']})"
                  f" over the ranges of the case file, {plural(tried['states_per_set'], 'state')} each")
     return text
+
+
+def as_written(text):
+    """A docstring or a case file's text as Markdown, its paragraphs kept: a paragraph with an indented line (a
+    matrix set out over lines, an aligned formula) as a block of its lines as written, a list as its items, any
+    other paragraph's lines joined (Markdown would join them, and flatten an indented formula, too)."""
+    blocks = []
+    for paragraph in textwrap.dedent(text).strip().split("\n\n"):
+        lines = paragraph.strip("\n").splitlines()
+        if any(line[:1].isspace() for line in lines):
+            blocks.append("\n".join(["```text", *textwrap.dedent("\n".join(lines)).splitlines(), "```"]))
+        elif all(line.lstrip().startswith(("- ", "* ")) for line in lines):
+            blocks.append("\n".join(lines))
+        else:
+            blocks.append(" ".join(paragraph.split()))
+    return "\n\n".join(blocks)
 
 
 def markdown_table(frame):
@@ -227,7 +247,7 @@ def write_case_page(result, case, tmp, animations=True):
         f"# {heading(case.spec)}",
         "",
         f"**{result.status}**: " + statuses_in_words(counts)
-        + f"; worst pointwise error among {'MuJoCo and Pinocchio' if case.one_derivation else 'reference, MuJoCo and Pinocchio'}"
+        + f"; worst pointwise error among {'the derivation' if case.one_derivation else 'reference'}, MuJoCo and Pinocchio"
         f": {worst_engine_error(rows):.1e}"
         + f" (tolerance {case.tolerance['pointwise']['value']:g}). [All cases](index.md)"
         + ("" if case.one_derivation else ", [errata](errata.md)")
@@ -236,9 +256,10 @@ def write_case_page(result, case, tmp, animations=True):
         "",
         *([f"For students: [the book's procedure step by step]({student_page.page_name(case)}).", ""]
           if "course" in case.spec else []),
+        *wrong_equations(result),  # first: what a researcher came for
         "## The scene",
         "",
-        " ".join(case.prose(case.spec["summary"], "summary").split()),
+        as_written(case.prose(case.spec["summary"], "summary")),
         "",
         *(embed(figures["scene"], "scene", captions["scene"]) if "scene" in figures else ["", ""]),
         "## Parameters",
@@ -273,7 +294,6 @@ def write_case_page(result, case, tmp, animations=True):
         "",
         *not_passed(rows),
         *not_checked(rows),
-        *wrong_equations(result),
         f"<details><summary>All {len(rows)} checks</summary>",
         "",
         markdown_table(table),
@@ -414,7 +434,7 @@ def wrong_equations(result):
     if not result.localisations:
         return []
     follow = consequences(result)
-    return ["### Where the derivation is wrong", "",
+    return ["## Where the derivation is wrong", "",
             "Each equation whose residual M_engine (q''_derivation - q''_engine) fails against MuJoCo, and each"
             " reaction that fails while the equations hold, fitted over the random states and parameter sets by a"
             " few terms in the derivation's own symbols:", "",

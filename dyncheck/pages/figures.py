@@ -199,12 +199,13 @@ def figure_pointwise(result, case, path, *, words):
     values = result.sample["values"]
     quantities = list(values["reference"])
     tolerance = case.tolerance["pointwise"]["value"]
+    # absent: its evaluation failed; named as the reference (a researcher's derivation is both): no deviation
+    drawn = [s for s in POINT_SOURCES if s in values and named(words, s) != named(words, "reference")]
     deviations = {}
     for quantity in quantities:
         ref = values["reference"][quantity]
         scale = np.max(np.abs(ref)) or 1.0
-        deviations[quantity] = {source: np.abs(values[source][quantity] - ref) / scale
-                                for source in POINT_SOURCES if source in values}  # absent: its evaluation failed
+        deviations[quantity] = {source: np.abs(values[source][quantity] - ref) / scale for source in drawn}
     low, high = log_range([d for by_source in deviations.values() for d in by_source.values()] + [[tolerance]])
     cols = min(4, len(quantities))
     rows = -(-len(quantities) // cols)
@@ -217,21 +218,21 @@ def figure_pointwise(result, case, path, *, words):
                         label=named(words, source))
         ax.axhline(tolerance, color="k", lw=0.8, ls="--", label=f"tolerance {tolerance:g}")
         ax.set_xticks([])
-        ax.set_xlim(-0.6, len(POINT_SOURCES) - 0.4)
+        ax.set_xlim(-0.6, len(drawn) - 0.4)
         ax.set_ylim(low, high)
         ax.set_title(quantity_label(quantity), fontsize=8)
     for ax in axes.flat[len(quantities):]:
         ax.set_axis_off()
-    fig.supylabel("relative deviation from the reference [1]" if rows > 1 else "relative deviation [1]", fontsize=9)
+    reference = named(words, "reference")
+    fig.supylabel(f"relative deviation from the {reference} [1]" if rows > 1 else "relative deviation [1]", fontsize=9)
     fig.suptitle(titled(case, f"pointwise, {len(result.sample['states'])} random states"))
     legend_below(fig, ncol=4)
     save(fig, path)
-    worst = {source: max(((d[source].max(), q) for q, d in deviations.items() if source in d), default=None)
-             for source in POINT_SOURCES}
-    return (f"Each source's deviation from the reference at each of the {len(result.sample['states'])} random"
-            " states, |source - reference| / max |reference| over the states, one panel per quantity (marker and colour per"
+    worst = {source: max((d[source].max(), q) for q, d in deviations.items()) for source in drawn}
+    return (f"Each source's deviation from the {reference} at each of the {len(result.sample['states'])} random"
+            f" states, |source - {reference}| / max |{reference}| over the states, one panel per quantity (marker and colour per"
             f" source; exact agreement on the bottom edge); dashed: the tolerance {tolerance:g}. The largest: "
-            + ", ".join(f"{named(words, s)} {w[0]:.1e} ({w[1]})" for s, w in worst.items() if w is not None) + ".")
+            + ", ".join(f"{named(words, s)} {w[0]:.1e} ({w[1]})" for s, w in worst.items()) + ".")
 
 
 def report_namespaces(result, case):

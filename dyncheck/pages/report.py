@@ -16,11 +16,12 @@ import os
 import re
 import shutil
 import sys
-from contextlib import contextmanager
+from contextlib import closing, contextmanager
 from pathlib import Path
 
 import pandas as pd
 
+from dyncheck.case import isolation
 from dyncheck.case.folder import Case
 from dyncheck.common.messages import plural, statuses_in_words
 from dyncheck.common.style import embed
@@ -31,9 +32,10 @@ from dyncheck.results.values import RESULTS_VERSION, case_json, load_result, sav
 from dyncheck.studies import work_precision
 
 
-def write_reports(results, out, animations=True):
+def write_reports(results, out, animations=True, case_written=lambda name: None):
     """Write the pages of `results` into the folder `out`, keeping what it holds of other cases, and
-    return the files written (relative to `out`); `animations`: with each case's GIF.
+    return the files written (relative to `out`); `animations`: with each case's GIF; `case_written(name)`
+    is told as each case's pages are done (a case's pages and GIF take tens of seconds: the progress).
 
     The new tree is a copy of `out` with this run's files written over it, and its index and errata
     are made from the summaries it holds; it is built beside `out` and exchanged with it in one
@@ -51,15 +53,21 @@ def write_reports(results, out, animations=True):
             (tree / "data").mkdir(exist_ok=True)
             save_results(results, tree / "results")
             written = [f"results/{result.name}" for result in results]
-            # The pages from the results as saved: what `report --from` renders from them.
-            for result in (load_result(tree / "results" / result.name) for result in results):
-                case = Case(result.folder, result.overrides, result.spec)
-                if result.runs:
-                    written += write_case_page(result, case, tree, animations)
-                    written += student_page.write(result, case, tree)  # after the case page: it shows its figures
-                else:  # its checks did not finish (dyncheck.checks.runs.unfinished)
-                    written.append(write_unfinished_page(result, case, tree))
-                written.append(write_summary(result, case, tree))
+            # A case's figures and GIF take tens of seconds: the cases' pages are written at once, one per core, each
+            # in a forked process of its own (files of its own names; the index and errata below read them all).
+            workers = min(len(results), os.cpu_count() or 1) or 1
+            pages = isolation.each_forked([result.name for result in results],
+                                          lambda name: case_pages(tree / "results" / name, tree, animations), workers,
+                                          lambda name: isolation.Budget(math.inf, math.inf,
+                                                                        isolation.machine_memory() // workers))
+            with closing(pages):
+                for index, (kind, value) in pages:
+                    if kind == "interrupted":
+                        raise KeyboardInterrupt
+                    if kind != "result":
+                        raise RuntimeError(f"the pages of {results[index].name} were not written: {value}")
+                    written += value
+                    case_written(results[index].name)
             cases = summaries(tree, out)
             written.append(write_index(tree, cases))
             written += write_index_timing(tree, cases)
@@ -296,6 +304,18 @@ def write_index_timing(tmp, cases):
              f"In short, {work_precision.in_short(timed, cost='cpu')}.", ""]
     (tmp / INDEX_TIMING).write_text("\n".join(lines))
     return [INDEX_TIMING]
+
+
+def case_pages(saved, tree, animations):
+    """The pages of the case whose results are saved in the folder `saved` (what `report --from` renders from),
+    written into `tree`; the files written."""
+    result = load_result(saved)
+    case = Case(result.folder, result.overrides, result.spec)
+    if not result.runs:  # its checks did not finish (dyncheck.checks.runs.unfinished)
+        return [write_unfinished_page(result, case, tree), write_summary(result, case, tree)]
+    return [*write_case_page(result, case, tree, animations),
+            *student_page.write(result, case, tree),  # after the case page: it shows its figures
+            write_summary(result, case, tree)]
 
 
 def write_index(tmp, cases):
