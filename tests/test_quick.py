@@ -5,6 +5,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 import planting
 from dyncheck import cli
 from dyncheck.case.folder import Case
@@ -14,11 +16,15 @@ import chain
 from test_ci_contract import validate
 
 
+@pytest.mark.full  # a whole run, if a short one
 def test_its_rows_are_runs_rows_at_the_states(tmp_path):
     """run_case(quick=True) gives the rows of run_case that are not of the runs along time, equal, in their order,
     and the same localisation of a wrong equation; no runs.  The full run's horizon is cut (Case.with_horizon),
-    which no check at the states depends on."""
-    case = Case(chain.write(tmp_path / "chain2", 2, planted="np.array([0.0, 0.4 * np.sin(q[0])])"))
+    which no check at the states depends on; its count of states is the case file's (budget 0), not what a measured
+    cost fits, which the two Cases would measure apart."""
+    folder = chain.write(tmp_path / "chain2", 2, planted="np.array([0.0, 0.4 * np.sin(q[0])])")
+    (folder / "case.toml").write_text("[sample]\nbudget = 0\n")
+    case = Case(folder)
     quick, full = run_case(case, quick=True), run_case(case.with_horizon(0.5))
     assert {r.check for r in full.rows} & set(QUICK_LEAVES_OUT)  # it has rows to leave out
     assert quick.rows == tuple(r for r in full.rows if r.check not in QUICK_LEAVES_OUT)
