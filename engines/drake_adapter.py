@@ -23,137 +23,35 @@ names the file: the harness can make Drake's rows of the case not applicable wit
 
 Prescribed joints are handled by partitioning, as in the other adapters: Drake's inverse dynamics with the driven
 joints' imposed accelerations gives the free joints' bias, Drake's mass matrix's free block is solved.
-"""
 
-import logging
-import xml.etree.ElementTree as ET
+This module holds the model: its construction, Drake's state at the case's states, the engine step, the model
+interface and the linearisation.  engines.drake_scene reads and writes the scene file (and defines `Refused`);
+engines.drake_loops closes and solves its loops.
+"""
 
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
 from pydrake.common.eigen_geometry import Quaternion
-from pydrake.math import RigidTransform, RollPitchYaw, RollPitchYaw_, RotationMatrix
-from pydrake.multibody.parsing import Parser
-from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import (BallRpyJoint, BodyIndex, JacobianWrtVariable, MultibodyForces, MultibodyForces_,
-                                    PrismaticJoint, RevoluteJoint, RotationalInertia, SpatialInertia, WeldJoint)
+from pydrake.math import RollPitchYaw, RollPitchYaw_, RotationMatrix
+from pydrake.multibody.tree import BallRpyJoint, BodyIndex, MultibodyForces, MultibodyForces_
 
-from engines import euler, scene as scene_rules
+from engines import coordinates, euler, scene as scene_rules
+from engines.drake_loops import DrakeLoops
+from engines.drake_scene import SCALAR_JOINTS, DrakeScene, Refused, plant_bodies
 from engines.linalg import linear_solution
-from engines.loops import Loop, _continuation, _dependent_rates, _rates_map
-from engines.mjcf_joints import inertial_frames, joint_values
-from engines.scene import Body
-
-SCALAR_JOINTS = (RevoluteJoint, PrismaticJoint)
-# URDF cannot write an unlimited revolute or prismatic joint: limits at or beyond this are read as none (as by
-# Pinocchio's adapter); Drake's MJCF joints without a range have infinite ones.
-NO_LIMIT = 1e300
-
-# What Drake's MJCF parser says it ignores, and why that is no difference here (the other warnings are refused).
-IGNORED = {
-    "The tag 'site'": "a frame for sensors: the reactions are read at the body's origin in its axes, as Pinocchio's"
-                      " (MuJoCo's adapter refuses a reaction site turned or off the origin)",
-    "The tag 'sensor'": "sensors do not act on the dynamics",
-    "The attribute 'timestep'": "the harness sets it for every run",
-    "The attribute 'integrator'": "the harness sets it for every run",
-    "The attribute 'stiffness' found in a 'joint'": "corrected: this adapter applies the spring",
-    "The attribute 'springref' found in a 'joint'": "corrected: this adapter applies the spring",
-}
-
-# The rounding error of Drake's AutoDiffXd derivatives, relative to their largest entry.  Forward-mode automatic
-# differentiation carries each derivative through the same operations as the value, exactly but for rounding: each
-# entry sums, over the chain's few bodies, products of poses, inertias, velocities and accelerations, a few dozen
-# operations rounding by eps of a term that cancellation (gyroscopic against gravity terms) may make a few times the
-# largest entry; 1e3 eps allows some ten times that.  Where the entries are far below the terms they sum (a
-# degenerate equilibrium) their rounding is measured instead (`DrakeModel._rounding`), NOISE_MARGIN times the
-# largest noise over a few ulps, the sample's allowance for missing the worst.
-EPS = np.finfo(float).eps
-ROUNDING = 1e3 * EPS
-NOISE_MARGIN = 10.0
+from engines.mjcf_joints import is_mjcf
 
 
-class Refused(ValueError):
-    """A scene element that Drake does not model as MuJoCo and Pinocchio do, and that this adapter does not
-    correct: Drake's rows of the case are not applicable, for the reason in the message."""
-
-
-class _Warnings(logging.Handler):
-    """The messages Drake's parser logs while it reads a file."""
-
-    def __init__(self):
-        super().__init__(logging.WARNING)
-        self.messages = []
-
-    def emit(self, record):
-        self.messages.append(record.getMessage())
-
-
-class DrakeModel:
+class DrakeModel(DrakeScene):
     """path: the scene's MJCF (a .xml file: the scene MuJoCo reads) or a URDF.  scene: as for MujocoModel
     (coords, layout, driven, applied, reactions, points, dependent, urdf_root_joint); reactions use the body (its
     joint's cut force, at the body's origin), not the sensor, as Pinocchio's adapter does."""
 
-    @staticmethod
-    def elements_in(path):
-        """What the scene file holds of a case's bindings (as PinocchioModel.elements_in)."""
-        return {"body", "joint", "option"} if _is_mjcf(path) else {"body"}
-
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
-        try:
-            document = ET.parse(self.path).getroot()
-        except ET.ParseError as error:
-            raise ValueError(f"{self.path}: {error}") from None
-        self.plant = MultibodyPlant(0.0)  # continuous: no contact solver, no SceneGraph
-        warnings = _Warnings()
-        logger = logging.getLogger("drake")
-        logger.addHandler(warnings)
-        propagate, logger.propagate = logger.propagate, False  # kept, not printed
-        try:
-            Parser(self.plant).AddModels(self.path)
-        except RuntimeError as error:
-            raise Refused(f"{self.path}: Drake's parser refuses the file: {error}") from None
-        finally:
-            logger.removeHandler(warnings)
-            logger.propagate = propagate
-        self.parser_warnings = tuple(warnings.messages)
-        for message in self.parser_warnings:
-            if not any(known in message for known in IGNORED):
-                raise Refused(f"{self.path}: Drake's parser drops or changes what MuJoCo's compiler reads: "
-                              f"{' '.join(message.split())}")
-        mjcf = _is_mjcf(self.path)
-        if mjcf:
-            _refuse_misread(document, self.path)
-            self.joint_values = joint_values(document, self.path)
-        else:  # URDF: no springs (the bindings set them), Drake's gravity default -9.81 z (the binding sets it)
-            self.joint_values = {"stiffness": {}, "springref": {}, "damping": {}, "armature": {}}
-            self.plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
-            self._hang_urdf_root(scene.urdf_root_joint)
-        for constraint in self.plant.GetConstraintIds():  # a <connect>: solved here (DrakeLoops)
-            self.plant.RemoveConstraint(constraint)
-        self.plant.Finalize()
-        self._refuse_free_bodies()
-        self.context = self.plant.CreateDefaultContext()
-        self.nq, self.nv = self.plant.num_positions(), self.plant.num_velocities()
-        self._inertias = {}  # (mass, com, inertia about the com), body frame, of each body: `_body_inertia`
-        self._last = None, None  # the last state asked and its dynamics (`_dynamics`)
-        self._written = set()  # the bodies whose inertia `_write` changed
-        self._inertial_frames = inertial_frames(document, self.path)
+        self._last = None, None  # the last state asked and its dynamics (`_dynamics`); a binding's write forgets it
         self._ad = None  # Drake's AutoDiffXd plant and its context, made at the first linearisation (`_autodiff`)
-        for location, value in writes:
-            self._write(location, value)
-        for index in self._written:  # once all are written: Drake refuses an inertia no body can have
-            mass, com, inertia = self._inertias[index]
-            why = scene_rules.unphysical(self.plant.get_body(BodyIndex(index)).name(), inertia)
-            if why:
-                raise ValueError(f"{self.path}: {why}")
-            self.plant.get_body(BodyIndex(index)).SetSpatialInertiaInBodyFrame(
-                self.context, SpatialInertia.MakeFromCentralInertia(mass, com, RotationalInertia(
-                    *np.diag(inertia), inertia[0, 1], inertia[0, 2], inertia[1, 2])))
-        if not mjcf:  # URDF dampers: Drake's joints' own (<dynamics damping>)
-            self.joint_values["damping"] = {name: float(joint.GetDampingVector(self.context)[0])
-                                            for name, joint in self._joints().items()
-                                            if joint.num_velocities() == 1 and joint.GetDampingVector(self.context)[0]}
-        self._check_damping()
+        document = self._read(scene, writes)
         self.coords = tuple(scene.coords)
         self.reaction_names = tuple(scene.reactions)
         self.layout = [(c.kind, self._joint(c.joint), list(c.indices)) for c in scene.layout]
@@ -162,6 +60,8 @@ class DrakeModel:
                                                                                               BallRpyJoint)):
                 raise ValueError(f"{self.path}: joint '{joint.name()}' is a Drake {joint.type_name()} joint, but the "
                                  f"case maps it as {'Euler angles' if kind == 'euler' else 'one coordinate'}")
+        # the joints as engines.coordinates takes them: (kind, first dof, coordinate indices)
+        self._dof_layout = [(kind, joint.velocity_start(), idx) for kind, joint, idx in self.layout]
         self.driven = [(self._joint(j), (law.angle, law.rate, law.acc)) for j, law in scene.driven.items()]
         self.dependent_joints = [(j, self._joint(j)) for j in scene.dependent]
         moved = scene_rules.named_joints(scene)
@@ -190,7 +90,7 @@ class DrakeModel:
                 array[joint.velocity_start():joint.velocity_start() + joint.num_velocities()] = value
         self.armature[self._driven_dofs] = 0.0
         self._armature = np.diag(self.armature)
-        self.loops = DrakeLoops(self, document if mjcf else None)
+        self.loops = DrakeLoops(self, document if is_mjcf(self.path) else None)
         if self.loops.loops and (self.driven or any(kind != "scalar" for kind, _, _ in self.layout)):
             raise Refused(f"{self.path}: a scene with closed loops is evaluated with hinges and slides that the case's "
                           "coordinates move or the loops close; prescribed motions and ball joints in it are not "
@@ -206,216 +106,7 @@ class DrakeModel:
         gravity = self.plant.gravity_field().gravity_vector()
         self._grounds_potential = -sum(
             self._body_inertia(body)[0] * gravity @ (body.EvalPoseInWorld(self.context) @ self._body_inertia(body)[1])
-            for body in _bodies(self.plant)[1:] if self._weld_root(body)[0].index() == self.plant.world_body().index())
-
-    # -- reading ----------------------------------------------------------
-    def _hang_urdf_root(self, root):
-        """A URDF's root link on the case's root joint (a ball, as Pinocchio's spherical root joint), attached to the
-        world at the link's origin; without one Drake would make it a free body (refused after Finalize)."""
-        if not root:
-            return
-        if root.type != "spherical":
-            raise Refused(f"{self.path}: urdf_root_joint type '{root.type}': this adapter hangs a URDF's root link on "
-                          "a spherical joint only")
-        children = {int(self.plant.get_joint(j).child_body().index()) for j in self.plant.GetJointIndices()}
-        orphans = [body for body in _bodies(self.plant)[1:] if int(body.index()) not in children]
-        if len(orphans) != 1:
-            raise Refused(f"{self.path}: {len(orphans)} root links; a urdf_root_joint hangs one")
-        self.plant.AddJoint(BallRpyJoint(root.name, self.plant.world_frame(), orphans[0].body_frame()))
-
-    def _refuse_free_bodies(self):
-        for j in self.plant.GetJointIndices():
-            joint = self.plant.get_joint(j)
-            if joint.num_velocities() == 6:
-                raise Refused(f"{self.path}: Drake makes body '{joint.child_body().name()}' a free body "
-                              f"({joint.type_name()}): a URDF's root link that no joint attaches to the world, and the "
-                              "case names no urdf_root_joint; a free body is refused (as MuJoCo's <freejoint>)")
-            if not isinstance(joint, (*SCALAR_JOINTS, BallRpyJoint, WeldJoint)):
-                raise Refused(f"{self.path}: joint '{joint.name()}' is a Drake {joint.type_name()} joint: hinges, "
-                              "slides and ball joints only")
-            limits = np.concatenate([joint.position_lower_limits(), joint.position_upper_limits()])
-            if np.any(np.abs(limits) < NO_LIMIT):
-                raise Refused(f"{self.path}: joint '{joint.name()}' has limits, which Drake's continuous plant ignores")
-
-    def _check_damping(self):
-        """Drake's parser reads MJCF dampers itself: what it read must be what MuJoCo's compiler resolves."""
-        for name, joint in self._joints().items():
-            drake = joint.GetDampingVector(self.context)
-            file = self.joint_values["damping"].get(name, 0.0)
-            if not np.all(drake == file):
-                raise Refused(f"{self.path}: joint '{name}': Drake's parser reads damping {drake.tolist()}, MuJoCo's "
-                              f"compiler {file}")
-
-    def _refuse_ball_springs(self):
-        for name in self.joint_values["stiffness"]:
-            if isinstance(self._joint(name), BallRpyJoint):
-                raise Refused(f"{self.path}: joint '{name}' is a ball joint with a spring, which this adapter does not "
-                              "model")
-
-    def _joints(self):
-        """{name: joint} of the plant's joints that move something (its welds left out)."""
-        joints = (self.plant.get_joint(j) for j in self.plant.GetJointIndices())
-        return {joint.name(): joint for joint in joints if joint.num_velocities()}
-
-    def _joint(self, name):
-        joint = self._joints().get(name)
-        if joint is None:
-            raise ValueError(f"{self.path}: no joint named '{name}'")
-        return joint
-
-    def _body(self, name):
-        if not self.plant.HasBodyNamed(name):
-            raise ValueError(f"{self.path}: no body named '{name}'")
-        return self.plant.GetBodyByName(name)
-
-    def _reaction_spec(self, name, spec):
-        """(body, axis, frame, quantity) of a reaction: the cut force of the body's joint; a loop's force where the
-        sensor names a <connect>."""
-        if spec.sensor in self.loops.names:
-            return "loop", (self.loops.names.index(spec.sensor), spec.axis), "world", "force"
-        return self._body(spec.body), spec.axis, spec.frame, spec.quantity
-
-    # -- the scene's values: bindings ----------------------------------------
-    def _write(self, location, value):
-        """Set a binding location's value (as MujocoModel._write): body mass, ipos, pos, inertia_about_origin, joint
-        stiffness, springref, damping, option gravity.  A body's inertia is held in `_inertias` and set in Drake's
-        context after all the writes: Drake refuses an inertia that no body can have, which one of several writes to
-        a body may leave (the top's moments about its tip, written one axis after another)."""
-        element, name, attribute = location["element"], location.get("name"), location.get("attribute")
-        i = location.get("index", 0)
-        if element == "option":
-            gravity = self.plant.gravity_field().gravity_vector().copy()
-            gravity[i] = value
-            self.plant.mutable_gravity_field().set_gravity_vector(gravity)
-        elif element == "joint":
-            self.joint_values[attribute][name] = value
-            if attribute == "damping":
-                self._joint(name).SetDampingVector(self.context, [value])
-        elif attribute == "pos":
-            frame = self._inboard(name).frame_on_parent()
-            pose = frame.GetPoseInParentFrame(self.context)
-            translation = pose.translation().copy()
-            translation[i] = value
-            frame.SetPoseInParentFrame(self.context, RigidTransform(pose.rotation(), translation))
-        else:
-            mass, com, inertia = self._body_inertia(self._body(name))
-            if attribute == "mass":
-                mass = value
-            elif attribute == "ipos":
-                com = com.copy()
-                com[i] = value
-            elif attribute == "inertia_about_origin":  # less the parallel-axis term and a ball joint's armature
-                inertia = inertia.copy()  # (as MuJoCo's)
-                inertia[i, i] = value - mass * (com @ com - com[i] ** 2) - self._ball_armature(name)
-            elif attribute == "fullinertia":  # about the centre of mass, in the body frame
-                inertia = inertia.copy()
-                inertia[scene_rules.FULL_INERTIA[i]] = inertia[scene_rules.FULL_INERTIA[i][::-1]] = value
-            else:  # inertia: a principal moment, in the inertial frame
-                frame = self._inertial_frame(name)
-                principal = frame.T @ inertia @ frame
-                principal[i, i] = value
-                inertia = frame @ principal @ frame.T
-            self._inertias[int(self._body(name).index())] = mass, com, inertia
-            self._written.add(int(self._body(name).index()))  # set in the context after the writes
-        self._last = None, None
-
-    def _ball_armature(self, body):
-        joint = self._inboard(body)
-        return self.joint_values["armature"].get(joint.name(), 0.0) if isinstance(joint, BallRpyJoint) else 0.0
-
-    def read(self, location):
-        """The model's value at a binding location (as MujocoModel.read)."""
-        element, name, attribute = location["element"], location.get("name"), location.get("attribute")
-        i = location.get("index", 0)
-        if element == "option":
-            return float(self.plant.gravity_field().gravity_vector()[i])
-        if element == "joint":
-            return float(self.joint_values[attribute].get(name, 0.0))
-        if attribute == "pos":
-            return float(self._inboard(name).frame_on_parent().GetPoseInParentFrame(self.context).translation()[i])
-        mass, com, inertia = self._body_inertia(self._body(name))
-        if attribute == "mass":
-            return mass
-        if attribute == "ipos":
-            return float(com[i])
-        if attribute == "fullinertia":
-            return float(inertia[scene_rules.FULL_INERTIA[i]])
-        if attribute == "inertia":
-            frame = self._inertial_frame(name)
-            return float((frame.T @ inertia @ frame)[i, i])
-        return float(inertia[i, i] + mass * (com @ com - com[i] ** 2) + self._ball_armature(name))
-
-    def _inertial_frame(self, body):
-        """As PinocchioModel._inertial_frame: the body's inertial frame in its frame (engines.mjcf_joints)."""
-        frame = self._inertial_frames.get(body)
-        if isinstance(frame, str):
-            raise ValueError(f"{self.path}: body '{body}': {frame}")
-        return np.eye(3) if frame is None else frame
-
-    def _inboard(self, body):
-        """The joint (or weld) that carries body `body`."""
-        index = self._body(body).index()
-        return next(self.plant.get_joint(j) for j in self.plant.GetJointIndices()
-                    if self.plant.get_joint(j).child_body().index() == index)
-
-    def _body_inertia(self, body):
-        """(mass, centre of mass, inertia about it) of a body in its frame, as the context holds them."""
-        index = int(body.index())
-        if index not in self._inertias:
-            spatial = body.CalcSpatialInertiaInBodyFrame(self.context)
-            mass, com = spatial.get_mass(), spatial.get_com()
-            about_origin = spatial.CalcRotationalInertia().CopyToFullMatrix3()
-            self._inertias[index] = mass, com, about_origin - mass * (com @ com * np.eye(3) - np.outer(com, com))
-        return self._inertias[index]
-
-    @property
-    def gravity(self):
-        return self.plant.gravity_field().gravity_vector().copy()
-
-    def tree(self):
-        """The moving bodies as Drake models them (see engines.scene.Body): one per joint, named after its child;
-        a body welded to the world (MJCF's ground) folded into it, a body welded to a moving body into that body
-        (its mass and inertia joined, engines.scene.combined_inertia), as the other adapters fold them; a ball
-        joint's armature counted in its body's inertia, as MujocoModel.tree counts it."""
-        bodies = []
-        roots = {int(body.index()): self._weld_root(body) for body in _bodies(self.plant)[1:]}
-        for name, joint in self._joints().items():
-            parent, above = self._weld_root(joint.parent_body())
-            pose = above @ joint.frame_on_parent().CalcPoseInBodyFrame(self.context)
-            welded = parent.index() == self.plant.world_body().index()
-            child = joint.child_body()
-            parts = []
-            for index, (root, placement) in roots.items():
-                if root.index() == child.index():
-                    part_mass, part_com, part_inertia = self._body_inertia(self.plant.get_body(BodyIndex(index)))
-                    rotation = placement.rotation().matrix()
-                    parts.append((part_mass, placement @ part_com, rotation @ part_inertia @ rotation.T))
-            mass, com, inertia = scene_rules.combined_inertia(parts)
-            kind = ("hinge" if isinstance(joint, RevoluteJoint) else "slide" if isinstance(joint, PrismaticJoint)
-                    else "ball")
-            axis = (joint.revolute_axis() if kind == "hinge" else joint.translation_axis() if kind == "slide"
-                    else np.zeros(3))
-            bodies.append(Body(name=joint.child_body().name(), parent="world" if welded else parent.name(), joint=name,
-                               joint_type=kind, axis=np.array(axis), position=pose.translation().copy(),
-                               rotation=pose.rotation().matrix().copy(), mass=float(mass), com=com.copy(),
-                               inertia=inertia + self._ball_armature(joint.child_body().name()) * np.eye(3),
-                               stiffness=np.array([self.joint_values["stiffness"].get(name, 0.0), 0.0, 0.0]),
-                               springref=self.joint_values["springref"].get(name, 0.0),
-                               damping=self.joint_values["damping"].get(name, 0.0)))
-        return bodies
-
-    def _weld_root(self, body):
-        """The body that `body` is welded to through jointless bodies (itself if a joint moves it, the world if it
-        is welded to the world), and body's pose in that body's frame."""
-        pose = RigidTransform()
-        while body.index() != self.plant.world_body().index():
-            joint = self._inboard(body.name())
-            if joint.num_velocities():
-                break
-            pose = self.plant.CalcRelativeTransform(self.context, joint.parent_body().body_frame(),
-                                                    body.body_frame()) @ pose
-            body = joint.parent_body()
-        return body, pose
+            for body in plant_bodies(self.plant)[1:] if self._weld_root(body)[0].index() == self.plant.world_body().index())
 
     # -- state -------------------------------------------------------------
     def engine_state(self, t, q, v):
@@ -462,7 +153,7 @@ class DrakeModel:
 
     def _applied_at(self, t, q, v):
         """The applied generalized forces at the case's state, every dof's (nv,), in the body's axes."""
-        return scene_rules.applied_forces(self.forces, self.nv, t, q, v)
+        return coordinates.applied_forces(self.forces, self.nv, t, q, v)
 
     def _inverse(self, rotations, acc, external=None):
         """Drake's inverse dynamics at the context's state, in the dofs of the body's axes: the generalised forces
@@ -526,33 +217,21 @@ class DrakeModel:
 
     # -- model interface ---------------------------------------------------
     def accelerations(self, t, q, v):
-        return self._book_accelerations(q, v, self._dynamics(t, q, v)[3])
+        return coordinates.case_accelerations(self._dof_layout, q, v, self._dynamics(t, q, v)[3])
 
     def accelerations_many(self, t, q, v):
         """`accelerations` at many states, t (N,), q and v (N, n): an array (N, n), the same numbers."""
         return np.array([self.accelerations(*state) for state in zip(np.asarray(t, dtype=float), q, v)]).reshape(
             len(t), len(self.coords))
 
-    def _book_accelerations(self, q, v, acc):
-        q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
-        out = np.zeros(len(self.coords))
-        for kind, joint, idx in self.layout:
-            iv = joint.velocity_start()
-            if kind == "scalar":
-                out[idx[0]] = acc[iv]
-            else:
-                out[idx] = euler.euler_accelerations(q[idx], v[idx], acc[iv:iv + 3])
-        return out
-
     def mass_matrix(self, t, q, v):
-        """The mass matrix in the case's coordinates (engines.scene.case_mass_matrix); with loops N^T M N, N every
+        """The mass matrix in the case's coordinates (engines.coordinates.case_mass_matrix); with loops N^T M N, N every
         dof's rate per independent rate."""
         mass = self._mass(self._put(*self.engine_state(t, q, v)))
         if self.loops.loops:
             rates = self.loops.rates([joint.velocity_start() for _, joint, _ in self.layout])
             return rates.T @ mass @ rates
-        return scene_rules.case_mass_matrix(mass, [(kind, joint.velocity_start(), idx)
-                                                   for kind, joint, idx in self.layout], q)
+        return coordinates.case_mass_matrix(mass, self._dof_layout, q)
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state."""
@@ -608,7 +287,7 @@ class DrakeModel:
         body index, from Drake's kinematics at the context's state and Drake's accelerations vdot."""
         accelerations = self.plant.CalcSpatialAccelerationsFromVdot(self.context, vdot)
         out = {}
-        for body in _bodies(self.plant):
+        for body in plant_bodies(self.plant):
             pose, velocity = body.EvalPoseInWorld(self.context), body.EvalSpatialVelocityInWorld(self.context)
             acceleration = accelerations[int(body.index())]
             out[int(body.index())] = (pose.rotation().matrix(), pose.translation(), velocity.rotational(),
@@ -670,11 +349,12 @@ class DrakeModel:
         return out
 
     def linearisation(self, t, q, v):
-        """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): Drake's inverse dynamics
+        """M q'' = f(t, q, q') linearised at the case's state (engines.coordinates.Linearisation): Drake's inverse dynamics
         differentiated by automatic differentiation (its AutoDiffXd plant, `_inverse_gradient`) at the state's
         accelerations, the prescribed joints' imposed, with the springs' -k on their dofs, in the case's coordinates
-        (engines.scene.case_linearisation, which differences applied laws of the state).  Its error: the rounding
-        of Drake's arithmetic (`_rounding`).  Refused for a scene with loops, as the other adapters refuse it."""
+        (engines.coordinates.case_linearisation, which differences applied laws of the state).  Its error: the rounding
+        of Drake's arithmetic (engines.coordinates.derivative_error: at the rotating pendulum's degenerate equilibrium
+        under g = 0 the noise is 5e-18, its df/dq 2.3e-11 and 4e-18 off MuJoCo's).  Refused for a scene with loops, as the other adapters refuse it."""
         if self.loops.loops:
             raise Refused(f"{self.path}: linearisation of a scene with closed loops "
                           f"({', '.join(loop.name for loop in self.loops.loops)}) is not supported: its coordinates' "
@@ -689,10 +369,11 @@ class DrakeModel:
         force_q, force_v = -dtau_dq, -dtau_dv  # Drake's dampers act in its inverse dynamics: they are in force_v
         for _, iv, k, _ in self.springs:
             force_q[iv, iv] -= k
-        error = self._rounding(at, (dtau_dq, dtau_dv), dofs)
-        error += EPS * max((abs(k) for _, _, k, _ in self.springs), default=0.0)  # the springs' sums, half an ulp
-        layout = [(kind, joint.velocity_start(), idx) for kind, joint, idx in self.layout]
-        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self._book_accelerations(q, v, acc), mass,
+        error = coordinates.derivative_error(at, (dtau_dq, dtau_dv), dofs)
+        # the springs' sums, half an ulp
+        error += np.finfo(float).eps * max((abs(k) for _, _, k, _ in self.springs), default=0.0)
+        return coordinates.case_linearisation(self._dof_layout, self.forces, t, q, v,
+                                              coordinates.case_accelerations(self._dof_layout, q, v, acc), mass,
                                               force_q, force_v, error, "Drake CalcInverseDynamics (AutoDiffXd)")
 
     def _inverse_gradient(self, positions, dofs, acc, tangent):
@@ -730,128 +411,3 @@ class DrakeModel:
         context.SetTimeStateAndParametersFrom(self.context)
         plant.mutable_gravity_field().set_gravity_vector(self.gravity)
         return plant, context
-
-    def _rounding(self, at, derivatives, dofs):
-        """The rounding error of Drake's derivatives `derivatives` (`at(0, 0)`): ROUNDING of their largest entry,
-        or, where they are far below the terms they sum, NOISE_MARGIN times their noise as measured over a few ulps
-        of each dof (engines.scene.rounding_noise, as Pinocchio's adapter measures its own; at the rotating
-        pendulum's degenerate equilibrium under g = 0 the noise is 5e-18, its df/dq 2.3e-11 and 4e-18 off MuJoCo's)."""
-        largest = max(float(np.max(np.abs(d), initial=0.0)) for d in derivatives)
-        return max(ROUNDING * largest, NOISE_MARGIN * scene_rules.rounding_noise(at, derivatives, dofs))
-
-
-class DrakeLoops:
-    """The MJCF's <connect> loops on a Drake model (removed from Drake's plant, which refuses them in continuous
-    time): each a point of body1 held on a point of body2, as engines.loops.Loop; closed by engines.loops'
-    continuation on Drake's kinematics, and solved rigidly by Gauss's principle on Drake's M, bias and point
-    Jacobians, as MujocoLoops does on MuJoCo's."""
-
-    def __init__(self, model, document):
-        self.model, self.plant, self.context = model, model.plant, model.context
-        elements = [] if document is None else [e for equality in document.iter("equality") for e in equality]
-        for element in elements:
-            if element.tag != "connect":
-                raise Refused(f"{model.path}: <{element.tag}>: only <connect> closes a loop here")
-            if element.get("site1") is not None:
-                raise Refused(f"{model.path}: <connect site1=...>: Drake's parser ignores sites; only the body form "
-                              "(body1, body2, anchor) is read by this adapter")
-        self.names = [e.get("name", "") for e in elements]
-        self._points = [self._describe(e) for e in elements]  # (body1, anchor1, body2, anchor2)
-        self.loops = tuple(Loop("connect", b1.name(), b2.name(), tuple(a1), tuple(a2), name)
-                           for (b1, a1, b2, a2), name in zip(self._points, self.names))
-
-    def _describe(self, element):
-        """body1, its anchor, body2 and its anchor: where body1's is at the default configuration (MuJoCo's
-        compiler puts body2's anchor at qpos0, which is Drake's zero)."""
-        body1, body2 = (self.model._body(element.get(b)) for b in ("body1", "body2"))
-        anchor1 = np.array([float(x) for x in element.get("anchor", "0 0 0").split()])
-        self.plant.SetPositions(self.context, np.zeros(self.model.nq))
-        world = body1.EvalPoseInWorld(self.context) @ anchor1
-        return body1, anchor1, body2, body2.EvalPoseInWorld(self.context).inverse() @ world
-
-    def _constraint(self, positions):
-        """The loops' residual p1 - p2 (world, m) and its Jacobian d/dq at `positions` (hinges and slides: q = v)."""
-        self.plant.SetPositions(self.context, positions)
-        residuals, jacobians = [], []
-        for body1, anchor1, body2, anchor2 in self._points:
-            ends = [(self.plant.CalcPointsPositions(self.context, b.body_frame(), a, self.plant.world_frame())[:, 0],
-                     self.plant.CalcJacobianTranslationalVelocity(self.context, JacobianWrtVariable.kV, b.body_frame(),
-                                                                  a, self.plant.world_frame(), self.plant.world_frame()))
-                    for b, a in ((body1, anchor1), (body2, anchor2))]
-            residuals.append(ends[0][0] - ends[1][0])
-            jacobians.append(ends[0][1] - ends[1][1])
-        return np.concatenate(residuals), np.vstack(jacobians)
-
-    def close(self, positions, rates, start=None):
-        """Drake's positions and velocities with the independent joints at `positions`, `rates` ({joint: value})
-        and the dependent ones closing every loop, on the branch of `start` (default the assembly, Drake's zero)."""
-        joints = [self.model._joint(name) for name in positions]
-        independent = np.array([joint.velocity_start() for joint in joints], dtype=int)
-        begin = np.zeros(self.model.nq) if start is None else np.array(start, dtype=float)
-        extent = max(np.linalg.norm(self.plant.get_joint(j).frame_on_parent().CalcPoseInBodyFrame(
-            self.context).translation()) for j in self.plant.GetJointIndices())
-        slides = [isinstance(joint, PrismaticJoint) for joint in joints]
-        q, jacobian = _continuation(begin, [joint.position_start() for joint in joints],
-                                    np.array(list(positions.values())), slides, independent, self.model.nv,
-                                    self._constraint, lambda q, step: q + step, extent, self.model.path)
-        self.plant.SetPositions(self.context, q)
-        return q, _dependent_rates(jacobian, independent, np.array(list(rates.values())))
-
-    def rates(self, independent):
-        """Every dof's rate per unit rate of each independent dof, at the context's (closed) positions."""
-        return _rates_map(self._constraint(self.plant.GetPositions(self.context))[1], independent)
-
-    def constrained(self, mass, force):
-        """The rigid loop's accelerations and each loop's force on body1 at its anchor (world, (nloops, 3)) at the
-        context's state: M acc = force + J^T f, J acc = -Jdot v, `force` the generalised forces less the bias.
-        Rows that carry no force direction (a planar loop's normal) are left out of the solve (as MujocoLoops)."""
-        jacobian = self._constraint(self.plant.GetPositions(self.context))[1]
-        bias = np.concatenate([self._bias(b1, a1) - self._bias(b2, a2) for b1, a1, b2, a2 in self._points])
-        free = np.linalg.solve(mass, force)
-        inverse_mass_jt = np.linalg.solve(mass, jacobian.T)
-        live = np.any(jacobian != 0, axis=1)
-        loop_force = np.zeros(len(jacobian))
-        loop_force[live] = np.linalg.solve((jacobian @ inverse_mass_jt)[np.ix_(live, live)],
-                                           (-bias - jacobian @ free)[live])
-        self._jacobian = jacobian
-        return free + inverse_mass_jt @ loop_force, loop_force.reshape(-1, 3)
-
-    def _bias(self, body, anchor):
-        return self.plant.CalcBiasTranslationalAcceleration(self.context, JacobianWrtVariable.kV, body.body_frame(),
-                                                            anchor, self.plant.world_frame(),
-                                                            self.plant.world_frame())[:, 0]
-
-    def generalised(self, loop_forces):
-        """J^T f: the loops' forces as generalised forces (at the last `constrained` state)."""
-        return self._jacobian.T @ loop_forces.reshape(-1)
-
-    def applied(self, loop_forces):
-        """(world point, body index, force) of each loop's force on body1 at its anchor and the opposite on body2,
-        at the context's positions; none without loops."""
-        if loop_forces is None:
-            return []
-        out = []
-        for (body1, anchor1, body2, anchor2), force in zip(self._points, loop_forces):
-            for body, anchor, sign in ((body1, anchor1, 1.0), (body2, anchor2, -1.0)):
-                out.append((body.EvalPoseInWorld(self.context) @ anchor, int(body.index()), sign * force))
-        return out
-
-
-def _is_mjcf(path):
-    return str(path).endswith(".xml")
-
-
-def _bodies(plant):
-    """Every body of the plant, the world first."""
-    return [plant.get_body(BodyIndex(i)) for i in range(plant.num_bodies())]
-
-
-def _refuse_misread(document, path):
-    """What Drake's MJCF parser reads otherwise than MuJoCo's compiler without a word: several joints on one body
-    (all but the last take the parent's axes)."""
-    for body in document.iter("body"):
-        joints = [j for j in body if j.tag in ("joint", "freejoint")]
-        if len(joints) > 1:
-            raise Refused(f"{path}: body '{body.get('name', '?')}' has {len(joints)} joints: Drake's MJCF parser puts "
-                          "all but the last on the parent's axes, where MuJoCo's compiler puts them on the body's; "
-                          "give every body one joint")

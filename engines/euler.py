@@ -10,7 +10,7 @@ the book's B2 vector turned into the spinning frame.  J is singular where sin(nu
 
 Every function takes one state, angles of shape (3,), or many, shape (N, 3), and answers in kind:
 the conversions of a whole trajectory are one call each.  The states may be complex: the complex steps
-of engines.scene.case_linearisation differentiate angular_velocity and bias exactly.
+of engines.coordinates.case_linearisation differentiate angular_velocity and bias exactly.
 """
 
 import numpy as np

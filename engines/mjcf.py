@@ -8,6 +8,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from engines.bindings import SceneLocation
+
 
 @dataclass(frozen=True)
 class Joint:
@@ -19,16 +21,10 @@ class Joint:
 
 @dataclass(frozen=True)
 class Value:
-    """A number of the compiled scene that a parameter can set: a binding location (as in case.toml's
-    [scene.bindings]) and its value there."""
-    location: dict
+    """A number of the compiled scene that a parameter can set: its place (as case.toml's [scene.bindings] names
+    it) and its value there."""
+    location: SceneLocation
     value: float
-
-    @property
-    def where(self):
-        loc = self.location
-        index = f"[{loc['index']}]" if "index" in loc else ""
-        return f"{loc['element']} '{loc['name']}' {loc.get('attribute', '')}{index}".replace("  ", " ")
 
 
 @dataclass(frozen=True)
@@ -59,21 +55,21 @@ def describe(path):
     sensors = {kind: {name(mujoco.mjtObj.mjOBJ_SENSOR, s): body_name(m.site_bodyid[m.sensor_objid[s]])
                       for s in range(m.nsensor) if m.sensor_type[s] == kind}
                for kind in (mujoco.mjtSensor.mjSENS_FORCE, mujoco.mjtSensor.mjSENS_TORQUE)}
-    values = [Value({"element": "option", "name": "gravity", "index": i}, float(m.opt.gravity[i]))
+    values = [Value(SceneLocation("option", "gravity", index=i), float(m.opt.gravity[i]))
               for i in range(3) if m.opt.gravity[i]]
     for b in range(1, m.nbody):
         body = body_name(b)
-        values.append(Value({"element": "body", "name": body, "attribute": "mass"}, float(m.body_mass[b])))
+        values.append(Value(SceneLocation("body", body, "mass"), float(m.body_mass[b])))
         for attribute in ("pos", "ipos"):
             array = getattr(m, "body_" + attribute)[b]
-            values += [Value({"element": "body", "name": body, "attribute": attribute, "index": i}, float(array[i]))
+            values += [Value(SceneLocation("body", body, attribute, i), float(array[i]))
                        for i in range(3) if array[i]]
     for j, joint in enumerate(joints):
         scalar = joint.kind in ("hinge", "slide")
         for attribute, value in (("stiffness", m.jnt_stiffness[j]), ("damping", m.dof_damping[m.jnt_dofadr[j]]),
                                  ("springref", m.qpos_spring[m.jnt_qposadr[j]] if scalar else 0.0)):
             if value:
-                values.append(Value({"element": "joint", "name": joint.name, "attribute": attribute}, float(value)))
+                values.append(Value(SceneLocation("joint", joint.name, attribute), float(value)))
     lengths = [np.linalg.norm(m.body_pos[b]) for b in range(1, m.nbody)] + \
               [np.linalg.norm(m.body_ipos[b]) for b in range(1, m.nbody)]
     return SceneFile(str(path), joints, sensors[mujoco.mjtSensor.mjSENS_FORCE], sensors[mujoco.mjtSensor.mjSENS_TORQUE],

@@ -1,7 +1,7 @@
-"""The joint values of an MJCF that an engine's own MJCF reader drops or reads otherwise than MuJoCo's compiler
-(springs, their rest positions, dampers, rotor inertia), resolved from the file's text as MuJoCo's compiler resolves
-them, and the bodies' inertial frames (MJCF or URDF), which the readers fold into the inertia: Pinocchio's and
-Drake's adapters read them here, with no engine of their own."""
+"""What Pinocchio's and Drake's adapters read of a scene file's text, with no engine of their own: the joint values
+of an MJCF that an engine's own MJCF reader drops or reads otherwise than MuJoCo's compiler (springs, their rest
+positions, dampers, rotor inertia), resolved as MuJoCo's compiler resolves them; the bodies' inertial frames (MJCF
+or URDF), which the readers fold into the inertia; and what a URDF's joint limits mean (NO_LIMIT)."""
 
 import math
 
@@ -10,6 +10,14 @@ import numpy as np
 JOINT_VALUES = {"stiffness": "spring", "springref": "spring's rest position", "damping": "damper",
                 "armature": "rotor inertia"}
 JOINT_DEFAULTS = {**dict.fromkeys(JOINT_VALUES, "0"), "type": "hinge"}  # MuJoCo's, where no class sets them
+# URDF cannot write an unlimited revolute or prismatic joint (urdfdom requires <limit> and refuses inf): limits at or
+# beyond this are read as none.
+NO_LIMIT = 1e300
+
+
+def is_mjcf(path):
+    """Whether the scene file at `path` is an MJCF (a .xml file: the scene MuJoCo reads), not a URDF."""
+    return str(path).endswith(".xml")
 
 
 def joint_values(document, path):
@@ -59,7 +67,7 @@ def inertial_frames(document, path):
     <inertial quat>, a URDF <inertial><origin rpy>; for an MJCF orientation written otherwise, the words of the
     refusal of a binding that needs it (a body's `inertia`: diaginertia, in that frame)."""
     frames = {}
-    if str(path).endswith(".xml"):
+    if is_mjcf(path):
         for body in document.iter("body"):
             inertial = body.find("inertial")
             written = [] if inertial is None else [a for a in ("quat", "axisangle", "euler", "xyaxes", "zaxis")
@@ -78,6 +86,16 @@ def inertial_frames(document, path):
             if origin is not None and origin.get("rpy"):
                 frames[link.get("name")] = _rpy_matrix([float(t) for t in origin.get("rpy").split()])
     return frames
+
+
+def inertial_frame(frames, body, path):
+    """The rotation of `body`'s inertial frame in its frame from its `inertial_frames`, in which a binding of
+    `inertia` is a diagonal entry (MJCF's diaginertia); ValueError naming the file and body for an orientation read
+    here only as its refusal's words."""
+    frame = frames.get(body)
+    if isinstance(frame, str):
+        raise ValueError(f"{path}: body '{body}': {frame}")
+    return np.eye(3) if frame is None else frame
 
 
 def _quaternion_matrix(quaternion):

@@ -8,86 +8,30 @@ this adapter; its dampers are the joints' <dynamics damping>.  An MJCF has them 
 but Pinocchio's parser drops them: this adapter reads them from the file.  Pinocchio's
 algorithms model no spring and no damper: their forces -k (q - springref) - d q' are
 generalised forces here.
+
+This module holds the model: its construction, Pinocchio's state at the case's states, the engine step, the model
+interface and the linearisation.  engines.pinocchio_scene reads and writes the scene file.
 """
 
 import math
-import xml.etree.ElementTree as ET
 
 import numpy as np
 import pinocchio as pin
 
-from engines import euler, scene as scene_rules
+from engines import coordinates, euler, scene as scene_rules
 from engines.linalg import linear_solution
 from engines.loops import PinocchioLoops
-from engines.mjcf_joints import inertial_frames, joint_values
+from engines.mjcf_joints import is_mjcf
+from engines.pinocchio_scene import PinocchioScene, unmodelled
 
-ROOT_JOINTS = {"spherical": pin.JointModelSpherical}
 
-
-class PinocchioModel:
+class PinocchioModel(PinocchioScene):
     """path: the scene's URDF, or its MJCF (a .xml file: the scene MuJoCo reads).
     scene: as for MujocoModel (coords, driven, reactions); reactions use the body, not the sensor."""
 
-    @staticmethod
-    def elements_in(path):
-        """What the scene file at `path` holds of a case's bindings (the case writes the rest): an MJCF its
-        bodies, joints and options, a URDF only its bodies (masses and lengths: no springs, no gravity)."""
-        return {"body", "joint", "option"} if _is_mjcf(path) else {"body"}
-
     def __init__(self, path, scene, writes=()):
         self.path = str(path)
-        root = scene.urdf_root_joint
-        constraints = []  # the loops' (a URDF closes none: refused against the MJCF's, dyncheck.case.folder)
-        try:
-            if _is_mjcf(self.path) and _equalities(self.path):
-                self.m, constraints = pin.buildModelAndLegacyConstraintsFromMJCF(self.path)
-            elif _is_mjcf(self.path):  # MJCF has ball joints: Pinocchio's spherical, no root joint to add
-                self.m = pin.buildModelFromMJCF(self.path)
-            elif root:  # URDF has no ball joint: the file's root link hangs on a spherical root joint
-                self.m = pin.buildModelFromXML(_urdf_text(self.path), ROOT_JOINTS[root.type](), root.name)
-            else:
-                self.m = pin.buildModelFromXML(_urdf_text(self.path))
-        except (ValueError, RuntimeError) as error:
-            raise ValueError(f"{self.path}: {_reader_error(self.path, error)}") from error
-        try:
-            document = ET.parse(self.path).getroot()
-        except ET.ParseError as error:  # stricter than urdfdom's parser
-            raise ValueError(f"{self.path}: {error}") from None
-        self._links = self._links_by_joint()
-        self._composite = any(joint.shortname() == "JointModelComposite" for joint in self.m.joints)
-        self._ball_armature = {}  # joint id: the armature `_complete_mjcf` holds in its body's inertia
-        self._joints = self._joints_by_name(document)
-        if _is_mjcf(self.path):
-            self._complete_mjcf(document, scene)
-        else:
-            # URDF has no springs: bindings set them; its dampers are Pinocchio's model.damping
-            self.joint_values = {"stiffness": {}, "springref": {},
-                                 "damping": {self.m.names[j]: float(self.m.damping[self.m.joints[j].idx_v])
-                                             for j in range(1, self.m.njoints) if self.m.joints[j].nv == 1
-                                             and self.m.damping[self.m.joints[j].idx_v]}}
-            self.m.gravity.linear[:] = 0.0  # URDF has no gravity: the case's binding sets it
-        self._inertial_frames = inertial_frames(document, self.path)
-        # each joint's welded links (Pinocchio's readers merge them into its inertia, and keep each link's own in the
-        # frame of its weld) and its own link's inertia, which the bindings set: the model's is their sum
-        self._welded = {j: sum((f.placement.act(f.inertia) for f in self.m.frames if f.parentJoint == j
-                                and f.type == pin.FrameType.FIXED_JOINT), pin.Inertia.Zero())
-                        for j in range(1, self.m.njoints)}
-        self._own = {j: self.m.inertias[j] - self._welded[j] if self._welded[j].mass else self.m.inertias[j].copy()
-                     for j in range(1, self.m.njoints)}
-        self._touched = set()  # the joints whose own link's inertia a binding sets
-        self._written = {}  # body: its inertia as the writes leave it (about the centre of mass, in its frame)
-        for location, value in writes:
-            self._write(location, value)
-        for body, inertia in self._written.items():  # once all are written: several may pass through an unphysical one
-            why = scene_rules.unphysical(body, inertia)
-            if why:
-                raise ValueError(f"{self.path}: {why}")
-            joint = self._body_joint(body)
-            self._own[joint] = pin.Inertia(self._own[joint].mass, self._own[joint].lever, inertia + self._armature_of(joint))
-        for joint in self._touched:
-            self.m.inertias[joint] = self._own[joint] + self._welded[joint]
-        for constraint, element in zip(constraints, _equalities(self.path)):  # the reader keeps no names
-            constraint.name = element.get("name", "")
+        document, constraints = self._read(scene, writes)
         self.loops = PinocchioLoops(self.m, constraints, self.path)  # after the model is complete
         if self.loops.loops and self._composite:  # the loops' joints are the model's: a composite's parts are not
             raise ValueError(f"{self.path}: a scene with closed loops is evaluated with one joint on each body; "
@@ -104,9 +48,9 @@ class PinocchioModel:
         self.driven = [(self._joint(j), (law.angle, law.rate, law.acc)) for j, law in scene.driven.items()]
         # after the case's joints are found: a renamed joint is missing before it is extra.  An MJCF's
         # are refused by MuJoCo's adapter, on the same file.
-        unmodelled = None if _is_mjcf(self.path) else next(_unmodelled(document, scene), None)
-        if unmodelled:
-            raise scene_rules.refusal(self.path, "URDF", *unmodelled)
+        unmodelled_element = None if is_mjcf(self.path) else next(unmodelled(document, scene), None)
+        if unmodelled_element:
+            raise scene_rules.refusal(self.path, "URDF", *unmodelled_element)
         self.forces = [(self._joint(joint).idx_v, force) for joint, force in scene.applied.items()]
         # Constant applied forces are evaluated once (`applied`); laws of the state at every evaluation.
         self.varying = not all(force.constant for _, force in self.forces)
@@ -129,6 +73,8 @@ class PinocchioModel:
                              "upper=\"1e300\"")
         # (nq, idx_q, idx_v) of the joints, read once: each of Pinocchio's attributes is a call.
         self._coord_joints = [(kind, (joint.nq, joint.idx_q, joint.idx_v), idx) for kind, joint, idx in self.layout]
+        # the joints as engines.coordinates takes them: (kind, first dof, coordinate indices)
+        self._dof_layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
         self._driven_joints = [((joint.nq, joint.idx_q, joint.idx_v), motion) for joint, motion in self.driven]
         self._independent = [(c.kind, self.m.getJointId(c.joint), list(c.indices)) for c in scene.layout if c.kind == "scalar"]
         self.dependent_joints = [(j, self._joint(j)) for j in scene.dependent]
@@ -156,209 +102,6 @@ class PinocchioModel:
         # them costs a third of fancy indexing
         self._free_columns = (np.minimum.outer(every, self.free) * self.m.nv + np.maximum.outer(every, self.free))
         self._free_block = self.free[:, None] * len(self.free) + np.arange(len(self.free))
-
-    def _complete_mjcf(self, document, scene):
-        """What Pinocchio's MJCF parser leaves out: the file's gravity and joints' springs and dampers, which it
-        drops; and the armature of MuJoCo's evaluation model (engines.mujoco_adapter): none on the prescribed joints, and
-        a ball joint's armature a on a body on the world as what it is there, the isotropic inertia a I about
-        the joint (MujocoModel.tree), held in the body's inertia so that `tree`, `read` and `_write` count it
-        as the URDF side's inertia does.  Refuses what the parser reads otherwise than MuJoCo's compiler."""
-        for frame in document.iter("frame"):
-            owner = f"frame '{frame.get('name')}'" if frame.get("name") else "a frame"
-            raise scene_rules.refusal(self.path, "MJCF", "body-frame", "*", owner, "")
-        misread = next(_misread(document), None)
-        if misread:
-            raise ValueError(f"{self.path}: {misread}")
-        option = document.find("option")
-        gravity = option.get("gravity", DEFAULT_GRAVITY) if option is not None else DEFAULT_GRAVITY
-        self.m.gravity.linear[:] = [float(x) for x in gravity.split()]
-        self.joint_values = joint_values(document, self.path)
-        for joint in scene.driven:
-            self.m.armature[self._joint(joint).idx_v] = 0.0
-        for j in range(1, self.m.njoints):
-            joint = self.m.joints[j]
-            if joint.shortname() == "JointModelSpherical" and self.m.parents[j] == 0:
-                dofs = slice(joint.idx_v, joint.idx_v + joint.nv)
-                inertia = self.m.inertias[j]
-                self._ball_armature[j] = float(self.m.armature[joint.idx_v])  # MJCF's one value for the 3 dofs
-                self.m.inertias[j] = pin.Inertia(inertia.mass, inertia.lever,
-                                                 inertia.inertia + np.diag(self.m.armature[dofs]))
-                self.m.armature[dofs] = 0.0
-
-    # -- names -------------------------------------------------------------
-    def _joints_by_name(self, document):
-        """{joint name: Pinocchio's joint model (nq, nv, idx_q, idx_v)}: the model's joints, and the joints that
-        Pinocchio's MJCF reader makes one composite joint of, for an MJCF body with several (named after the first,
-        its parts keep no names: they are the body's joints, in the file's order, engines.scene.moving_body)."""
-        joints = {}
-        for j in range(1, self.m.njoints):
-            joint = self.m.joints[j]
-            if joint.shortname() != "JointModelComposite":
-                joints[self.m.names[j]] = joint
-                continue
-            names = [e.get("name") for b in document.iter("body") if b.get("name") == self._links[j]
-                     for e in b if e.tag == "joint"]
-            joints.update(zip(names, joint.extract().joints))
-        return joints
-
-    def _links_by_joint(self):
-        """{joint id: the link it moves}: the first body frame on each joint; the links welded to it follow."""
-        links = {}
-        for frame in self.m.frames:
-            if frame.type == pin.FrameType.BODY:
-                links.setdefault(frame.parentJoint, frame.name)
-        return links
-
-    def _joint(self, name):
-        if name not in self._joints:
-            raise ValueError(f"{self.path}: no joint named '{name}'")
-        return self._joints[name]
-
-    def _body_frame(self, body):
-        if not self.m.existBodyName(body):
-            raise ValueError(f"{self.path}: no link named '{body}'")
-        return self.m.getBodyId(body)
-
-    def _point_frame(self, spec):
-        """The frame whose kinematics a point reads: the link's own, or one added at its centre of mass."""
-        frame_id = self._body_frame(spec.body)
-        if spec.kind != "com acceleration":
-            return frame_id
-        frame = self.m.frames[frame_id]
-        at_com = pin.SE3(frame.placement.rotation, self._own_com(frame_id))  # the link's axes, at its centre of mass
-        return self.m.addFrame(pin.Frame(spec.body + "_com", frame.parentJoint, frame_id, at_com,
-                                         pin.FrameType.OP_FRAME))
-
-    def _own_com(self, frame_id):
-        """The centre of mass of the link of body frame `frame_id` alone, in its joint's frame: Pinocchio's readers
-        merge welded links into the joint's inertia, and keep each welded link's own in the frame of its weld (the
-        body frame's parent)."""
-        frame = self.m.frames[frame_id]
-        if self._links.get(frame.parentJoint) != frame.name:  # a welded link: its weld's inertia is its own
-            weld = self.m.frames[frame.parentFrame]
-            return weld.placement.act(weld.inertia.lever)
-        return self._own[frame.parentJoint].lever
-
-    def _body_joint(self, body):
-        """Id of the joint that moves link `body` (URDF link frames are those joints' frames here)."""
-        return self.m.frames[self._body_frame(body)].parentJoint
-
-    def _moved_joint(self, body, what):
-        """`_body_joint` of a link that a joint moves itself; ValueError naming `what` for a welded link, whose
-        mass and inertia Pinocchio's readers merge into the link it is welded to."""
-        joint = self._body_joint(body)
-        if self._links.get(joint) != body:
-            raise ValueError(f"{self.path}: {what} of body '{body}', which is welded to body '{self._links.get(joint, 'world')}':"
-                             " Pinocchio's reader merges its mass and inertia into that body's, and the Pinocchio side"
-                             " reads no force or value of the weld itself")
-        return joint
-
-    def _slot(self, location):
-        """(object, attribute) holding a binding location's value in the Pinocchio model."""
-        element, name, attribute = location["element"], location.get("name"), location.get("attribute")
-        if element == "option":
-            return self.m.gravity, "linear"
-        if element == "joint":
-            return self.joint_values[attribute], name
-        joint = self._moved_joint(name, f"a binding of {attribute}")
-        if attribute == "pos":
-            return self.m.jointPlacements[joint], "translation"
-        if attribute in INERTIA_ATTRIBUTES:
-            return self._own[joint], attribute
-        return self._own[joint], {"mass": "mass", "ipos": "lever"}[attribute]
-
-    def _write(self, location, value):
-        """Set a binding location's value; an inertia's in `_written` (set in the model once all are written)."""
-        holder, key = self._slot(location)
-        i = location.get("index", 0)
-        if location["element"] == "body" and key != "translation":
-            self._touched.add(self._body_joint(location["name"]))
-        if key in INERTIA_ATTRIBUTES:
-            name = location["name"]
-            inertia = self._written.setdefault(name, self._inertia_of(name))  # about the com, in the body's frame
-            joint = self._body_joint(name)
-            if key == "inertia_about_origin":  # about the body origin (a ball joint's armature in it): less the
-                inertia[i, i] = (value - holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2)  # parallel
-                                 - self._ball_armature.get(joint, 0.0))  # axis term and the armature
-            elif key == "fullinertia":
-                inertia[scene_rules.FULL_INERTIA[i]] = inertia[scene_rules.FULL_INERTIA[i][::-1]] = value
-            else:  # in the inertial frame
-                frame = self._inertial_frame(name)
-                principal = frame.T @ inertia @ frame
-                principal[i, i] = value
-                inertia[:] = frame @ principal @ frame.T
-        elif location["element"] == "joint":
-            holder[key] = value
-        elif np.ndim(getattr(holder, key)) == 0:
-            setattr(holder, key, value)
-        else:  # Pinocchio's bindings return these arrays by reference
-            getattr(holder, key)[i] = value
-
-    def _inertia_of(self, body):
-        """A moving body's inertia about its centre of mass in its frame, as the file writes it: without the
-        armature of a ball joint on the world that `_complete_mjcf` holds in it."""
-        joint = self._moved_joint(body, "the inertia")
-        return self._own[joint].inertia.copy() - self._armature_of(joint)
-
-    def _armature_of(self, joint):
-        return self._ball_armature.get(joint, 0.0) * np.eye(3)
-
-    def _inertial_frame(self, body):
-        """The rotation of a body's inertial frame in its frame (MJCF's <inertial> orientation, URDF's <inertial>
-        <origin rpy>), in which a binding of `inertia` is a diagonal entry (MJCF's diaginertia)."""
-        frame = self._inertial_frames.get(body)
-        if isinstance(frame, str):  # an orientation this adapter does not read
-            raise ValueError(f"{self.path}: body '{body}': {frame}")
-        return np.eye(3) if frame is None else frame
-
-    def tree(self):
-        """The moving bodies as Pinocchio models them (see engines.scene.Body, engines.scene.moving_body): one per
-        joint, named after the link it moves (its welded links' mass and inertia merged into it by Pinocchio's
-        readers), a composite joint's parts a chain; a joint's axis is its motion subspace at the neutral
-        configuration."""
-        bodies = []
-        for j in range(1, self.m.njoints):
-            placement, inertia = self.m.jointPlacements[j], self.m.inertias[j]
-            # 6 x nv; eigenpy hands a one-column matrix (a scene of one joint) back as a vector
-            jacobian = np.reshape(pin.computeJointJacobian(self.m, self.m.createData(), self.neutral, j), (6, -1))
-            joints = []
-            for name, joint in self._parts(j):
-                motion = jacobian[:, joint.idx_v]
-                if joint.nv == 1:  # motion = (linear, angular) per unit rate, in the joint's frame
-                    kind, axis = ("hinge", motion[3:]) if np.any(motion[3:]) else ("slide", motion[:3])
-                else:  # a ball joint (spherical: the top)
-                    kind, axis = "ball", np.zeros(3)
-                joints.append((name, kind, axis.copy(), [self.joint_values["stiffness"].get(name, 0.0), 0.0, 0.0],
-                               self.joint_values["springref"].get(name, 0.0), self.joint_values["damping"].get(name, 0.0)))
-            parent = self.m.parents[j]
-            bodies += scene_rules.moving_body(self._links[j], self._links[parent] if parent else "world", joints,
-                                              placement.translation.copy(), placement.rotation.copy(),
-                                              float(inertia.mass), inertia.lever.copy(), inertia.inertia.copy())
-        return bodies
-
-    def _parts(self, j):
-        """(name, joint model) of the case's joints that Pinocchio's joint j holds: itself, or a composite's parts."""
-        joint = self.m.joints[j]
-        return [(name, part) for name, part in self._joints.items()
-                if joint.idx_v <= part.idx_v < joint.idx_v + joint.nv]
-
-    @property
-    def gravity(self):
-        return self.m.gravity.linear.copy()
-
-    def read(self, location):
-        holder, key = self._slot(location)
-        i = location.get("index", 0)
-        if key == "inertia_about_origin":
-            return float(holder.inertia[i, i] + holder.mass * (holder.lever @ holder.lever - holder.lever[i] ** 2))
-        if key == "fullinertia":
-            return float(self._inertia_of(location["name"])[scene_rules.FULL_INERTIA[i]])
-        if key == "inertia":
-            frame = self._inertial_frame(location["name"])
-            return float((frame.T @ self._inertia_of(location["name"]) @ frame)[i, i])
-        if location["element"] == "joint":
-            return float(holder.get(key, 0.0))
-        return float(np.atleast_1d(getattr(holder, key))[location.get("index", 0)])
 
     # -- state -------------------------------------------------------------
     def engine_state(self, t, q, v):
@@ -427,7 +170,7 @@ class PinocchioModel:
 
     def _applied_at(self, t, q, v):
         """The applied generalized forces at the case's state (t, q, v): every dof's, (nv,)."""
-        return scene_rules.applied_forces(self.forces, self.m.nv, t, q, v)
+        return coordinates.applied_forces(self.forces, self.m.nv, t, q, v)
 
     def engine_dynamics(self, config, velocity, applied):
         """Pinocchio alone, on its own configuration and velocity under the applied generalized forces
@@ -486,14 +229,7 @@ class PinocchioModel:
         at many, q and v (N, n)."""
         if not self._balls:  # the case's coordinates are one-dof joints' positions (take: a third of indexing's cost)
             return acc.take(self._coord_dofs, axis=-1)
-        q, v = np.asarray(q), np.asarray(v)
-        out = np.zeros(q.shape)
-        for kind, (_, _, iv), idx in self._coord_joints:
-            if kind == "scalar":
-                out[..., idx[0]] = acc[..., iv]
-            else:
-                out[..., idx] = euler.euler_accelerations(q[..., idx], v[..., idx], acc[..., iv:iv + 3])
-        return out
+        return coordinates.case_accelerations(self._dof_layout, q, v, acc)
 
     def _dynamics_of_states(self, t, q, v):
         """`_dynamics` of many states, t (N,), q and v (N, n), one after another (an iterator), the same numbers: the
@@ -577,38 +313,30 @@ class PinocchioModel:
 
     def ball_joint_linearisation(self, quaternion, omega):
         """The state matrix A of (dtheta, dw) about the scene's ball joint's state (as `ball_joint_acceleration`),
-        engines.scene.ball_joint_state_matrix, with dw' from Pinocchio's analytic derivatives of ABA
+        engines.coordinates.ball_joint_state_matrix, with dw' from Pinocchio's analytic derivatives of ABA
         (computeABADerivatives: tangent perturbations quaternion * exp(dtheta), as dtheta's); and the estimated
-        error of its entries, rounding (ROUNDING)."""
+        error of its entries, rounding (engines.coordinates.DERIVATIVE_ROUNDING)."""
         dofs, config, velocity = self._ball_joint_state("ball_joint_linearisation", quaternion, omega)
         acc_q, acc_v, _ = pin.computeABADerivatives(self.m, self.d, config, velocity, self.applied)
-        matrix = scene_rules.ball_joint_state_matrix(omega, acc_q[dofs, dofs], acc_v[dofs, dofs])
-        return matrix, ROUNDING * np.max(np.abs(matrix))
+        matrix = coordinates.ball_joint_state_matrix(omega, acc_q[dofs, dofs], acc_v[dofs, dofs])
+        return matrix, coordinates.DERIVATIVE_ROUNDING * np.max(np.abs(matrix))
 
     def _ball_joint_state(self, method, quaternion, omega):
         """The ball joint's dofs (a slice), and Pinocchio's configuration and velocity at its quaternion (w, x, y,
-        z) and angular velocity; ValueError where `method` cannot apply (`_ball_joint`, laws of the state)."""
-        joint = self._ball_joint(method)
+        z) and angular velocity; ValueError where `method` cannot apply (another joint, laws of the state)."""
+        joint = coordinates.lone_ball_joint(self.path, self.layout, self.driven, method)
+        coordinates.constant_forces(self.path, self.varying, method)
         config, velocity = self.neutral.copy(), np.zeros(self.m.nv)
         config[joint.idx_q:joint.idx_q + 4] = np.roll(quaternion, -1)  # Pinocchio's order: (x, y, z, w)
         velocity[joint.idx_v:joint.idx_v + 3] = omega
-        if self.varying:
-            raise ValueError(f"{self.path}: {method} needs constant applied forces; this scene's depend on the state")
         return slice(joint.idx_v, joint.idx_v + 3), config, velocity
 
-    def _ball_joint(self, method):
-        """The ball (spherical) joint of a scene that has no other joint."""
-        if [kind for kind, _, _ in self.layout] != ["euler"] or self.driven:
-            raise ValueError(f"{self.path}: {method} needs a scene whose only joint is a ball joint; this one "
-                             f"has {len(self.layout)} free joints and {len(self.driven)} driven")
-        return self.layout[0][1]
-
     def linearisation(self, t, q, v):
-        """M q'' = f(t, q, q') linearised at the case's state (engines.scene.Linearisation): Pinocchio's analytic
+        """M q'' = f(t, q, q') linearised at the case's state (engines.coordinates.Linearisation): Pinocchio's analytic
         derivatives of RNEA (computeRNEADerivatives) at the state's accelerations, the prescribed joints' imposed,
         with the springs' -k and the dampers' -d on their dofs, in the case's coordinates
-        (engines.scene.case_linearisation, which differences applied laws of the state).  Its error: RNEA's
-        rounding (ROUNDING of its largest entry), and the rounding of the springs' and dampers' sums with it.
+        (engines.coordinates.case_linearisation, which differences applied laws of the state).  Its error: RNEA's
+        rounding (engines.coordinates.derivative_error), and the rounding of the springs' and dampers' sums with it.
         ValueError for a scene with loops."""
         if self.loops.loops:
             raise ValueError(f"{self.path}: linearisation of a scene with closed loops "
@@ -628,9 +356,9 @@ class PinocchioModel:
             force_q[iv, iv] -= k
             force_v[iv, iv] -= damping
         # the sums' rounding: half an ulp of each, within eps of the term added (RNEA's share is in its own)
-        error += EPS * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive), default=0.0)
-        layout = [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints]
-        return scene_rules.case_linearisation(layout, self.forces, t, q, v, self.accelerations(t, q, v),
+        error += np.finfo(float).eps * max((max(abs(k), abs(damping)) for _, _, k, _, damping in self.passive),
+                                           default=0.0)
+        return coordinates.case_linearisation(self._dof_layout, self.forces, t, q, v, self.accelerations(t, q, v),
                                               mass, force_q, force_v, error, method)
 
     def _rnea_derivatives(self, config, velocity, acc):
@@ -640,17 +368,16 @@ class PinocchioModel:
         # RNEA's rounding is of RNEA's own entries: a stiff spring's -k, added here in one rounding, would make it
         # 1e3 eps of k on every entry (k = 4929 N/m on a spring pendulum's length row put 2e-6 on its angle's row,
         # whose entries are about 10, and its mode rows were inconclusive); or, where its entries are far below the
-        # terms they sum, its noise as measured (engines.scene.rounding_noise)
-        error = max(ROUNDING * max(np.max(np.abs(dtau_dq)), np.max(np.abs(dtau_dv))),
-                    NOISE_MARGIN * scene_rules.rounding_noise(
-                        lambda step_q, step_v: derivatives(pin.integrate(self.m, config, step_q), velocity + step_v),
-                        (dtau_dq, dtau_dv), velocity))
+        # terms they sum, its noise as measured (engines.coordinates.derivative_error)
+        error = coordinates.derivative_error(
+            lambda step_q, step_v: derivatives(pin.integrate(self.m, config, step_q), velocity + step_v),
+            (dtau_dq, dtau_dv), velocity)
         return dtau_dq, dtau_dv, error
 
     def _rnea_differences(self, config, velocity, acc):
         """dtau/dq, dtau/dv of RNEA at the state's accelerations by centred differences (positions stepped in
         Pinocchio's tangent space, pin.integrate, as MuJoCo's mj_integratePos), extrapolated at the step of least
-        estimated error (engines.scene.extrapolated_differences, difference_rounding: as MujocoModel's
+        estimated error (engines.coordinates.least_error_differences, as MujocoModel's
         `_inverse_derivatives`), and that error.  For a model with a composite joint (several joints of one MJCF
         body), through which computeRNEADerivatives (Pinocchio 4.1) gives wrong derivatives: measured on a
         spherical pendulum of two hinges, dtau/dq of the second hinge off by 1.58 N m/rad and dtau/dv by 0.085 N m s,
@@ -672,13 +399,7 @@ class PinocchioModel:
         bias, gravity = (np.array(pin.nonLinearEffects(self.m, self.d, config, velocity)),
                          np.array(pin.computeGeneralizedGravity(self.m, self.d, config)))
         size = max(float(np.max(np.abs(x))) for x in (inertial, bias - gravity, gravity))
-        best = None
-        for step in scene_rules.DIFFERENCE_STEPS:
-            (dq, dv), truncation = scene_rules.extrapolated_differences(centred, step)
-            error = truncation + scene_rules.difference_rounding(size, step)
-            if best is None or error < best[2]:
-                best = dq, dv, error
-        return best
+        return coordinates.least_error_differences(centred, size)
 
     def dependent(self, t, q, v):
         """The dependent joints' positions and rates, {joint: value} each, on the closed state (`engine_state`)."""
@@ -689,14 +410,14 @@ class PinocchioModel:
                 {name: float(velocity[joint.idx_v]) for name, joint in self.dependent_joints})
 
     def mass_matrix(self, t, q, v):
-        """The mass matrix in the case's coordinates at (t, q) (engines.scene.case_mass_matrix): CRBA's, whose
+        """The mass matrix in the case's coordinates at (t, q) (engines.coordinates.case_mass_matrix): CRBA's, whose
         upper triangle is read for the whole."""
         config = self.engine_state(t, q, v)[0]
         mass = pin.crba(self.m, self.d, config)[self._whole]
         if self.loops.loops:  # N^T M N, N every dof's rate per independent rate (as MujocoModel.mass_matrix)
             rates = self.loops.rates(config, [self.m.joints[j].idx_v for _, j, _ in self._independent])
             return rates.T @ mass @ rates
-        return scene_rules.case_mass_matrix(mass, [(kind, iv, idx) for kind, (_, _, iv), idx in self._coord_joints], q)
+        return coordinates.case_mass_matrix(mass, self._dof_layout, q)
 
     def energy(self, t, q, v):
         return self._energy_of(*self.engine_state(t, q, v))
@@ -755,124 +476,3 @@ class BallJointCoordinates:
         q, v = np.empty((len(y), len(self.model.coords))), np.empty((len(y), len(self.model.coords)))
         q[:, self.angles], v[:, self.angles] = angles, euler.euler_rates(angles, y[:, 4:])
         return q, v
-
-
-def _is_mjcf(path):
-    return str(path).endswith(".xml")
-
-
-# A body's inertia as a binding sets it: about the body origin (a diagonal entry), the principal moments in the
-# inertial frame (MJCF's diaginertia, index 0..2) or the full tensor about the centre of mass in the body's frame (MJCF's
-# fullinertia, a URDF <inertia> where its <origin> has no rpy: index 0..5, engines.scene.FULL_INERTIA)
-INERTIA_ATTRIBUTES = ("inertia_about_origin", "inertia", "fullinertia")
-
-
-def _urdf_text(path):
-    """The URDF at `path` with `NO_LIMIT` written into each revolute or prismatic joint without a <limit>, which
-    urdfdom rejects ("does not specify limits"): a joint without a limit has none.  ValueError for a file that
-    is not XML, saying where."""
-    try:
-        robot = ET.parse(path).getroot()
-    except ET.ParseError as error:
-        raise ValueError(f"not well-formed XML: {error}") from None
-    for joint in robot.iter("joint"):
-        if joint.get("type") in ("revolute", "prismatic") and joint.find("limit") is None:
-            ET.SubElement(joint, "limit", lower=f"{-NO_LIMIT:g}", upper=f"{NO_LIMIT:g}", effort="0", velocity="0")
-    return ET.tostring(robot, encoding="unicode")
-
-
-def _reader_error(path, error):
-    """Pinocchio's reader's error in words: its message without the C++ file and function it comes from, and
-    for an MJCF body that it finds no inertia of, which one and what to write."""
-    message = str(error).split("message:", 1)[-1].strip()
-    if "Cannot get inertia from geom" not in message:
-        return message
-    root = ET.parse(path).getroot()  # parsed by Pinocchio's reader already
-    body = next(b.get("name", "?") for b in root.iter("body") if b.find("geom") is not None and b.find("inertial") is None)
-    return (f"body '{body}' has a geom and no <inertial>, and <compiler inertiafromgeom=\"false\"> keeps MuJoCo from "
-            f"taking its inertia from its geoms: Pinocchio's MJCF reader then finds none and stops; give body '{body}' "
-            "an <inertial>, or remove inertiafromgeom=\"false\"")
-
-
-def _equalities(path):
-    """The <equality> constraints of an MJCF, in the file's order (Pinocchio's reader keeps it, not their names)."""
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError:  # reported where the adapter reads the file
-        return []
-    return [element for equality in root.iter("equality") for element in equality]
-
-
-# The rounding error of Pinocchio's analytic derivatives, relative to their largest entry: each entry sums, over
-# the chain's few bodies, products of placements, inertias, velocities and accelerations, a few dozen operations
-# that each round by eps of a term that cancellation (gyroscopic against gravity terms) may make a few times the
-# largest entry; 1e3 eps allows some ten times that.  Nothing measured contradicts it: Pinocchio's linearisation
-# agrees with MuJoCo's to 1e-14 to 1e-12 of the largest entry (the top, the cart-pendulum: no placeholders),
-# MuJoCo's own rounding (tests/test_engine_linearisation.py).
-EPS = np.finfo(float).eps
-ROUNDING = 1e3 * EPS
-# The rounding noise measured over a few ulps (engines.scene.rounding_noise) samples the rounding of one evaluation: the error
-# of Pinocchio's A at the degenerate equilibrium there was 3 times it; 10 times allows for a sample that misses.
-NOISE_MARGIN = 10.0
-
-DEFAULT_GRAVITY = "0 0 -9.81"  # MuJoCo's, where the MJCF has no <option gravity>
-
-# A unit axis written in decimals has a norm within an ulp or two of 1; Pinocchio's rotation is off
-# by about |axis| - 1, which the scene comparison would find beyond 16 eps (dyncheck.case.folder.SCENE_RTOL).
-UNIT_AXIS_RTOL = 4 * np.finfo(float).eps
-
-
-def _misread(document):
-    """What Pinocchio's MJCF parser (Pinocchio 4.1) reads otherwise than MuJoCo's compiler, which both accept
-    without a word: one message each."""
-    for compiler in document.iter("compiler"):
-        sequence = compiler.get("eulerseq", "xyz")
-        if sequence != sequence.lower():
-            yield (f'<compiler eulerseq="{sequence}">: Pinocchio\'s MJCF parser turns every Euler angle about '
-                   "the moving axes, where MuJoCo's upper-case letters name fixed ones; write the sequence in "
-                   "lower case, or the orientations as quat")
-    worldbody = document.find("worldbody")
-    roots = [] if worldbody is None else worldbody.findall("body")
-    if len(roots) > 1:
-        yield (f"<worldbody> holds {len(roots)} bodies ({', '.join(b.get('name', '?') for b in roots)}): Pinocchio's "
-               "MJCF parser (4.1) reads the first and drops the others without a word; give the scene one body on "
-               "the world, or a scene.urdf")
-    for element in document.iter():
-        if element.tag in ("body", "inertial", "geom") and "axisangle" in element.attrib:
-            norm = np.linalg.norm([float(x) for x in element.get("axisangle").split()[:3]])
-            if abs(norm - 1.0) > UNIT_AXIS_RTOL:
-                yield (f'<{element.tag} axisangle="{element.get("axisangle")}">: Pinocchio\'s MJCF parser does '
-                       f"not normalise the axis (its norm is {norm:.17g}), MuJoCo's compiler does; write a unit axis")
-        if element.tag == "include":
-            yield (f'<include file="{element.get("file")}">: Pinocchio\'s MJCF parser skips included files; '
-                   "write their elements into the scene")
-
-
-# URDF cannot write an unlimited revolute or prismatic joint (urdfdom requires <limit> and refuses inf):
-# limits at or beyond this are read as none.
-NO_LIMIT = 1e300
-
-
-def _unmodelled(robot, scene):
-    """What the URDF says that Pinocchio's dynamics drop, as (element, attribute, owner, value) of
-    engines.scene.RULES (Pinocchio itself parses these silently), and joints the case does not move."""
-    moved = scene_rules.named_joints(scene)
-    for joint in robot.iter("joint"):
-        name, kind = joint.get("name"), joint.get("type")
-        owner = f"joint '{name}'"
-        if kind == "fixed":  # a welded link: no coordinate, its mass and inertia merged into its parent's
-            continue
-        if kind not in ("revolute", "continuous", "prismatic"):  # no coordinate, named in the case or not
-            yield "joint", "type", owner, kind
-        if name not in moved:
-            yield "joint", "name", owner, name
-        limit = joint.find("limit")
-        if limit is not None and kind != "continuous":  # a continuous joint's limits are ignored by urdfdom
-            for bound in ("lower", "upper"):
-                if abs(float(limit.get(bound, 0.0))) < NO_LIMIT:
-                    yield "joint/limit", bound, owner, limit.get(bound, "0 (by default)")
-        dynamics = joint.find("dynamics")
-        if dynamics is not None and float(dynamics.get("friction", 0.0)):
-            yield "joint/dynamics", "friction", owner, dynamics.get("friction")
-        if joint.find("mimic") is not None:
-            yield "joint/mimic", "*", owner, ""

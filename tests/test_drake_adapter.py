@@ -26,6 +26,8 @@ pytest.importorskip("pydrake", reason="Drake is an optional extra: pip install -
 import dyncheck  # noqa: E402
 from dyncheck.checks import linear  # noqa: E402
 from dyncheck.case.scene import Coordinates, Driven, Reaction, Scene  # noqa: E402
+from engines.bindings import SceneLocation  # noqa: E402
+from engines.coordinates import case_accelerations  # noqa: E402
 from engines.drake_adapter import DrakeModel, Refused  # noqa: E402
 from engines.mujoco_adapter import MujocoModel  # noqa: E402
 from engines.pinocchio_adapter import PinocchioModel  # noqa: E402
@@ -38,18 +40,9 @@ SCENES = [(name, ROOT / "cases") for name in dyncheck.case_names()] + \
 RTOL = 1e-12
 
 
-def writes(case, Model, path):
-    """The writes that dyncheck.case.folder.Case._build gives `Model` on `path` (as tests/test_engines_mjcf.py)."""
-    held = Model.elements_in(path)
-    changed = lambda p, loc: p in case.overrides or set(loc.get("depends", ())) & set(case.overrides)
-    return sorted([(loc, case.params[p] * loc.get("scale", 1.0))
-                   for p, locations in case.spec["scene"].get("bindings", {}).items() for loc in locations
-                   if changed(p, loc) or loc["element"] not in held], key=lambda write: "depends" in write[0])
-
-
 def drake(case, file="scene.xml"):
     path = case.folder / file
-    return DrakeModel(path, case.scene, writes(case, DrakeModel, path))
+    return DrakeModel(path, case.scene, case.writes(DrakeModel, path))
 
 
 def quantities(model, case, t, q, v):
@@ -98,9 +91,9 @@ def test_drake_takes_the_case_parameters(name, overrides):
     model = drake(case)
     errors = disagreement(case.model("mujoco"), model, case.sample_states()[:8], case)
     assert {k: e for k, e in errors.items() if not e <= RTOL} == {}
-    for param, locations in case.spec["scene"].get("bindings", {}).items():
-        for loc in locations:
-            assert model.read(loc) == pytest.approx(case.params[param] * loc.get("scale", 1.0), rel=1e-14), loc
+    for binding in case.bindings:
+        assert model.read(binding.location) == pytest.approx(case.params[binding.param] * binding.scale,
+                                                             rel=1e-14), binding
 
 
 def test_drakes_tree_is_mujocos():
@@ -180,7 +173,7 @@ def test_springs_are_applied_where_drakes_parser_ignores_them(tmp_path):
         acc = reference.accelerations(t, q, v)
         assert np.max(np.abs(model.accelerations(t, q, v) - acc)) <= RTOL * np.max(np.abs(acc))
         assert abs(model.energy(t, q, v) - reference.energy(t, q, v)) <= RTOL * abs(reference.energy(t, q, v))
-    assert model.read({"element": "joint", "name": "a", "attribute": "springref"}) == pytest.approx(math.radians(20))
+    assert model.read(SceneLocation("joint", "a", "springref")) == pytest.approx(math.radians(20))
 
 
 def test_several_joints_on_one_body_are_refused(tmp_path):
@@ -253,12 +246,12 @@ def test_a_urdf_root_link_hangs_on_the_cases_root_joint(tmp_path):
     urdf.write_text(urdf.read_text().replace('ixx="0.00112716152"', 'ixx="0.0014"').replace(
         'iyy="0.00112716152"', 'iyy="0.0014"'))
     case = dyncheck.load_case("spinning_top", tmp_path)
-    pinocchio = PinocchioModel(urdf, case.scene, writes(case, PinocchioModel, urdf))
+    pinocchio = PinocchioModel(urdf, case.scene, case.writes(PinocchioModel, urdf))
     errors = disagreement(pinocchio, drake(case, "scene.urdf"), case.sample_states()[:8], case)
     assert {k: e for k, e in errors.items() if not e <= RTOL} == {}
     free = replace(case.scene, urdf_root_joint=None)
     with pytest.raises(Refused, match="free body"):
-        DrakeModel(urdf, free, writes(case, DrakeModel, urdf))
+        DrakeModel(urdf, free, case.writes(DrakeModel, urdf))
 
 
 def test_a_connect_is_solved_rigidly_where_drakes_continuous_plant_refuses_it():
@@ -308,7 +301,7 @@ def test_the_bare_drake_step_gives_the_adapters_accelerations(name):
     states = case.sample_states()[:5]
     bare = drake_steps(model, [model.engine_state(*state) for state in states])
     for (t, q, v), (acc, _, _) in zip(states, bare):
-        np.testing.assert_array_equal(model._book_accelerations(q, v, acc), model.accelerations(t, q, v))
+        np.testing.assert_array_equal(case_accelerations(model._dof_layout, q, v, acc), model.accelerations(t, q, v))
 
 
 # -- linearisation -----------------------------------------------------------------------------------
@@ -321,7 +314,7 @@ LINEAR += [("rotating_pendulum", ROOT / "cases", {"g": 0.0})]
 
 
 # The least error of MuJoCo's linearisation, relative to its largest entry: centred differences of mj_inverse at the
-# step of least estimated error (1e-3 to 3e-5) round by ~1.5 g eps |F| / h (engines.scene.difference_rounding), |F|
+# step of least estimated error (1e-3 to 3e-5) round by ~1.5 g eps |F| / h (engines.coordinates.difference_rounding), |F|
 # the largest term summed, a few times the entries: at h = 1e-3 some 1e-12 of them (1.0e-12 measured, above), and
 # 1e-11 allows ten times that.
 MUJOCO_FLOOR = 1e-11
@@ -363,7 +356,7 @@ def test_drakes_linearisation_agrees_with_pinocchios_and_mujocos(name, folder, o
     path = ROOT / folder.name / name / "scene.xml"
     for case, states in linearisation_states(name, folder, overrides):
         model = drake(case)
-        pinocchio = PinocchioModel(path, case.scene, writes(case, PinocchioModel, path))
+        pinocchio = PinocchioModel(path, case.scene, case.writes(PinocchioModel, path))
         for t, q, v in states:
             ours, theirs, mujoco, doubled = (m.linearisation(t, q, v) for m in (model, pinocchio, case.model("mujoco"),
                                                                               case.approximations_doubled()))

@@ -1,4 +1,4 @@
-"""The engines' own linearisations (engines.scene.Linearisation, ball_joint_linearisation): against differences of
+"""The engines' own linearisations (engines.coordinates.Linearisation, ball_joint_linearisation): against differences of
 each engine's own accelerations, MuJoCo's against Pinocchio's, the sleeping top's eigenvalues against the theory,
 and what they refuse."""
 
@@ -11,7 +11,7 @@ import scipy.linalg
 
 from dyncheck.case.folder import load_case
 from dyncheck.checks import linear
-from engines import scene
+from engines import coordinates
 
 ROOT = Path(__file__).resolve().parent.parent
 # a stiff spring (k = 4929 N/m, a light bob under g = 1): RNEA's rounding is of its own entries, not the spring's
@@ -114,11 +114,11 @@ def test_a_law_of_the_state_is_differenced(forced_by_a_law_of_the_state, engine)
         tolerance = np.linalg.norm(inverse_mass, np.inf) * linear.error + difference_error
         assert np.max(np.abs(inverse_mass @ np.hstack([linear.force_q, linear.force_v]) - differences)) <= tolerance
     t, q, v = states(case)[1]
-    law = scene.applied_derivatives(model.forces, model.m.nv, t, q, v)
+    law = coordinates.applied_derivatives(model.forces, model.m.nv, t, q, v)
     assert law[0][0] == pytest.approx([-3 * np.cos(q[0]) - 0.5 * v[1], 0.0], abs=law[2])
     assert law[1][0] == pytest.approx([0.0, -0.5 * q[0]], abs=law[2])
     time_only = load_case("forced_cart_pendulum", ROOT / "examples").model(engine)
-    assert scene.applied_derivatives(time_only.forces, time_only.m.nv, t, q, v)[2] == 0.0
+    assert coordinates.applied_derivatives(time_only.forces, time_only.m.nv, t, q, v)[2] == 0.0
 
 
 def sleeping_top_eigenvalues(case, spin):

@@ -68,10 +68,10 @@ def copy_case(tmp_path, name):
 
 
 @pytest.mark.parametrize("scene, old, new, message", [
-    ("scene.xml", 'mass="0.2"', 'mass="0.25"', "body 'particle' mass[0] is 0.25, but case.toml gives m = 0.2"),
+    ("scene.xml", 'mass="0.2"', 'mass="0.25"', "body 'particle' mass is 0.25, but case.toml gives m = 0.2"),
     ("scene.urdf", '<origin xyz="0 0.5 0.05"/>', '<origin xyz="0 0.55 0.05"/>',
      "body 'disk' pos[1] is 0.55, but case.toml gives b = 0.5"),
-    ("scene.xml", 'stiffness="2000"', 'stiffness="1500"', "joint 'l' stiffness[0] is 1500.0, but case.toml gives k = 2000.0"),
+    ("scene.xml", 'stiffness="2000"', 'stiffness="1500"', "joint 'l' stiffness is 1500.0, but case.toml gives k = 2000.0"),
 ])
 def test_a_scene_that_disagrees_with_its_case_is_refused(tmp_path, scene, old, new, message):
     folder = copy_case(tmp_path, "spring_pendulum")

@@ -17,19 +17,9 @@ NAMES = dyncheck.case_names()
 WITH_COORDS = [name for name in NAMES if dyncheck.load_case(name).coords]
 
 
-def writes(case, Model, path):
-    """The writes that dyncheck.case.folder.Case._build gives `Model` on the scene file `path`: what the file
-    does not hold of the bindings, and the overrides (after them, what depends on them)."""
-    held = Model.elements_in(path)
-    changed = lambda p, loc: p in case.overrides or set(loc.get("depends", ())) & set(case.overrides)
-    return sorted([(loc, case.params[p] * loc.get("scale", 1.0))
-                   for p, locations in case.spec["scene"].get("bindings", {}).items() for loc in locations
-                   if changed(p, loc) or loc["element"] not in held], key=lambda write: "depends" in write[0])
-
-
 def pinocchio_on_mjcf(case):
     path = case.folder / "scene.xml"
-    return PinocchioModel(path, case.scene, writes(case, PinocchioModel, path))
+    return PinocchioModel(path, case.scene, case.writes(PinocchioModel, path))
 
 
 class WithModel:
@@ -72,9 +62,9 @@ def test_the_mjcf_models_the_same_scene_in_both_engines(name):
     case = dyncheck.load_case(name)
     model = pinocchio_on_mjcf(case)
     compare_scenes(case.model("mujoco"), model, name)
-    for param, locations in case.spec["scene"].get("bindings", {}).items():
-        for loc in locations:
-            assert model.read(loc) == pytest.approx(case.params[param] * loc.get("scale", 1.0), rel=1e-14), loc
+    for binding in case.bindings:
+        assert model.read(binding.location) == pytest.approx(case.params[binding.param] * binding.scale,
+                                                             rel=1e-14), binding
 
 
 def test_the_evaluation_models_armature_is_mujocos():
@@ -179,7 +169,7 @@ def test_the_mass_matrix_gives_the_kinetic_energy(name):
         scene = frozen(case, t)
         for Model, path in ((MujocoModel, case.folder / "scene.xml"), (PinocchioModel, case.folder / "scene.urdf"),
                             (PinocchioModel, case.folder / "scene.xml")):
-            model = Model(path, scene, writes(case, Model, path))
+            model = Model(path, scene, case.writes(Model, path))
             moving, still = model.energy(t, q, v), model.energy(t, q, np.zeros_like(v))
             kinetic = 0.5 * v @ model.mass_matrix(t, q, v) @ v
             assert abs(moving - still - kinetic) <= 1e-12 * max(abs(moving), abs(still)), (path, t)

@@ -115,9 +115,9 @@ def test_a_spring_rest_position_is_bound_and_followed(tmp_path, capsys):
 def test_an_engine_that_drops_its_dampers_is_refused(tmp_path, capsys, monkeypatch):
     """Were the Pinocchio side to lose the dampers it reads from the MJCF, the two engines' models of one file
     would disagree on load."""
-    from engines import pinocchio_adapter
-    read = pinocchio_adapter.joint_values
-    monkeypatch.setattr(pinocchio_adapter, "joint_values", lambda *args: {**read(*args), "damping": {}})
+    from engines import pinocchio_scene
+    read = pinocchio_scene.joint_values
+    monkeypatch.setattr(pinocchio_scene, "joint_values", lambda *args: {**read(*args), "damping": {}})
     status, _, err = run(example(tmp_path), capsys)
     assert status == 2
     assert "damping" in err

@@ -20,6 +20,7 @@ import pytest
 from dyncheck.case.folder import Case
 from dyncheck.case.scene import Coordinates, Point, Reaction, Scene, compare_scenes
 from dyncheck.cli import main
+from engines.bindings import SceneLocation
 from engines.mujoco_adapter import MujocoModel
 from engines.pinocchio_adapter import PinocchioModel
 
@@ -150,7 +151,7 @@ def models(tmp_path, name, writes=()):
         (tmp_path / "scene.urdf").write_text(urdf)
     pinocchio_file = tmp_path / ("scene.urdf" if urdf else "scene.xml")
     mujoco = MujocoModel(tmp_path / "scene.xml", spec, writes)
-    gravity = [({"element": "option", "name": "gravity", "index": 2}, -9.81)] if urdf else []  # URDF has none
+    gravity = [(SceneLocation("option", "gravity", index=2), -9.81)] if urdf else []  # URDF has none
     pinocchio = PinocchioModel(pinocchio_file, spec, [*writes, *gravity])
     return mujoco, pinocchio
 
@@ -287,23 +288,22 @@ def test_an_inertia_binding_reads_back_what_it_wrote_in_both_engines(tmp_path, n
     """Read back to 1e-14 of the body's largest moment: MuJoCo compiles a fullinertia to principal moments and a
     rotation (mju_eig3, iterative: measured to 15 eps of the largest moment), read back as the tensor; the other
     entries unchanged as much, and both engines' bodies still the same."""
-    location = {"element": "body", "name": body, "attribute": attribute, "index": index}
+    location = SceneLocation("body", body, attribute, index)
     before = models(tmp_path, name)
     written = models(tmp_path, name, [(location, value)])
     width = 3 if attribute == "inertia" else 6
     for old, new in zip(before, written):
-        rounding = 1e-14 * max(abs(new.read({**location, "attribute": "fullinertia", "index": i}))
-                                                 for i in range(3))
+        rounding = 1e-14 * max(abs(new.read(SceneLocation("body", body, "fullinertia", i))) for i in range(3))
         assert new.read(location) == pytest.approx(value, rel=0, abs=rounding)
         for other in set(range(width)) - {index}:
-            at = {**location, "index": other}
+            at = SceneLocation("body", body, attribute, other)
             assert new.read(at) == pytest.approx(old.read(at), rel=0, abs=rounding), other
     compare_scenes(*written, name)
 
 
 @pytest.mark.parametrize("name, body, attribute, index, value", INERTIAS)
 def test_both_engines_agree_after_an_inertia_binding(tmp_path, name, body, attribute, index, value):
-    location = {"element": "body", "name": body, "attribute": attribute, "index": index}
+    location = SceneLocation("body", body, attribute, index)
     mujoco, pinocchio = models(tmp_path, name, [(location, value)])
     for state in states(len(SCENES[name][2].coords), 2):
         errors = differences(quantities(mujoco, *state), quantities(pinocchio, *state))
@@ -314,7 +314,7 @@ def test_both_engines_agree_after_an_inertia_binding(tmp_path, name, body, attri
                                                      ("fullinertia", 3, 5e-3)])
 def test_an_unphysical_inertia_is_refused_naming_the_body(tmp_path, attribute, index, value):
     """A + B < C, a negative moment, a product of inertia beyond the moments: ValueError naming the file and body."""
-    location = {"element": "body", "name": "bob", "attribute": attribute, "index": index}
+    location = SceneLocation("body", "bob", attribute, index)
     (tmp_path / "scene.xml").write_text(SPHERICAL)
     for Model in (MujocoModel, PinocchioModel):
         with pytest.raises(ValueError, match=r"scene.xml: body 'bob': principal moments .* not a rigid body's"):
@@ -323,7 +323,7 @@ def test_an_unphysical_inertia_is_refused_naming_the_body(tmp_path, attribute, i
 
 def test_several_writes_are_judged_together(tmp_path):
     """Raising all three moments of the spherical pendulum's bob tenfold passes through A + B < C on the way."""
-    writes = [({"element": "body", "name": "bob", "attribute": "inertia", "index": i}, 10 * x)
+    writes = [(SceneLocation("body", "bob", "inertia", i), 10 * x)
               for i, x in ((2, 2.5e-3), (0, 1e-3), (1, 2e-3))]
     for model in models(tmp_path, "spherical", writes):
         assert [model.read(location) for location, _ in writes] == pytest.approx([value for _, value in writes])
@@ -333,7 +333,7 @@ def test_several_writes_are_judged_together(tmp_path):
 def test_an_inertia_binding_of_a_fullinertia_body_s_principal_moments_is_refused(tmp_path, Model):
     """Written or read: MuJoCo's principal moments of a fullinertia are its own decomposition's, in its order."""
     (tmp_path / "scene.xml").write_text(SLIDE_HINGE)
-    location = {"element": "body", "name": "cart", "attribute": "inertia", "index": 0}
+    location = SceneLocation("body", "cart", "inertia", 0)
     with pytest.raises(ValueError, match="body 'cart'.* fullinertia.* bind fullinertia"):
         Model(tmp_path / "scene.xml", SCENES["slide_hinge"][2], [(location, 5e-3)])
     if Model is PinocchioModel:
@@ -391,10 +391,9 @@ def test_pinocchio_s_analytic_derivatives_are_wrong_through_a_composite_joint(tm
 def test_drake_models_the_welded_scene_as_mujoco(tmp_path, file, write):
     """Measured worst: 1.7e-15 (reactions); the bindings read back exactly."""
     drake_adapter = pytest.importorskip("engines.drake_adapter")
-    writes = [] if write is None else [({"element": "body", "name": write[0], "attribute": write[1],
-                                         "index": write[2]}, write[3])]
+    writes = [] if write is None else [(SceneLocation("body", *write[:3]), write[3])]
     mujoco, _ = models(tmp_path, "welded", writes)
-    gravity = [({"element": "option", "name": "gravity", "index": 2}, -9.81)] if file == "scene.urdf" else []
+    gravity = [(SceneLocation("option", "gravity", index=2), -9.81)] if file == "scene.urdf" else []
     drake = drake_adapter.DrakeModel(tmp_path / file, SCENES["welded"][2], writes + gravity)
     compare_scenes(mujoco, drake, "welded")
     for state in states(2, 3):
@@ -453,7 +452,7 @@ def test_a_case_binds_a_parameter_to_a_body_s_inertia(tmp_path, binding, about):
     case = Case(spherical_case_with_izz(tmp_path, binding))
     izz = next(p for p in case.parameters if p.name == "IZZ")
     assert (izz.unit, izz.about) == ("kg m^2", about)
-    location = {"element": "body", "name": "bob", "attribute": binding[0], "index": binding[1]}
+    location = SceneLocation("body", "bob", *binding)
     other = case.with_params(IZZ=1.5e-3)
     for source in ("mujoco", "pinocchio"):
         assert other.model(source).read(location) == pytest.approx(1.5e-3, rel=1e-15)

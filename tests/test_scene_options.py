@@ -15,7 +15,7 @@ from dyncheck.case.folder import Case
 from dyncheck.checks.pointwise import evaluate
 from dyncheck.cli import main
 from engines import scene
-from engines.mujoco_adapter import OPTION_ATTRIBUTES, options_set
+from engines.mujoco_scene import OPTION_ATTRIBUTES, options_set
 from test_own_case_doc import steps
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -56,7 +56,7 @@ def test_every_option_and_flag_of_the_installed_mujoco_has_its_own_rule():
 
 
 def test_the_adapter_finds_every_option_and_flag_set_otherwise_than_its_default():
-    """engines.mujoco_adapter.options_set, which the load judges, sees each one (walked from MuJoCo's lists)."""
+    """engines.mujoco_scene.options_set, which the load judges, sees each one (walked from MuJoCo's lists)."""
     model = mujoco.MjModel.from_xml_string("<mujoco/>")
     for attribute, field in installed_options().items():
         opt = mujoco.MjModel.from_xml_string("<mujoco/>").opt

@@ -34,10 +34,11 @@ AXES = "xyz"
 
 
 def component(location):
-    """The name of a binding location's component in ABOUT: an axis, or a fullinertia's entry (xx ... yz)."""
-    index = location.get("index", 0)
-    from engines.scene import FULL_INERTIA  # here, not above: rendering saved results imports no engine module
-    return "".join(AXES[i] for i in FULL_INERTIA[index]) if location.get("attribute") == "fullinertia" else AXES[index]
+    """The name of a location's component (engines.bindings.SceneLocation) in ABOUT: an axis, or a fullinertia's
+    entry (xx ... yz)."""
+    from engines.bindings import FULL_INERTIA  # here, not above: rendering saved results imports no engine module
+    index = location.index
+    return "".join(AXES[i] for i in FULL_INERTIA[index]) if location.attribute == "fullinertia" else AXES[index]
 
 DIVISORS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)  # of an output step into MuJoCo's steps: 1-2-5 steps
 # States of the pointwise check: a region of 5 % of the state space holds about 13 of 256 evenly spread states
@@ -255,46 +256,51 @@ def applied_parameters(params, given, file):
 
 
 def bindings(params, scene, joints_kind, file, given, declared=None):
-    """{parameter: [location]} and {parameter: unit}: each parameter bound where `given` (a case.toml's
-    [scene.bindings]) says, or else to the one scene number equal to it (or to minus it for a position or gravity)
-    whose unit is the one `declared` ({parameter: unit}, the module's UNITS, where it gives one).  Every parameter
-    that matches no number or several is refused in one message, with a [scene.bindings] block to complete."""
-    found, units, unbound, ambiguous = {}, {}, [], {}
-    unit = lambda location: UNITS[(location.get("attribute"), joints_kind.get(location["name"]))
-                                  if location.get("attribute") in JOINT_ATTRIBUTES else location.get("attribute")]
+    """{parameter: [binding table]}, {parameter: unit} and {parameter: the location of its first binding}: each
+    parameter bound where `given` (a case.toml's [scene.bindings]) says, or else to the one scene number equal to it
+    (or to minus it for a position or gravity) whose unit is the one `declared` ({parameter: unit}, the module's
+    UNITS, where it gives one).  Every parameter that matches no number or several is refused in one message, with a
+    [scene.bindings] block to complete."""
+    from engines.bindings import SceneLocation  # here, not above: rendering saved results imports no engine module
+    found, units, places, unbound, ambiguous = {}, {}, {}, [], {}
+    unit = lambda location: UNITS[(location.attribute, joints_kind.get(location.name))
+                                  if location.attribute in JOINT_ATTRIBUTES else location.attribute]
     declared = declared or {}
     for name, value in params.items():
         if name in given:
-            found[name] = given[name]
-            units[name] = unit(given[name][0])
+            found[name], places[name] = given[name], SceneLocation.of(given[name][0])
+            units[name] = unit(places[name])
             continue
-        matches = [{**v.location, **({"scale": scale} if scale != 1.0 else {})}
-                   for v in scene.values for scale in ((1.0, -1.0) if v.location.get("attribute") in SIGNED else (1.0,))
+        matches = [(v.location, scale)
+                   for v in scene.values for scale in ((1.0, -1.0) if v.location.attribute in SIGNED else (1.0,))
                    if value != 0 and abs(v.value - scale * value) <= MATCH_RTOL * abs(value)
                    and declared.get(name, unit(v.location)) == unit(v.location)]
         if len(matches) == 1:
-            found[name], units[name] = matches, unit(matches[0])
+            found[name], units[name], places[name] = [binding_table(*matches[0])], unit(matches[0][0]), matches[0][0]
         elif matches:
             ambiguous[name] = matches
         else:
             unbound.append(name)
     if unbound or ambiguous:
         raise binding_refusal(file, scene, params, unbound, ambiguous, unit, declared)
-    return found, units
+    return found, units, places
+
+
+def binding_table(location, scale):
+    """A [scene.bindings] table: the parameter times `scale` at `location` (an engines.bindings.SceneLocation)."""
+    return {**location.table(), **({"scale": scale} if scale != 1.0 else {})}
 
 
 def binding_refusal(file, scene, params, unbound, ambiguous, unit, declared):
-    """The refusal of the parameters that bind to no scene number or to several: each named on one line, and a
-    [scene.bindings] block for a case.toml beside the module, a line a parameter (the first of several candidates,
-    the others in its comment; where there is none, a commented template)."""
-    where = lambda location: (f"{location['element']} '{location['name']}' {location.get('attribute', '')}"
-                              + (f"[{location['index']}]" if "index" in location else "")
-                              + (" x -1" if location.get("scale", 1.0) < 0 else "")
-                              + f" ({unit(location)})").replace("  ", " ")
-    as_toml = lambda location: "{ " + ", ".join(f"{k} = {_toml(x)}" for k, x in location.items()) + " }"
+    """The refusal of the parameters that bind to no scene number or to several (`ambiguous`: {parameter:
+    [(location, scale)]}): each named on one line, and a [scene.bindings] block for a case.toml beside the module, a
+    line a parameter (the first of several candidates, the others in its comment; where there is none, a commented
+    template)."""
+    where = lambda location, scale: f"{location.text()}{' x -1' if scale < 0 else ''} ({unit(location)})"
+    as_toml = lambda match: "{ " + ", ".join(f"{k} = {_toml(x)}" for k, x in binding_table(*match).items()) + " }"
     unit_of = lambda name: f" in {declared[name]}" if name in declared else ""
     problems = [f"PARAMS['{name}'] = {params[name]!r} matches {len(found)} numbers{unit_of(name)}: "
-                + ", ".join(where(location) for location in found) for name, found in ambiguous.items()]
+                + ", ".join(where(*match) for match in found) for name, found in ambiguous.items()]
     problems += [f"PARAMS['{name}'] = {params[name]!r} is no number{unit_of(name)} of the scene (a body's mass, "
                  "position or centre of mass, a joint's stiffness, damping or spring rest position, gravity)"
                  for name in unbound]
@@ -304,7 +310,7 @@ def binding_refusal(file, scene, params, unbound, ambiguous, unit, declared):
                "(docs/own-case.md), keeping the location each parameter means (the others are in its comment); or "
                "give the scene numbers that tell them apart, or the module a UNITS = {name: unit}")
     block = ["[scene.bindings]"]
-    block += [f"{name} = [{as_toml(found[0])}]  # or: " + "; ".join(as_toml(location) for location in found[1:])
+    block += [f"{name} = [{as_toml(found[0])}]  # or: " + "; ".join(as_toml(match) for match in found[1:])
               for name, found in ambiguous.items()]
     block += [f'# {name} = [{{ element = "body", name = "...", attribute = "mass" }}]  # no number of the scene is '
               f"{params[name]!r}: write where it goes" for name in unbound]
@@ -367,8 +373,8 @@ def case_file(folder, module, scene, given, overrides=None):
     units = ["rad" if kinds[joints[c]] == "hinge" else "m" for c in coords]
     given_bindings = given.get("scene", {}).get("bindings", {})
     forcing = applied_parameters(params, given, file) - set(given_bindings)
-    bound, param_units = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds, file,
-                                  given_bindings, declared_units(module, params, file))
+    bound, param_units, places = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds,
+                                          file, given_bindings, declared_units(module, params, file))
     for p in forcing:
         param_units[p] = given["params"][p]["unit"]
     length = max(scene.length, 0.1)
@@ -402,8 +408,8 @@ def case_file(folder, module, scene, given, overrides=None):
     span = lambda c, unit: list(ranges[joints[c]]) if ranges[joints[c]] else (
         [-math.pi, math.pi] if unit == "rad" else [-0.75 * length, 0.75 * length])
     rate = lambda unit: 4 * omega * (1.0 if unit == "rad" else length)
-    gravity = next((p for p, locs in bound.items() if locs[0]["element"] == "option"), None)
-    masses = [p for p, locs in bound.items() if locs[0].get("attribute") == "mass"]
+    gravity = next((p for p, location in places.items() if location.element == "option"), None)
+    masses = [p for p, location in places.items() if location.attribute == "mass"]
     weight = (f"({' + '.join(masses)})" if masses else f"{sum(scene.masses.values()):.6g}") + \
         (f" * abs({gravity})" if gravity else " * 9.81")
     derived = {
@@ -416,8 +422,7 @@ def case_file(folder, module, scene, given, overrides=None):
         "coord_units": units,
         "params": {p: {"value": value, "unit": param_units[p],
                        "about": "in the applied forces (`scene.applied` of case.toml)" if p in forcing else
-                       ABOUT[bound[p][0].get("attribute")].format(name=bound[p][0]["name"],
-                                                                  index=component(bound[p][0]))}
+                       ABOUT[places[p].attribute].format(name=places[p].name, index=component(places[p]))}
                    for p, value in params.items()},  # every other parameter is bound (bindings refuses the rest)
         "initial": {"q": q0.tolist(), "v": v0.tolist(), "t_end": t_end},
         "sample": {"count": SAMPLE_COUNT, "budget": SAMPLE_BUDGET, "seed": 1, "t": [0.0, 4 * t_end],
@@ -491,19 +496,18 @@ def scaffold(name, scene):
     equations.py with the coordinates, parameters and signatures filled in, and a case.toml that binds
     each parameter to its scene number (so that equal numbers are no ambiguity)."""
     scalar = [j for j in scene.joints if j.kind in ("hinge", "slide")]
-    params = {}  # name -> (value, location, about)
+    params = {}  # name -> (value, binding table, about)
     for v in scene.values:
-        loc = v.location
-        attribute = loc.get("attribute")
+        location, attribute = v.location, v.location.attribute
         if attribute == "mass" and v.value <= 1e-12:  # a placeholder: no parameter
             continue
-        label = {"mass": f"m_{loc['name']}", "stiffness": f"k_{loc['name']}", "damping": f"c_{loc['name']}",
-                 "springref": f"{loc['name']}_rest", None: "g",
-                 "pos": f"{loc['name']}_pos_{AXES[loc.get('index', 0)]}",
-                 "ipos": f"{loc['name']}_com_{AXES[loc.get('index', 0)]}"}[attribute]
+        name = location.name
+        label = {"mass": f"m_{name}", "stiffness": f"k_{name}", "damping": f"c_{name}", "springref": f"{name}_rest",
+                 None: "g", "pos": f"{name}_pos_{AXES[location.index]}", "ipos": f"{name}_com_{AXES[location.index]}"
+                 }[attribute]
         scale = -1.0 if v.value < 0 and attribute in SIGNED else 1.0
-        params[label] = (scale * v.value, {**loc, **({"scale": scale} if scale < 0 else {})},
-                         ABOUT[attribute].format(name=loc["name"], index=component(loc)))
+        params[label] = (scale * v.value, binding_table(location, scale),
+                         ABOUT[attribute].format(name=name, index=component(location)))
     coords = [j.name for j in scalar]
     unpack = lambda names: ", ".join(names) + ("," if len(names) == 1 else "")
     rates = [f"{c}_rate" for c in coords]
@@ -553,8 +557,8 @@ def energy(t, q, v, p):
     {unpack(rates)} = v
     raise NotImplementedError("energy: write T + V")
 '''
-    bindings = "\n".join(f"{p} = [{{ {', '.join(f'{k} = {_toml(x)}' for k, x in loc.items())} }}]"
-                         for p, (_, loc, _) in params.items())
+    bindings = "\n".join(f"{p} = [{{ {', '.join(f'{k} = {_toml(x)}' for k, x in table.items())} }}]"
+                         for p, (_, table, _) in params.items())
     case_toml = f'''# What dyncheck cannot read from scene.xml and equations.py alone (docs/own-case.md).  Everything
 # else (units, horizon, steps, tolerances, random states) is derived; any table of docs/case-file.md
 # written here replaces the derived one.

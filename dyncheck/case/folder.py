@@ -7,7 +7,7 @@ import math
 import re
 import time
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 from types import MappingProxyType
@@ -341,6 +341,11 @@ class Case:
         """The scene as the engine adapters take it (dyncheck.case.scene.Scene)."""
         return scene.describe(self)
 
+    @cached_property
+    def bindings(self):
+        """The parameters' places in the scene files (dyncheck.case.scene.Binding), from [scene.bindings]."""
+        return scene.bindings(self.spec)
+
     def least_reaction_scale(self, name):
         """The least scale reaction `name` is judged against: the case's force scale, or for a moment its moment
         scale (tolerance.pointwise), so that a reaction that vanishes is not judged by rounding noise."""
@@ -356,10 +361,8 @@ class Case:
     def damped(self):
         """Whether a joint of the scene has a damper: in scene.xml, or bound to a parameter that is not 0."""
         from engines.mjcf import describe  # the harness reads a scene only through engines/
-        bound = [p for p, locations in self.spec["scene"].get("bindings", {}).items()
-                 for loc in locations if loc.get("attribute") == "damping"]
-        return any(self.params[p] for p in bound) or any(
-            v.location.get("attribute") == "damping" for v in describe(self.folder / derived.SCENE).values)
+        return any(self.params[b.param] for b in self.bindings if b.location.attribute == "damping") or any(
+            v.location.attribute == "damping" for v in describe(self.folder / derived.SCENE).values)
 
     @cached_property
     def derivation(self):
@@ -455,17 +458,8 @@ class Case:
             path = self.pinocchio_scene
         if not path.is_file():
             raise ValueError(f"{path}: no such scene file (case '{self.name}' needs it for {source})")
-        bindings = self.spec["scene"].get("bindings", {})
-        # The scene file must already hold the defaults; write what it cannot hold, and overrides.
-        # A location that `depends` on other parameters (an inertia about the origin depends on the
-        # mass and the centre of mass) is rewritten when they change, after them.
-        changed = lambda p, loc: p in self.overrides or set(loc.get("depends", ())) & set(self.overrides)
-        writes = sorted([(loc, self.params[p] * loc.get("scale", 1.0))
-                         for p, locations in bindings.items() for loc in locations
-                         if changed(p, loc) or loc["element"] not in Model.elements_in(path)],
-                        key=lambda write: "depends" in write[0])
-        model = Model(path, self.scene, writes)
-        self._verify(model, path, bindings)
+        model = Model(path, self.scene, self.writes(Model, path))
+        self._verify(model, path)
         other = {"mujoco": "pinocchio", "pinocchio": "mujoco"}[source]
         if other in self._models:  # both engines loaded: their files must model the same scene
             engines = {source: model, other: self._models[other]}
@@ -475,6 +469,16 @@ class Case:
             refuse_unmatched(engines["mujoco"].loops.loops, engines["pinocchio"].loops.loops,
                              engines["mujoco"].path, engines["pinocchio"].path)
         return model
+
+    def writes(self, Model, path):
+        """The (location, value) pairs that an adapter `Model` writes into the scene file at `path`: the file must
+        already hold the defaults, so what it cannot hold (Model.elements_in), and the overrides.  A location that
+        `depends` on other parameters (an inertia about the origin depends on the mass and the centre of mass) is
+        rewritten when they change, after them."""
+        changed = lambda b: b.param in self.overrides or set(b.depends) & set(self.overrides)
+        return [(b.location, self.params[b.param] * b.scale)
+                for b in sorted(self.bindings, key=lambda b: bool(b.depends))
+                if changed(b) or b.location.element not in Model.elements_in(path)]
 
     @property
     def pinocchio_scene(self):
@@ -533,22 +537,21 @@ class Case:
                              f"({len(self.coords)},), one per coordinate")
         return model
 
-    def _verify(self, model, path, bindings):
+    def _verify(self, model, path):
         """Refuse an engine model whose masses, lengths, springs, dampers or gravity differ from the case."""
-        for param, locations in bindings.items():
-            for loc in locations:
-                expected = self.params[param] * loc.get("scale", 1.0)
-                found = model.read(loc)
-                if loc.get("attribute") == "fullinertia":  # to within the rounding of the body's largest moment
-                    largest = max(abs(model.read({**loc, "index": i})) for i in range(3))
-                    allowed = FULLINERTIA_RTOL * max(abs(expected), largest)
-                else:
-                    allowed = BINDING_RTOL * max(abs(expected), abs(found))
-                if abs(found - expected) > allowed:
-                    where = f"{loc['element']} '{loc['name']}' {loc.get('attribute', '')}[{loc.get('index', 0)}]"
-                    raise ValueError(f"{path.name} of case '{self.name}': {where} is {found!r}, but "
-                                     f"{self._given_by(param)} gives {param} = {self.params[param]!r}"
-                                     + (f" (x {loc['scale']})" if loc.get("scale", 1.0) != 1.0 else ""))
+        for binding in self.bindings:
+            location, param = binding.location, binding.param
+            expected = self.params[param] * binding.scale
+            found = model.read(location)
+            if location.attribute == "fullinertia":  # to within the rounding of the body's largest moment
+                largest = max(abs(model.read(replace(location, index=i))) for i in range(3))
+                allowed = FULLINERTIA_RTOL * max(abs(expected), largest)
+            else:
+                allowed = BINDING_RTOL * max(abs(expected), abs(found))
+            if abs(found - expected) > allowed:
+                raise ValueError(f"{path.name} of case '{self.name}': {location.text()} is {found!r}, but "
+                                 f"{self._given_by(param)} gives {param} = {self.params[param]!r}"
+                                 + (f" (x {binding.scale})" if binding.scale != 1.0 else ""))
 
     def _given_by(self, param):
         """What gives the value of parameter `param`, as a message names it: an override, the case.toml that

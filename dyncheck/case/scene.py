@@ -1,7 +1,8 @@
 """The scene a case hands the engine adapters, as typed values (`Scene` and its parts: plain data, which the adapters
 read by attribute, so that engines/ imports nothing of dyncheck), built from its case file at its parameters
-(`describe`), the applied forces in it (`AppliedForce`), and the comparison of the case's two scene files
-(`compare_scenes`), body by body, with the placeholders MuJoCo needs where the scene means no mass."""
+(`describe`), the applied forces in it (`AppliedForce`), the parameters' places in the scene files (`Binding`), and
+the comparison of the case's two scene files (`compare_scenes`), body by body, with the placeholders MuJoCo needs
+where the scene means no mass."""
 
 from dataclasses import dataclass
 from pathlib import Path
@@ -58,6 +59,24 @@ class RootJoint:
     """The joint Pinocchio gives the URDF's root (its `type`: "spherical"), named as the MJCF names it."""
     name: str
     type: str
+
+
+@dataclass(frozen=True)
+class Binding:
+    """A parameter's place in the scene files (case.toml [scene.bindings]): the scene number at `location` (an
+    engines.bindings.SceneLocation) is parameter `param` times `scale`; `depends` names the other parameters whose
+    change rewrites it (an inertia about the origin follows the mass and the centre of mass)."""
+    param: str
+    location: object
+    scale: float = 1.0
+    depends: tuple[str, ...] = ()
+
+
+def bindings(spec):
+    """The Binding of each location of a case file's [scene.bindings], parameter by parameter in the file's order."""
+    from engines.bindings import SceneLocation  # here, not above: rendering saved results imports no engine module
+    return tuple(Binding(param, SceneLocation.of(table), table.get("scale", 1.0), tuple(table.get("depends", ())))
+                 for param, tables in spec["scene"].get("bindings", {}).items() for table in tables)
 
 
 @dataclass(frozen=True)

@@ -151,7 +151,7 @@ CONDITIONS = {"> 0": (lambda x: x > 0, "must be > 0"), ">= 0": (lambda x: x >= 0
 # What a binding can set in the scene files (the engines' `_write` and `read`): element and
 # attribute -> the number of components `index` may pick.  An option binding is gravity.  A body's inertia is its
 # principal moments about the centre of mass (MJCF diaginertia, in the inertial frame); its fullinertia the tensor
-# about the centre of mass in the body frame, ixx iyy izz ixy ixz iyz (engines.scene.FULL_INERTIA).
+# about the centre of mass in the body frame, ixx iyy izz ixy ixz iyz (engines.bindings.FULL_INERTIA).
 BINDABLE = {("body", "mass"): 1, ("body", "pos"): 3, ("body", "ipos"): 3, ("body", "inertia_about_origin"): 3,
             ("body", "inertia"): 3, ("body", "fullinertia"): 6,
             ("joint", "stiffness"): 1, ("joint", "damping"): 1, ("joint", "springref"): 1, ("option", None): 3}

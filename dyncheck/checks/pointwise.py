@@ -308,41 +308,41 @@ def scene_breaks(case, drawn):
     """Why the scene has no rigid bodies at the parameters `drawn` over the case's, or None: the constraints its
     bindings imply, which no bound of one parameter states.  A body whose mass, centre of mass or inertia is bound
     to parameters must keep a positive mass and, about its centre of mass, principal moments that are positive and
-    satisfy the triangle inequality A + B >= C (engines.scene.unphysical): a moment about the origin, I_o,i, leaves
+    satisfy the triangle inequality A + B >= C (engines.bindings.unphysical): a moment about the origin, I_o,i, leaves
     I_o,i - m (|c|^2 - c_i^2) about the centre of mass c, which a drawn mass or centre of mass (or the moment
     itself) can make impossible (a Furuta pendulum's arm with its moments about the hub bound); bound principal
     moments (inertia) or entries of the tensor (fullinertia) can break it themselves.  As the engines write them
     (MujocoModel's `_write`): a moment about the origin is the principal moment of that axis less the parallel-axis
     term and a ball joint's armature; the values no binding writes are the scene's, read from MuJoCo's model (a
     welded body's too)."""
-    from engines import scene as scene_rules  # here, not above: rendering saved results imports no engine module
-    bindings = case.spec["scene"].get("bindings", {})
+    # here, not above: rendering saved results imports no engine module
+    from engines.bindings import SceneLocation, full_tensor, parallel_axis, unphysical
     params = {**case.params, **drawn}
     bodies = {}  # name: {attribute: {index: value}}
-    for param, locations in bindings.items():
-        for location in locations:
-            if location["element"] == "body" and location.get("attribute") in INERTIAL:
-                bodies.setdefault(location["name"], {}).setdefault(location["attribute"], {})[
-                    location.get("index", 0)] = params[param] * location.get("scale", 1.0)
+    for binding in case.bindings:
+        location = binding.location
+        if location.element == "body" and location.attribute in INERTIAL:
+            bodies.setdefault(location.name, {}).setdefault(location.attribute, {})[location.index] = \
+                params[binding.param] * binding.scale
     if not bodies:
         return None
     model = case.model("mujoco")
     for name, written in bodies.items():
-        scene = lambda attribute, i=0: model.read({"element": "body", "name": name, "attribute": attribute, "index": i})
+        scene = lambda attribute, i=0: model.read(SceneLocation("body", name, attribute, i))
         value = lambda attribute, i=0: written.get(attribute, {}).get(i, scene(attribute, i))
         mass, com = value("mass"), np.array([value("ipos", i) for i in range(3)])
         if not mass > 0:
             return f"body '{name}': mass {mass:.4g} kg is not positive"
         if "fullinertia" in written:  # the tensor in the body frame
-            inertia = scene_rules.full_tensor([value("fullinertia", i) for i in range(6)])
+            inertia = full_tensor([value("fullinertia", i) for i in range(6)])
         else:  # the principal moments, in the inertial frame
             inertia = np.diag([value("inertia", i) for i in range(3)])
         scene_com = np.array([scene("ipos", i) for i in range(3)])
         for i, about_origin in written.get("inertia_about_origin", {}).items():
-            armature = scene("inertia_about_origin", i) - scene("inertia", i) - scene("mass") * (
-                scene_com @ scene_com - scene_com[i] ** 2)
-            inertia[i, i] = about_origin - mass * (com @ com - com[i] ** 2) - armature
-        why = scene_rules.unphysical(name, inertia)
+            armature = (scene("inertia_about_origin", i) - scene("inertia", i)
+                        - parallel_axis(scene("mass"), scene_com, i))
+            inertia[i, i] = about_origin - parallel_axis(mass, com, i) - armature
+        why = unphysical(name, inertia)
         if why:
             return why
     return None

@@ -269,7 +269,29 @@ def fit_at(case, samples, place, units, driven, cyclic=()):
     if not usable:
         return None
     floor = case.tolerance["pointwise"]["value"] * fitted[0][4]
-    return terms.fit(case.coords, units, list(case.params), usable, floor, driven, cyclic)
+    fit = terms.fit(case.coords, units, list(case.params), usable, floor, driven, cyclic)
+    if in_accelerations and fit.exact and whole_equation(case, fit, usable[0], samples[0][2], place[1], driven):
+        fit = terms.fit(case.coords, units, list(case.params), [u[:4] for u in usable], floor, driven, cyclic)
+    return fit
+
+
+# The share of an equation's inertia terms M_e,i q''_d by which a fit's terms in the accelerations may miss them all
+# and still be the whole equation: a wrong entry of M leaves the others' terms, of the same order as the row.
+WHOLE = 1e-6
+
+
+def whole_equation(case, fit, sample, r, i, driven):
+    """Whether the fit's terms in the accelerations are all of equation i's inertia terms, -M_e,i q''_d: then
+    they and its force terms are the engine's whole equation, which fits the residual M_e,i q''_d - f_e,i of ANY
+    wrong accelerations (with few terms, as a 2-dof row has), and name nothing."""
+    params, q, v, _, a = sample
+    index = {name: k for k, name in enumerate(list(case.coords) + [name for name, _ in driven])}
+    in_accelerations = [term for term in fit.terms if any(f.function == "acceleration" for f in term.state)]
+    if not in_accelerations:
+        return False
+    inertia = np.einsum("nj,nj->n", r.mass[:len(q), i, :], a)
+    missed = inertia + sum(term.value(params, q, v, a, index) for term in in_accelerations)
+    return bool(np.max(np.abs(missed)) <= WHOLE * np.max(np.abs(inertia)))
 
 
 SHIFT = 1.0  # rad: not a divisor of 2 pi, so that no term of the library (periods 2 pi and pi) is unchanged by it

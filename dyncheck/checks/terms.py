@@ -18,6 +18,7 @@ angles and the search as its square: a library beyond a budget of memory and wor
 narrowed to one position factor per term, and one still beyond it is not searched, which the fit says.
 """
 
+import math
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from itertools import combinations, combinations_with_replacement, product
@@ -85,6 +86,16 @@ class Term:
     # A coefficient that is a sum of such products, ((number, powers), ...), its first number positive; `number`
     # is then the sum's sign, +-1: `(Ixx - m h^2) sin(theta)`.
     sum: tuple = ()
+
+    def value(self, params, q, v, a, index):
+        """The term at states q, v, a (Factor.value) of the parameter set `params` ({name: value}); a coefficient
+        that is no product of parameters has its value at the first set."""
+        product = lambda number, powers: number * math.prod(params[name] ** power for name, power in powers)
+        if self.sum:
+            coefficient = self.number * sum(product(number, powers) for number, powers in self.sum)
+        else:
+            coefficient = product(self.number, self.powers) if self.identified else self.number
+        return coefficient * math.prod((factor.value(q, v, a, index) for factor in self.state), start=np.ones(len(q)))
 
     @property
     def magnitude_text(self):
