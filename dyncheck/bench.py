@@ -51,8 +51,11 @@ import contextlib
 import os
 import shutil
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -89,6 +92,27 @@ def _measure(source, entries, repeat):
             for (what, count, _, against), t in zip(entries, times)]
 
 
+def bench_table(cases, run_all=None):
+    """`dyncheck bench`'s table of `cases`: their throughput rows (bench_case) and, with `run_all` (the command line's
+    run_cases), their whole runs (bench_runs).  A case whose applied forces vary has no throughput rows (no bare loop
+    evaluates a law of the state: engines.bench), which a line under the table says; its whole runs are timed."""
+    frames, without = [], []
+    for case in cases:
+        if case.model("mujoco").varying:
+            without.append(case.name)
+        else:
+            frames.append(bench_case(case))
+    if run_all is not None:
+        frames.append(bench_runs(cases, run_all))
+    untimed = (f"no throughput rows of {', '.join(without)}: its applied forces vary, which no bare engine loop "
+               "evaluates (--runs times its whole runs)") if without else ""
+    if not frames:
+        return untimed
+    table = pd.concat(frames, ignore_index=True)
+    table["ratio to bare"] = table["ratio to bare"].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")  # no bare loop
+    return "\n".join(filter(None, (table.to_string(index=False, float_format=lambda x: f"{x:.3g}"), untimed)))
+
+
 def bench_case(case, steps=2000, repeat=5):
     """Rows: source, what, count, median seconds, per second, the ratio per item to the bare row
     `against` (1 for a bare row itself)."""
@@ -117,9 +141,10 @@ def _table(frame, bound=BOUND):
 def bench_runs(cases, run_all, repeat=3):
     """Whole runs side by side (`dyncheck bench --runs`), in the table of bench_case: each case's checks
     (`run_case`, without the findings' localisation, as `dyncheck run` runs them) with an empty cache of tight
-    solutions against with the cache that run left; and all the cases one after another in this process
-    against `run_all` (the command line's run_cases), one process per core.  Minutes: a whole run per row
-    and repeat."""
+    solutions against with the cache that run left; the command `dyncheck run --quick` of the case against
+    `dyncheck run` of it, each in a process of its own as a terminal starts it (its imports and the case's loading
+    included), with that cache; and all the cases one after another in this process against `run_all` (the command
+    line's run_cases), one process per core.  Minutes: a whole run per row and repeat."""
     rows = []
     with tempfile.TemporaryDirectory() as folder, _cache_in(folder):
         for case in cases:
@@ -127,10 +152,13 @@ def bench_runs(cases, run_all, repeat=3):
                 shutil.rmtree(cache.folder(), ignore_errors=True)
                 return _timed(lambda: run_case(case, localise=False))()
             computed = "run_case, tight solutions computed (empty cache)"
+            full = "dyncheck run, the command"
             rows += [(case.name,) + r for r in _measure("harness", [
                 (computed, 1, cold, ""),
                 ("run_case, tight solutions from the cache", 1, _timed(lambda: run_case(case, localise=False)),
-                 computed)], repeat)]
+                 computed),
+                (full, 1, _timed(lambda: _command(case)), ""),
+                ("dyncheck run --quick, the command", 1, _timed(lambda: _command(case, "--quick")), full)], repeat)]
     was, cache.enabled = cache.enabled, False
     try:
         one = f"{len(cases)} cases in one process"
@@ -141,6 +169,20 @@ def bench_runs(cases, run_all, repeat=3):
     finally:
         cache.enabled = was
     return _table(pd.DataFrame(rows, columns=["case", "source", "what", "count", "median s", "against"]), bound=None)
+
+
+def _command(case, *options):
+    """`dyncheck run` of `case` (its folder, its overrides) with `options`, in a process of its own running this
+    checkout's dyncheck; RuntimeError where it does not give a verdict (exit 0 or 1)."""
+    checkout = str(Path(__file__).resolve().parents[1])
+    overrides = [f"--set={name}={value!r}" for name, value in case.overrides.items()]
+    done = subprocess.run([sys.executable, "-m", "dyncheck", "run", case.name, "--cases", str(case.folder.parent),
+                           *overrides, *options], capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, (
+                              checkout, os.environ.get("PYTHONPATH"))))})
+    if done.returncode not in (0, 1):
+        raise RuntimeError(f"dyncheck run {case.name} {' '.join(options)}: exit {done.returncode}: "
+                           f"{done.stderr.strip()[-500:]}")
 
 
 @contextlib.contextmanager

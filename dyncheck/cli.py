@@ -17,16 +17,14 @@ from dataclasses import replace
 from importlib.metadata import version
 from pathlib import Path
 
-import pandas as pd
-
 from dyncheck.case import isolation
 from dyncheck.case.folder import CASES_DIR, SOURCES, case_names, load_case
 from dyncheck.checks.pointwise import validate_placeholders
-from dyncheck.checks.runs import run_case, unfinished
+from dyncheck.checks.runs import QUICK_LEAVES_OUT, run_case, unfinished
 from dyncheck.common.messages import suggest
 from dyncheck.common.progress import Progress
 from dyncheck.results import ci
-from dyncheck.results.values import format_rows, heading, load_results, save_results, to_json
+from dyncheck.results.values import heading, load_results, rows_text, save_results, to_json
 from dyncheck.run import cache
 from dyncheck.run.simulate import fastest_frequency
 
@@ -79,7 +77,8 @@ def command(argv):
     bench.add_argument("cases", nargs="*", metavar="CASE", help="cases to measure (default: all)")
     bench.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help=argparse.SUPPRESS)
     bench.add_argument("--runs", action="store_true",
-                       help="also whole runs: the tight solutions' cache, and the cases in parallel (minutes)")
+                       help="also whole runs: the tight solutions' cache, the command `run --quick` against `run`, "
+                            "and the cases in parallel (minutes)")
     listing.add_argument("cases", nargs="*", metavar="CASE", help="cases to list (default: all)")
     for sub in (run, report):
         sub.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
@@ -93,6 +92,10 @@ def command(argv):
         sub.add_argument("--cases", type=Path, default=CASES_DIR, metavar="DIR", dest="cases_dir",
                          help="the folder of case folders (default: the checkout's cases/)")
     run.add_argument("--json", type=Path, metavar="PATH", help="also write the results as JSON")
+    run.add_argument("--quick", action="store_true",
+                     help="the checks at states alone, in seconds: pointwise, equations, printed rows, random "
+                          "parameter sets, the terms a wrong equation lacks; leaves out every run along time "
+                          f"(the rows of {', '.join(QUICK_LEAVES_OUT)})")
     run.add_argument("--results", type=Path, metavar="DIR",
                      help="also save the results (rows, runs, findings) for `dyncheck report --from DIR`")
     report.add_argument("--out", type=Path, metavar="DIR",
@@ -106,6 +109,7 @@ def command(argv):
                         help="render the pages from results saved in DIR (a report's results/ folder, or "
                              "`run --results DIR`) instead of running anything; needs neither engine")
     args = parser.parse_args(argv)
+    quick = args.command == "run" and args.quick
     if args.command == "report" and args.out is None:
         args.out = Path("reports" + "".join(f"-{pair.strip().replace('/', '_')}" for pair in args.set))
     if args.command == "campaign" and args.out is None:
@@ -128,31 +132,33 @@ def command(argv):
             check_out_folder(args.out)
             if args.saved:
                 return report_saved(args, start)
-        cases = select_cases(args.cases, args.set, args.cases_dir)
+        cases = select_cases(args.cases, args.set, args.cases_dir, quick)
         cache.enabled = not getattr(args, "no_cache", False)
         if args.command == "run" and args.json:
             check_file_path("--json", args.json)
         if args.command == "run" and args.results:
+            if quick:  # the pages that report --from renders draw the runs along time
+                raise ValueError(f"--results {args.results}: saves what `report --from` renders pages from, with the "
+                                 "runs along time that --quick leaves out; give one or the other")
             check_results_folder(args.results, [case.name for case in cases])
     except ValueError as error:
         return error_exit(error)
     isolation.RECORD.loading = False
     if args.command == "bench":
-        from dyncheck.bench import bench_case, bench_runs
-        table = pd.concat([bench_case(case) for case in cases] + ([bench_runs(cases, run_cases)] if args.runs else []),
-                          ignore_index=True)
-        table["ratio to bare"] = table["ratio to bare"].map(lambda x: "-" if pd.isna(x) else f"{x:.3g}")  # no bare loop
-        print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+        from dyncheck.bench import bench_table
+        print(bench_table(cases, run_cases if args.runs else None))
         return 0
     try:
         # The findings' localisation (seconds each) only where it is shown: in JSON, results, pages.
-        results, interrupted = run_cases(cases, args.command == "report" or bool(args.json or args.results))
+        results, interrupted = run_cases(cases, args.command == "report" or bool(args.json or args.results),
+                                         quick=quick)
         writing = f"--out {args.out}" if args.command == "report" else None  # for a write that fails
         if args.command == "run":
-            print_results(results)
+            print_results(results, quick=quick)
             if args.json:
                 writing = f"--json {args.json}"
-                write_json(to_json(results, ci.tool_versions(), interrupted), args.json)
+                write_json(to_json(results, ci.tool_versions(), interrupted, QUICK_LEAVES_OUT if quick else ()),
+                           args.json)
             if args.results and not interrupted:
                 writing = f"--results {args.results}"
                 save_results(results, args.results)
@@ -160,7 +166,7 @@ def command(argv):
             results = make_report(results, cases, args.out, args.no_studies, not args.no_animations)
         if not interrupted:  # a JUnit file has no word for "some cases did not run": it would pass for all
             writing = f"--junit {args.junit}"  # the one file that close() writes
-            close(results, args.junit, start)
+            close(results, args.junit, start, quick)
     except OSError as error:  # the output passed its checks before the run but failed now (a full disk)
         return error_exit(f"{writing}: cannot write it: {error.strerror or error}")
     if interrupted:
@@ -183,11 +189,12 @@ def error_exit(error):
     return 2
 
 
-def run_cases(cases, localise=True, workers=None):
-    """The results of the cases, in their order, and the name of the first case that did not finish because of
-    Ctrl-C (None if all did).  Each case runs in a forked process of its own (it inherits its Case, whose engine
-    models cannot be pickled), one per core, the longest first (expected_cost) so that no long case starts last;
-    a process that dies or overruns its budget gives its case one failing row saying so (dyncheck.case.isolation)."""
+def run_cases(cases, localise=True, workers=None, quick=False):
+    """The results of the cases (with `quick`, of their checks at states: run_case), in their order, and the name of
+    the first case that did not finish because of Ctrl-C (None if all did).  Each case runs in a forked process of
+    its own (it inherits its Case, whose engine models cannot be pickled), one per core, the longest first
+    (expected_cost) so that no long case starts last; a process that dies or overruns its budget gives its case one
+    failing row saying so (dyncheck.case.isolation)."""
     workers = min(len(cases), workers or os.cpu_count() or 1)
     finished = {}  # index -> result
     try:
@@ -197,8 +204,8 @@ def run_cases(cases, localise=True, workers=None):
                 bar.step()
                 bar.note(f"{result.name} done, {result.status}")
             longest_first = sorted(range(len(cases)), key=lambda i: -expected_cost(cases[i]))
-            each = isolation.each_forked([cases[i] for i in longest_first], lambda case: run_case(case, localise),
-                                         workers, shared_memory(workers))
+            each = isolation.each_forked([cases[i] for i in longest_first],
+                                         lambda case: run_case(case, localise, quick), workers, shared_memory(workers))
             with contextlib.closing(each):  # on Ctrl-C, its processes are ended here
                 for position, (kind, value) in each:
                     index = longest_first[position]
@@ -256,15 +263,15 @@ def report_saved(args, start):
     return exit_code(results)
 
 
-def close(results, junit, start):
+def close(results, junit, start, quick=False):
     """What every finished run and report ends with: the JUnit file (with --junit), an annotation per
-    failing row on GitHub Actions, the failing rows and the summary line."""
+    failing row on GitHub Actions, the failing rows and the summary line (which says `quick`: run --quick's)."""
     if junit:
         write_file(ci.junit_xml(results), junit)
     if os.environ.get("GITHUB_ACTIONS") == "true":  # GitHub sets it in every step of a workflow
         for line in ci.github_annotations(results):
             print(line)
-    for line in ci.recap(results, time.perf_counter() - start):
+    for line in ci.recap(results, time.perf_counter() - start, quick):
         print(line)
 
 
@@ -416,9 +423,10 @@ def parse_overrides(pairs):
     return overrides
 
 
-def select_cases(names, set_pairs, cases_dir=CASES_DIR):
-    from dyncheck.studies import stability, work_precision
-    from dyncheck.checks import linear
+def select_cases(names, set_pairs, cases_dir=CASES_DIR, quick=False):
+    """The cases named (default: all of cases_dir), with the overrides of `set_pairs`, loaded and checked: ValueError
+    (bad input) where one is.  `quick`: for `run --quick`, whose checks at states need none of the settings of the
+    runs along time and the studies, which are then not checked (nor their modules imported)."""
     names = list(dict.fromkeys(names)) or case_names(cases_dir)  # a case named twice runs once
     defaults = {name: load_case(name, cases_dir).defaults for name in names}  # an unknown case name is named here
     overrides = parse_overrides(set_pairs)
@@ -429,24 +437,38 @@ def select_cases(names, set_pairs, cases_dir=CASES_DIR):
                              f"(cases: {', '.join(names)})")
     cases = [load_case(name, cases_dir, **{k: v for k, v in overrides.items() if k in defaults[name]})
              for name in names]
-    for case in cases:  # load every model and study setting now: a scene that disagrees with its case,
+    for case in cases:  # load every model and setting now: a scene that disagrees with its case,
         for source in SOURCES:  # or a setting that is vacuous or runs away, is bad input
             case.model(source)
-        stability.validate(case)
-        linear.validate(case)
         validate_placeholders(case)
-        work_precision.settings(case)
+        if not quick:
+            validate_studies(case)
     return cases
 
 
-def print_results(results, table=True):
+def validate_studies(case):
+    """A case's settings of its vibration analysis and its studies checked: ValueError where one is vacuous or runs
+    away."""
+    from dyncheck.checks import linear
+    from dyncheck.studies import stability, work_precision
+    stability.validate(case)
+    linear.validate(case)
+    work_precision.settings(case)
+
+
+def print_results(results, table=True, quick=False):
+    """Each case's table of rows (with `table`), where its random states lie, and with `quick` what the quick tier
+    left out; its wrong equations and its summary line."""
     for result in results:
         spec, rows = result.spec, result.rows
         if table:
             print(f"\n== {result.name}: {heading(spec)}"
                   + (f", with {result.overrides_text}" if result.overrides else ""))
-            print(format_rows(rows).to_string(index=False))
+            print(rows_text(rows))
             print(ci.states_covered(result))
+            if quick:
+                print(f"{result.name}: quick tier, the checks at states alone: left out every run along time, the rows "
+                      f"of {', '.join(QUICK_LEAVES_OUT)} (`dyncheck run` without --quick has them)")
         for line in ci.wrong_equations(result):
             print(line)
         print(f"{result.name}: {result.status}: {ci.tally(rows)} ({result.wall:.1f} s)")

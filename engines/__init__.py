@@ -12,3 +12,10 @@ book's Euler angles of a ball joint; scene, what a scene file may hold and the b
 mjcf, what an MJCF holds (for a case derived from it); render, the bodies' positions at an animation's frames and
 MuJoCo's renderer for them.
 """
+
+import os
+
+# MuJoCo's import opens an OpenGL library (GLFW, through cffi: a quarter of a second, a third of MuJoCo's import)
+# unless MUJOCO_GL turns its renderer off.  Its renderer draws only where MUJOCO_GL asks for egl or osmesa
+# (dyncheck.pages.animation), so where MUJOCO_GL is unset it is off, before any module here imports MuJoCo.
+os.environ.setdefault("MUJOCO_GL", "disable")

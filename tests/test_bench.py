@@ -1,12 +1,16 @@
 """The batched paths the benchmark measures give what the state-by-state ones give; the bench's table."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import dyncheck
-from dyncheck.bench import bench_case
+from dyncheck.bench import bench_case, bench_table
 from engines import euler
 from engines.bench import MujocoLoops, pinocchio_rhs, pinocchio_steps
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_drive_powers_of_a_run_equal_drive_power_state_by_state():
@@ -87,3 +91,10 @@ def test_the_bench_table_names_each_rows_bare_loop():
     # the harness's accelerations (all the states in one call) against the engine step on as many states
     harness, loop = (table[table["what"] == what] for what in ("harness accelerations", "pin.rnea loop"))
     assert list(harness["against"]) == ["pin.rnea loop"] and list(harness["count"]) == list(loop["count"])
+
+
+def test_a_scene_whose_forces_vary_has_no_throughput_rows_but_says_so():
+    """No bare loop evaluates a law of the state (engines.bench): the forced cart-pendulum's rows are left out, with
+    a line that says why (its whole runs, --runs, are still timed)."""
+    forced = dyncheck.load_case("forced_cart_pendulum", ROOT / "examples")
+    assert bench_table([forced]).startswith("no throughput rows of forced_cart_pendulum: its applied forces vary")

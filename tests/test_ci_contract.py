@@ -101,7 +101,7 @@ def properties(testcase):
 def canned(monkeypatch, **results):
     """`dyncheck run CASE ...` answering each case with results[CASE], without running anything (by name: the
     cases run in parallel processes)."""
-    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: results[case.name])
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True, quick=False: results[case.name])
 
 
 def test_junit_has_a_failure_per_failing_row_and_skips_the_not_applicable(monkeypatch, tmp_path):
@@ -126,7 +126,7 @@ def test_junit_has_a_failure_per_failing_row_and_skips_the_not_applicable(monkey
     ("/proc/x.xml", "cannot write in /proc"),
 ])
 def test_a_junit_path_that_cannot_be_written_exits_2_before_any_work(where, why, monkeypatch, tmp_path, capsys):
-    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: pytest.fail("ran a case before checking --junit"))
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True, quick=False: pytest.fail("ran a case before checking --junit"))
     (tmp_path / "a_file").write_text("")
     path = where.format(tmp=tmp_path)
     for command in ("run", "report"):

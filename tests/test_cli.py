@@ -17,7 +17,7 @@ from dyncheck.studies.stability import long_runs
 def canned(monkeypatch, results):
     """`run_case` answering from the session's results, and no studies (minutes; their page is
     tested below), so CLI tests cost no simulation."""
-    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: results[case.name])
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True, quick=False: results[case.name])
     monkeypatch.setattr(cli, "study_case", lambda case: {
         "work_precision": pd.DataFrame(columns=work_precision.COLUMNS), "stability": []})
 
@@ -71,7 +71,7 @@ def test_run_exits_0_and_writes_the_json_of_the_design(canned, tmp_path, capsys)
 
 
 def test_run_exits_1_when_a_check_fails(monkeypatch, results):
-    def failing(case, localise=True):
+    def failing(case, localise=True, quick=False):
         res = results[case.name]
         return replace(res, rows=(replace(res.rows[0], status=Status.FAIL),) + res.rows[1:])
     monkeypatch.setattr(cli, "run_case", failing)
@@ -92,7 +92,7 @@ def test_bad_input_exits_2_with_a_message(argv, message, capsys):
 
 
 def test_overrides_reach_the_run(monkeypatch, results, tmp_path):
-    def run_case(case, localise=True):  # in a worker process: a case without the override fails the run there
+    def run_case(case, localise=True, quick=False):  # in a worker process: a case without the override fails the run there
         assert case.params["g"] == 3.5 and case.overrides == {"g": 3.5}, case.name
         return results[case.name]
     monkeypatch.setattr(cli, "run_case", run_case)
@@ -159,7 +159,7 @@ def test_the_page_shows_the_studies(monkeypatch, results, tmp_path):
         drift = {**stability.settings_of(case, "energy_drift"), "methods": ["explicit Euler", "semi-implicit Euler"],
                  "dt": 0.02, "horizon": 2.0, "output_step": 0.02}
         return {"work_precision": work_precision.sweep(case), "stability": [long_runs.energy_drift(case, drift)]}
-    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: results[case.name])
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True, quick=False: results[case.name])
     monkeypatch.setattr(cli, "study_case", small_studies)
     assert cli.main(["report", "double_pendulum", "--out", str(tmp_path)]) == 0
     page = (tmp_path / "double_pendulum.md").read_text()

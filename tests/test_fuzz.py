@@ -313,7 +313,7 @@ HOSTILE = st.one_of(st.text(max_size=20), st.text(alphabet=st.characters(codec="
 
 
 def set_outcome(value, monkeypatch):
-    monkeypatch.setattr(dyncheck.cli, "run_cases", lambda cases, localise=True: ([], None))
+    monkeypatch.setattr(dyncheck.cli, "run_cases", lambda cases, localise=True, quick=False: ([], None))
     monkeypatch.setattr(dyncheck.cli, "print_results", lambda *a, **k: None)
     try:
         code = bounded(dyncheck.cli.main, ["run", "piston", "--set", f"m={value}"])

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from dyncheck.case.scene import Driven
-from dyncheck.case.units import UNIT_REGISTRY
+from dyncheck.case.units import registry
 from dyncheck.common.messages import statuses_in_words
 from dyncheck.pages.case_page import as_written, law_of_time, markdown_table, random_tried, worst_engine_error
 from dyncheck.results.values import OWN_WORDS, Row, Status
@@ -69,7 +69,7 @@ def test_no_page_shows_a_repr_an_empty_field_or_a_wrong_plural(pages):
 
 def is_unit(word):
     try:
-        UNIT_REGISTRY.parse_units(word)
+        registry().parse_units(word)
     except Exception:  # pint's parser fails in many ways
         return False
     return True

@@ -19,7 +19,7 @@ from test_ci_contract import toy
 def quick_report(monkeypatch):
     """`dyncheck report piston` with a toy result (with a run, so that it gets studies), studies that take two steps
     each and no pages: what is left is the command's progress and its output."""
-    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: replace(toy("piston"), runs={"reference": None}))
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True, quick=False: replace(toy("piston"), runs={"reference": None}))
 
     def steps(result):
         def study(case, progress=None):

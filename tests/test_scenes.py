@@ -295,7 +295,7 @@ def test_issue_10_scenes_that_passed_or_failed_as_engine_disagreements_are_bad_i
 def test_the_command_line_refuses_a_scene_the_other_file_contradicts(tmp_path, monkeypatch, capsys):
     """Exit 2 before any check runs: `run` loads every model up front, and the comparison with them."""
     mutated(tmp_path, "rotating_pendulum", "scene.xml", 'gravity="0 0 -9.81"', 'gravity="0.5 0 -9.81"')
-    monkeypatch.setattr(cli, "run_case", lambda case, localise=True: pytest.fail("ran a case with a bad scene"))
+    monkeypatch.setattr(cli, "run_case", lambda case, localise=True, quick=False: pytest.fail("ran a case with a bad scene"))
     assert cli.main(["run", "rotating_pendulum", "--cases", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("dyncheck: error: ") and "scene.xml and scene.urdf" in err and "gravity" in err

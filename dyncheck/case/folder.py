@@ -13,9 +13,9 @@ from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
-from scipy.stats import qmc
 
 from dyncheck.case import derived, files, isolation, scene, schema
+from dyncheck.case.halton import halton
 from dyncheck.case.isolation import guarded, load_file
 from dyncheck.case.scene import PLACEHOLDER_INERTIA, PLACEHOLDER_MASS, compare_scenes
 from dyncheck.common import expressions, words
@@ -292,8 +292,8 @@ class Case:
         bounds = lambda ranges: np.array([[self.value(lo), self.value(hi)] for lo, hi in ranges]).reshape(-1, 2)
         box = np.vstack([[[self.value(s["t"][0]), self.value(s["t"][1])]], bounds(s["q"]), bounds(s["v"])])
         count = self.sample_count if count is None else min(count, s["count"])
-        halton = qmc.Halton(len(box), scramble=True, seed=np.random.default_rng([s["seed"], stream]))
-        points = box[:, 0] + halton.random(count) * (box[:, 1] - box[:, 0])
+        unit = halton(len(box), count, np.random.default_rng([s["seed"], stream]))
+        points = box[:, 0] + unit * (box[:, 1] - box[:, 0])
         n = len(self.coords)
         return [(float(x[0]), x[1:1 + n], x[1 + n:]) for x in points]
 

@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import DOP853
+import scipy  # scipy.integrate on first use (as in dyncheck.run.simulate)
 
 from dyncheck.checks.linear import (ENGINES, EPS, MUJOCO_TWIN, MUJOCO_TWIN_FACTOR, NEWTON_ITERATIONS,
                                     NEWTON_TOLERANCE, SAFETY, Motion, along, derivation_linear, eigensystem,
@@ -355,7 +355,7 @@ def dop853(rhs, start, t_end, rtol, omega):
     """y(t_end) of y' = rhs(t, y), y(0) = start, by scipy's DOP853 at rtol = atol, within the step budget of a run
     of frequency omega (dyncheck.run.simulate.scipy_budget); Unstable if it blows up or exceeds it."""
     budget = scipy_budget("DOP853", t_end, rtol, np.inf, omega)
-    solver = DOP853(rhs, 0.0, start, t_end, rtol=rtol, atol=rtol)
+    solver = scipy.integrate.DOP853(rhs, 0.0, start, t_end, rtol=rtol, atol=rtol)
     steps = 0
     with np.errstate(all="ignore"):  # a blow-up is the Unstable below, not a warning on the way to it
         while solver.status == "running":

@@ -7,7 +7,7 @@ import math
 import time
 
 import numpy as np
-from scipy.integrate import solve_ivp
+import scipy  # scipy.integrate on first use (as in dyncheck.run.simulate)
 
 from dyncheck.case.folder import settings_of
 from dyncheck.run.simulate import Unstable, attempt, describe
@@ -47,8 +47,8 @@ def benettin(case, q0, v0, horizon, renormalise, d0, rtol):
     steps = int(round(horizon / renormalise))
     times, logs, total = [0.0], [0.0], 0.0
     for i in range(steps):
-        sol = solve_ivp(rhs, (i * renormalise, (i + 1) * renormalise), y, method="DOP853", rtol=rtol,
-                        atol=rtol * 1e-2)
+        sol = scipy.integrate.solve_ivp(rhs, (i * renormalise, (i + 1) * renormalise), y, method="DOP853", rtol=rtol,
+                                        atol=rtol * 1e-2)
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):
             raise Unstable("DOP853", sol.t[-1], i, sol.message)
         y = sol.y[:, -1].copy()
@@ -71,8 +71,8 @@ def amplification(case, horizon, rtol, delta=1e-7, points=200):
     x = np.concatenate([q0, v0]).astype(float)
     y0 = np.concatenate([x] + [x + delta * e / scale for e in np.eye(2 * n)])
     grid = np.linspace(0.0, horizon, points + 1)
-    sol = solve_ivp(copies_rhs(model, n, 2 * n + 1), (0.0, horizon), y0, method="DOP853", rtol=rtol,
-                    atol=rtol * 1e-2, t_eval=grid)
+    sol = scipy.integrate.solve_ivp(copies_rhs(model, n, 2 * n + 1), (0.0, horizon), y0, method="DOP853", rtol=rtol,
+                                    atol=rtol * 1e-2, t_eval=grid)
     if sol.status != 0:
         raise Unstable("DOP853", sol.t[-1], len(sol.t), sol.message)
     y = sol.y.reshape(2 * n + 1, 2 * n, -1)

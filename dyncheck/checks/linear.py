@@ -7,8 +7,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-from scipy.integrate import DOP853
+import scipy.linalg  # and scipy.integrate on first use (as in dyncheck.run.simulate)
 
 from dyncheck.common import ceilings, expressions
 from dyncheck.results import store
@@ -478,8 +477,9 @@ def dop853_exponent_error(lam, step):
     2 pi / 20) it is 6.1e-12 of |lambda|, which a mode's rows allowed nothing for: a spring-mass pendulum's 5.37 rad/s
     mode measured 6.3e-12 off in its run and failed at a tolerance of 5.0e-12 (pytest -m slow)."""
     z = lam * step
-    stages = DOP853.n_stages
-    growth = 1 + z * DOP853.B @ np.linalg.solve(np.eye(stages) - z * DOP853.A[:stages, :stages], np.ones(stages))
+    dop853 = scipy.integrate.DOP853
+    stages = dop853.n_stages
+    growth = 1 + z * dop853.B @ np.linalg.solve(np.eye(stages) - z * dop853.A[:stages, :stages], np.ones(stages))
     return float(abs(np.log(growth) / step - lam))
 
 

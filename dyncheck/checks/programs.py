@@ -170,8 +170,9 @@ def program_output_checks(case, listing):
 
 def finding_effect(case, finding, runs):
     """What a finding changes in the book's own results: for an error of its equations, its reactions
-    in newtons and its energy balance in joules along its run; otherwise the case file's `effect`."""
-    if "book" not in finding["sources"] or not all(runs[s].ok for s in ("book", "reference")):
+    in newtons and its energy balance in joules along its run; otherwise (or without that run: the quick tier)
+    the case file's `effect`."""
+    if "book" not in finding["sources"] or not all(s in runs and runs[s].ok for s in ("book", "reference")):
         return account(case, finding, "effect") if finding.get("effect") else ""
     book, tight = runs["book"].run, runs["reference"].twin
     parts = [f"the book's {q} is off by up to {(book[q] - tight[q]).abs().max():.3g} N"

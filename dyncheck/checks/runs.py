@@ -2,7 +2,7 @@
 
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -286,17 +286,27 @@ def data_checks(case):
     return rows
 
 
-def run_case(case, localise=True):
-    """All checks of a case, the findings they establish and what the figures draw: a CaseResult.
-    `localise`: search each finding's smallest edit of the printed expression (seconds per finding;
-    what is written or saved shows it, a table of rows does not need it)."""
-    start = time.perf_counter()
-    rows, sample = pointwise(case)
-    equations, residuals_found = residuals.equation_rows(case, sample)
-    rows += equations + residuals.printed_rows(case, sample) + random_parameters(case)
+QUICK_LEAVES_OUT = ("trajectory", "energy", "along the run", "convergence", "vibration", "program", "figure")
+"""The checks whose rows `run_case(quick=True)` leaves out: those of the runs along time (the book's initial conditions
+integrated by every source, the convergence orders, the vibration analysis's runs, the book's programs)."""
+
+
+@dataclass(frozen=True)
+class InTime:
+    """What the runs along time add to a case's result (`in_time`); nothing in the quick tier."""
+    rows: list = field(default_factory=list)
+    runs: dict = field(default_factory=dict)  # {source: Outcome} of the book's initial conditions
+    program: dict = field(default_factory=dict)  # the book's program run (program_checks)
+    vibration: object = None  # the vibration analysis, for a case with [vibration]
+    limit: object = None  # the case's Runaway, which the runs' rows are judged by (runaway_rows)
+
+
+def in_time(case, sample):
+    """The checks along time: the book's initial conditions integrated by every source (trajectory, energy, the
+    engines along the run), the convergence orders, the vibration analysis and the book's programs."""
     limit = case.runaway()
     runs = run_sources(case, None if limit is None else limit.bound)
-    rows += trajectory(case, runs) + energy(case, runs) + along_run(case, runs)
+    rows = trajectory(case, runs) + energy(case, runs) + along_run(case, runs)
     try:
         rows += convergence(case)
     except NoFrequency as error:  # nothing to converge on where nothing moves; a motion without omega is the case's fault
@@ -309,11 +319,24 @@ def run_case(case, localise=True):
         rows.append(no_number("convergence", "every method", ("reference",), f"not measured: {error}", Status.FAIL))
     program_rows, program = program_checks(case, sample)
     vibrations = vibration.analyse(case)
-    rows += vibrations.rows if vibrations else []
-    rows = book_numbers_only(case, apply_findings(case, rows + program_rows + data_checks(case)))
+    rows += [*(vibrations.rows if vibrations else []), *program_rows]
+    return InTime(rows, runs, program, vibrations, limit)
+
+
+def run_case(case, localise=True, quick=False):
+    """All checks of a case, the findings they establish and what the figures draw: a CaseResult.
+    `localise`: search each finding's smallest edit of the printed expression (seconds per finding;
+    what is written or saved shows it, a table of rows does not need it).  `quick`: the checks at states alone,
+    for the edit-run loop (a second where the runs along time take tens: QUICK_LEAVES_OUT), with no runs to draw."""
+    start = time.perf_counter()
+    rows, sample = pointwise(case)
+    equations, residuals_found = residuals.equation_rows(case, sample)
+    rows += equations + residuals.printed_rows(case, sample) + random_parameters(case)
+    timed = InTime() if quick else in_time(case, sample)
+    rows = book_numbers_only(case, apply_findings(case, rows + timed.rows + data_checks(case)))
     right_rows, right = right_sides(case, sample)
     rows += right_rows
-    rows = runaway_rows(limit, runs, rows)  # a bounded run's failure is no finding of the book
+    rows = runaway_rows(timed.limit, timed.runs, rows)  # a bounded run's failure is no finding of the book
     parameter_draws = parameter_sets(case)[0]
     localisations = residuals.localise(case, rows, residuals_found, parameter_draws)
     localisations += residuals.localise_values(case, rows, sample, parameter_draws,
@@ -321,15 +344,15 @@ def run_case(case, localise=True):
     # What the pages draw along runs: each source's run, and the reference's tight twin (report.trajectories).
     drawn = lambda source, outcome: replace(outcome, **({"twin": with_paths(case, outcome.twin)} if source == "reference"
                                                         else {"run": with_paths(case, outcome.run)}))
-    runs = {source: drawn(source, outcome) if outcome.ok else outcome for source, outcome in runs.items()}
-    findings = tuple(findings_of(case, rows, sample, runs, localise, right, program))
+    runs = {source: drawn(source, outcome) if outcome.ok else outcome for source, outcome in timed.runs.items()}
+    findings = tuple(findings_of(case, rows, sample, runs, localise, right, timed.program))
     if case.one_derivation:
         rows, localisations = in_own_words(rows), tuple(replace(loc, source=OWN_WORDS[loc.source])
                                                        for loc in localisations)
     return CaseResult(folder=str(case.folder), spec=case.spec, overrides=dict(case.overrides), rows=tuple(rows),
-                      findings=findings, sample=sample, runs=runs, program=program,
-                      drawings={**drawings(case, runs), "animation": frames(case, runs, program)},
-                      wall=time.perf_counter() - start, localisations=localisations, vibration=vibrations)
+                      findings=findings, sample=sample, runs=runs, program=timed.program,
+                      drawings={**drawings(case, runs), "animation": frames(case, runs, timed.program)} if runs else {},
+                      wall=time.perf_counter() - start, localisations=localisations, vibration=timed.vibration)
 
 
 def unfinished(case, why):

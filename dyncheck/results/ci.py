@@ -54,15 +54,17 @@ def describe(row):
             + (f" [finding {row.finding}]" if row.finding else ""))
 
 
-def recap(results, seconds):
+def recap(results, seconds, quick=False):
     """The lines that close a run: every failing row, then one summary line, e.g. `dyncheck: FAIL: 2 of 6
-    cases; 351 pass, 40 findings, 3 fail, 1 unstable, 25 not applicable (71 s)`."""
+    cases; 351 pass, 40 findings, 3 fail, 1 unstable, 25 not applicable (71 s)`; `quick`: `run --quick`'s,
+    `dyncheck: PASS (quick tier): ...`."""
     rows = failing(results)
     lines = [f"failing rows ({len(rows)}):"] + [f"  {name}: {describe(r)}" for name, r in rows] if rows else []
     lines += [line for result in results for line in wrong_equations(result)]
     failed_cases = len({name for name, _ in rows})
     cases = plural(len(results), "case")
-    verdict = f"FAIL: {failed_cases} of {cases}" if rows else f"PASS: {cases}"
+    verdict = (f"FAIL{' (quick tier)' * quick}: {failed_cases} of {cases}" if rows
+               else f"PASS{' (quick tier)' * quick}: {cases}")
     return lines + [f"dyncheck: {verdict}; {tally([r for result in results for r in result.rows])} ({seconds:.0f} s)"]
 
 

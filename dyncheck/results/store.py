@@ -28,7 +28,6 @@ from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
-import pandas as pd
 
 FORMAT = "dyncheck-results"
 VERSION = 1
@@ -116,9 +115,17 @@ def load(folder):
 
 # -- saving ---------------------------------------------------------------------------------------
 
+def _pandas():
+    """pandas, imported where a frame or series is met: importing it takes 0.4 s, which a command that saves and
+    loads none (`run --quick`) does not spend."""
+    import pandas
+    return pandas
+
+
 def _encode(value, path, arrays):
     """The JSON tree of `value`, its arrays appended to `arrays`; `path` (value["runs"][0]) names it
     in errors."""
+    pd = _pandas()
     if isinstance(value, np.generic):
         return _encode(value.item(), path, arrays)
     if isinstance(value, MappingProxyType):  # a read-only view of a dict (a case's parameters): comes back a dict
@@ -187,6 +194,7 @@ def _registered(node, path):
 
 
 def _encode_index(index, path, arrays):
+    pd = _pandas()
     name = _encode(index.name, f"{path}.name", arrays)
     if type(index) is pd.RangeIndex:
         return {"name": name, "range": [index.start, index.stop, index.step]}
@@ -195,6 +203,7 @@ def _encode_index(index, path, arrays):
 
 def _encode_values(values, path, arrays):
     """A Series' or an Index's values: numbers and bools as an array, strings in the JSON."""
+    pd = _pandas()
     dtype = values.dtype
     if isinstance(dtype, np.dtype) and dtype.kind in NUMERIC_KINDS:
         return {"entry": _add(values.to_numpy(), arrays)}
@@ -208,6 +217,7 @@ def _encode_values(values, path, arrays):
 
 
 def _missing(item):
+    pd = _pandas()
     return item is None or item is pd.NA or (isinstance(item, float) and math.isnan(item))
 
 
@@ -240,6 +250,7 @@ def _key_path(path, key):
 # -- loading --------------------------------------------------------------------------------------
 
 def _decode(node, path, archive):
+    pd = _pandas()
     if isinstance(node, list):
         return [_decode(item, f"{path}[{i}]", archive) for i, item in enumerate(node)]
     if not isinstance(node, dict):
@@ -283,6 +294,7 @@ def _decode(node, path, archive):
 
 
 def _decode_index(spec, path, archive):
+    pd = _pandas()
     name = _decode(spec["name"], f"{path}.name", archive)
     if "range" in spec:
         return pd.RangeIndex(*spec["range"], name=name)

@@ -5,12 +5,17 @@ Data flows one way: case -> models -> checks and studies -> these results -> sav
 file) carries RESULTS_VERSION; docs/results.md describes it.
 """
 
+from __future__ import annotations  # unevaluated: they name pandas's types without importing pandas
+
 import enum
 import math
 from dataclasses import asdict, dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:  # imported where a table is made (format_rows): `run --quick` prints its rows without it (0.4 s)
+    import pandas as pd
 
 from dyncheck.results import measured, store
 
@@ -320,27 +325,40 @@ def localisations_json(localisations):
     return [asdict(loc) for loc in localisations]
 
 
-def to_json(results, tool=None, interrupted=None):
+def to_json(results, tool=None, interrupted=None, left_out=()):
     """The `dyncheck run --json` file of `results`: with `tool` (dyncheck.results.ci.tool_versions()), what ran
     them; with `interrupted`, the case that Ctrl-C stopped (the results are then of the cases before it,
-    and the run does not pass)."""
+    and the run does not pass); with `left_out`, the checks that `run --quick` left out."""
     rows = [r for result in results for r in result.rows]
     return {"version": RESULTS_VERSION, "status": "fail" if interrupted else verdict(rows),
             "counts": status_counts(rows), **({"tool": tool} if tool else {}),
             **({"incomplete": f"interrupted (Ctrl-C) during case {interrupted}"} if interrupted else {}),
+            **({"quick": list(left_out)} if left_out else {}),
             "cases": [case_json(r) for r in results]}
 
 
 TABLE_COLUMNS = ["check", "quantity", "sources", "error", "tolerance", "status"]
 
 
-def format_rows(rows):
-    """The rows as a table of strings, as `dyncheck run` prints them and the pages list them."""
+def row_cells(rows):
+    """The rows as strings, {column: text} for each, as `dyncheck run` prints them and the pages list them."""
     number = lambda x: "-" if x is None else f"{x:.2e}"
-    return pd.DataFrame([{"check": r.check, "quantity": r.quantity, "sources": r.comparison,
-                          "error": inside_or_outside(r) if r.yes_or_no else number(r.error),
-                          "tolerance": "-" if r.yes_or_no else number(r.tolerance), "status": str(r.status)}
-                         for r in rows], columns=TABLE_COLUMNS)
+    return [{"check": r.check, "quantity": r.quantity, "sources": r.comparison,
+             "error": inside_or_outside(r) if r.yes_or_no else number(r.error),
+             "tolerance": "-" if r.yes_or_no else number(r.tolerance), "status": str(r.status)} for r in rows]
+
+
+def format_rows(rows):
+    """The rows as a table of strings, as the pages list them."""
+    import pandas as pd
+    return pd.DataFrame(row_cells(rows), columns=TABLE_COLUMNS)
+
+
+def rows_text(rows):
+    """The rows as `dyncheck run` prints them: each column right-aligned under its heading, one space apart."""
+    lines = [dict(zip(TABLE_COLUMNS, TABLE_COLUMNS))] + row_cells(rows)
+    widths = {column: max(len(line[column]) for line in lines) for column in TABLE_COLUMNS}
+    return "\n".join(" ".join(line[column].rjust(widths[column]) for column in TABLE_COLUMNS) for line in lines)
 
 
 def inside_or_outside(row):

@@ -5,9 +5,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
-from scipy.integrate import DOP853, LSODA, RK45, Radau, cumulative_simpson
-from scipy.optimize import brentq
+import scipy  # scipy.integrate and .optimize as attributes, which scipy imports on first use: runs need
+#               them, the checks at states (`run --quick`) not, and their import is 0.3 s
 
 from dyncheck.common.ceilings import MAX_STEPS
 from dyncheck.results import store
@@ -61,7 +60,6 @@ METHODS = {m.name: m for m in (
     Method("mujoco:RK4", "mujoco", "RK4", order=4))}
 SCIPY_METHODS, FIXED_METHODS, MUJOCO_METHODS = (tuple(n for n, m in METHODS.items() if m.stepper == stepper)
                                                 for stepper in ("scipy", "python", "mujoco"))
-SCIPY_SOLVERS = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "LSODA": LSODA}
 LANDING = ("RK45", "DOP853", "Radau")  # the solvers that read their t_bound afresh at every step (LSODA's Fortran does not)
 
 
@@ -310,8 +308,8 @@ def _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound, lan
         y0 = np.append(y0, 0.0)
         if land_on_outputs:
             outputs, done = [y0[None]], 1
-        solver = SCIPY_SOLVERS[method](rhs, grid[0], y0, grid[done] if land_on_outputs else grid[-1], rtol=rtol,
-                                       atol=rtol, max_step=max_step)
+        solver = getattr(scipy.integrate, METHODS[method].engine_name)(
+            rhs, grid[0], y0, grid[done] if land_on_outputs else grid[-1], rtol=rtol, atol=rtol, max_step=max_step)
         while solver.status == "running":
             message = solver.step()
             steps += 1
@@ -354,7 +352,7 @@ def _escape_within_step(solver, bound, method, step, coordinates):
     name, index, limit = bound
     dense = solver.dense_output()
     # inside at t_old, beyond at t
-    t = brentq(lambda s: abs(coordinates(dense(s))[index]) - limit, solver.t_old, solver.t)
+    t = scipy.optimize.brentq(lambda s: abs(coordinates(dense(s))[index]) - limit, solver.t_old, solver.t)
     raise Escaped(method, t, step, f"|{name}| reached {limit:g} (by the step's dense output)")
 
 
@@ -442,7 +440,7 @@ def _mujoco(model, q0, v0, grid, method, dt, every, work, budget, bound):
     check_mujoco_run(run, method, dt, bound)
     # Work of the prescribed motions: drive power at every step, Simpson's rule (error ~ dt^4).
     if work:
-        work = cumulative_simpson(model.drive_powers(t, q, v), x=t, initial=0.0)
+        work = scipy.integrate.cumulative_simpson(model.drive_powers(t, q, v), x=t, initial=0.0)
     else:
         work = np.zeros(len(t))
     keep = slice(None, None, every)
@@ -499,6 +497,7 @@ def _frame(model, t, q, v, work, attrs, quantities):
             columns["energy"] = _at_every_state(model, "energy", method, t, q, v)
     if work is not None:
         columns["work"] = work
+    import pandas as pd  # here, not above: the checks at states (`run --quick`) make no run, and its import is 0.4 s
     frame = pd.DataFrame(columns, index=pd.Index(t, name="t"))
     finite_cells = np.isfinite(frame.to_numpy(dtype=float))
     if not finite_cells.all():  # a finite state whose reactions, energy or work overflow
