@@ -2,12 +2,17 @@ import shutil
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 import dyncheck
 from dyncheck.cli import run_cases
 from dyncheck.pages.report import write_reports
 
 ROOT = Path(__file__).resolve().parent.parent
+# No test here is about speed (docs/speed.md: speed is benchmarked), and a worker per core makes an example's time
+# the machine's load: hypothesis's deadline (200 ms an example) off for all, as the slow property tests had it.
+settings.register_profile("dyncheck", deadline=None)
+settings.load_profile("dyncheck")
 WHOLE_RUNS = {"results", "example_results", "rendered"}  # the session fixtures that run every case
 
 
