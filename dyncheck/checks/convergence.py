@@ -6,9 +6,9 @@ import math
 import numpy as np
 
 from dyncheck.case.schema import MAX_OUTPUTS
-from dyncheck.checks.linear import jacobian, scales_of
 from dyncheck.common import ceilings
 from dyncheck.common.ceilings import LEAST_RTOL, MAX_STEPS, ROUNDING_FLOOR
+from dyncheck.common.derivatives import jacobian, scales_of
 from dyncheck.results.values import Status, no_number, row
 from dyncheck.run.simulate import (FIXED_METHODS, METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable, fastest_frequency,
                                    simulate, state_columns)
