@@ -42,7 +42,10 @@ MEANINGS = {
     "constraints[i].expression": "An expression of the parameters and pi that must be >= 0 (> 0 if strict).",
     "constraints[i].strict": "true: the expression must be > 0, not only >= 0.  Absent: false.",
     "constraints[i].why": "What the constraint means and why it holds; the error shows it.",
-    "initial": "The initial conditions of the integrated runs.",
+    "initial": "The initial conditions of the integrated runs.  A case of two files without them starts at rest, a "
+               "tenth of a radian on every angle and a hundredth of the scene's size on every slide from its stable "
+               "equilibrium at rest, where Newton-Raphson finds one from the scene's pose that holds at every time "
+               "(dyncheck/case/start.py); otherwise 0.5 rad and a tenth of that size from the pose.",
     "initial.q": "The coordinates at t = 0, one per coordinate.",
     "initial.v": "Their rates at t = 0, one per coordinate.",
     "initial.t_end": "The end of the runs, which start at t = 0: a whole number of `integration.output_step`s.",
