@@ -11,7 +11,7 @@ from dyncheck.common.ceilings import LEAST_RTOL, MAX_STEPS, ROUNDING_FLOOR
 from dyncheck.common.derivatives import jacobian, scales_of
 from dyncheck.results.values import Status, no_number, row
 from dyncheck.run.simulate import (FIXED_METHODS, METHODS, MUJOCO_METHODS, SCIPY_METHODS, Unstable, fastest_frequency,
-                                   simulate, state_columns)
+                                   run_wall, simulate, state_columns)
 
 EXPECTED_ORDER = {name: method.order for name, method in METHODS.items() if method.order}  # the fixed steps
 SWEEP_METHODS = {"reference": SCIPY_METHODS + FIXED_METHODS, "pinocchio": SCIPY_METHODS, "mujoco": MUJOCO_METHODS}
@@ -189,7 +189,7 @@ def convergence(case):
         every = max(k for k in range(1, max(1, n // 50) + 1) if n % k == 0)
         try:
             runs = [simulate(model, (q0, v0), t_end, method, dt=h / 2**i, output_step=every * h,
-                             work=False, quantities=())[columns] for i in range(3)]
+                             work=False, quantities=(), wall=run_wall(case))[columns] for i in range(3)]
         except Unstable as failure:
             rows.append(no_number("convergence", method, (source,), failure))
             continue
@@ -235,7 +235,8 @@ def motion_frequency(case, t_end):
     n = len(q0)
     try:
         run = simulate(model, (q0, v0), t_end, "DOP853", rtol=case.integration["rtol"],
-                       output_step=t_end / MOTION_POINTS, work=False, omega=fastest_frequency(case), quantities=())
+                       output_step=t_end / MOTION_POINTS, work=False, omega=fastest_frequency(case), quantities=(),
+                       wall=run_wall(case))
     except Unstable:
         return np.array([0.0]), np.array([0.0])
     states = run[state_columns(case)].to_numpy()[:, np.r_[0:2 * n:2, 1:2 * n:2]]  # (q, q') per instant
