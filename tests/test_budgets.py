@@ -13,6 +13,7 @@ from dyncheck.checks.pointwise import evaluate, parameter_sets, pointwise, rando
 from dyncheck.cli import main
 from dyncheck.common import ceilings
 from dyncheck.run import simulate as sim
+from dyncheck.results.values import Status
 from dyncheck.run.simulate import Unstable, fastest_frequency, simulate
 
 
@@ -38,12 +39,47 @@ def test_fixed_step_runs_longer_than_the_cap_are_not_started():
         simulate(case.model("book"), case.initial[:2], 3.0, "RK4", dt=1e-6 * 3 / ceilings.MAX_STEPS, output_step=1e-3)
 
 
-def test_a_run_past_its_wall_budget_gives_up(monkeypatch):
-    monkeypatch.setattr(sim, "WALL_BUDGET", 0.0)
+def test_a_run_past_its_wall_budget_is_stopped_and_says_how_far_it_got(monkeypatch):
+    """Issue 37: a fixed 120 s stopped a 7-dof arm's run (2-6 ms an evaluation) as `unstable`.  The budget is now
+    what the run's steps take at the cost of its first ones, LOAD times over (or case.toml's [budget] run), and a run
+    past it is a Spent, its status `budget spent`, saying the budget, what set it and how far the run got."""
     case = load_case("spring_pendulum")
-    with pytest.raises(Unstable, match="gave up after 0 s of wall time"):
-        simulate(case.model("book"), case.initial[:2], 0.1, "RK45", rtol=1e-6, output_step=1e-2,
-                 omega=fastest_frequency(case))
+    run = lambda **options: simulate(case.model("book"), case.initial[:2], 0.1, "RK45", rtol=1e-6, output_step=1e-2,
+                                     omega=fastest_frequency(case), **options)
+    with pytest.raises(sim.OverBudget, match=r"RK45 stopped at t = .* spent its budget of 1e-09 s of wall time "
+                                             r"\(case.toml's \[budget\] run\) at step 0, t = 0 s of 0.1 s") as spent:
+        run(wall=1e-9)
+    assert spent.value.failure.status == Status.SPENT and isinstance(spent.value.failure, sim.Spent)
+    monkeypatch.setattr(sim, "LOAD", 1e-9)  # as if each step had got a billion times costlier after the first 20
+    monkeypatch.setattr(sim, "WALL_FLOOR", 0.0)
+    with pytest.raises(sim.OverBudget, match=r"spent its budget of .* s of wall time \(1e-09 x its \d+ steps at .* ms "
+                                             r"each, the cost of its first 20, at least 0 s; case.toml's \[budget\] run "
+                                             r"sets another\) at step 20, t = .* s of 0.1 s"):
+        run()
+    monkeypatch.setattr(sim, "LOAD", 4.0)
+    assert len(run()) == 11  # within its budget
+
+
+def test_a_spent_budget_is_its_own_status_not_a_failure_of_the_derivation(tmp_path):
+    """The runs of a case whose [budget] run they outlast give rows `budget spent`, which exit 1 (the verdict is
+    incomplete) and are JUnit errors, not failures."""
+    from types import SimpleNamespace
+
+    from dyncheck.checks.runs import energy, run_sources, trajectory
+    from dyncheck.results.ci import junit_xml
+    case = load_case("spring_pendulum")
+    case.spec["budget"] = {"run": 1e-9}
+    runs = run_sources(case)
+    assert all(isinstance(runs[source].failure, sim.Spent) for source in ("reference", "book", "pinocchio"))
+    rows = trajectory(case, runs) + energy(case, runs)
+    spent = [r for r in rows if r.status == Status.SPENT]
+    # every trajectory row (nothing to compare with), the energy rows of the three spent runs (not MuJoCo's)
+    assert len(spent) == 3 * 4 + 3 and not any(r.status == Status.UNSTABLE for r in rows)
+    assert all("spent its budget of 1e-09 s" in r.detail and "t = 0 s of 3 s" in r.detail for r in spent)
+    assert not Status.SPENT.ok
+    junit = junit_xml([SimpleNamespace(name="spring_pendulum", rows=spent[:1] + [r for r in rows if r.status.ok],
+                                       wall=1.0)])
+    assert 'failures="0" errors="1"' in junit and '<error message="DOP853 stopped at t = 0 s' in junit
 
 
 def test_stepping_scipy_here_gives_solve_ivps_outputs():

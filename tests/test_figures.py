@@ -90,3 +90,72 @@ def test_the_pointwise_panels_name_no_code(monkeypatch):
     assert f"tolerance {result.spec['tolerance']['pointwise']['value']:g}" in [
         text.get_text() for text in drawn["fig"].legends[0].get_texts()]
     style.pyplot().close(drawn["fig"])
+
+
+def chain_like(n):
+    """Saved results and a case of n coordinates as the case page's figures read them: every source's run of two
+    seconds (each off the tight one by its own small amount) and a pointwise sample."""
+    from types import SimpleNamespace
+
+    import numpy as np
+    import pandas as pd
+
+    from dyncheck.results.values import Outcome
+    coords = [f"theta{k + 1}" for k in range(n)]
+    t = np.linspace(0.0, 2.0, 201)
+    run = lambda off: pd.DataFrame({c: np.sin((k + 1) * t) * (1 + off) + off for k, name in enumerate(coords)
+                                    for c in (name, f"{name}_rate")}, index=pd.Index(t, name="t"))
+    runs = {"reference": Outcome(run(1e-9), run(0.0)), "book": Outcome(run(2e-9)),
+            "pinocchio": Outcome(run(3e-9)), "mujoco": Outcome(run(4e-7))}
+    values = {source: {f"{c}_acc": np.linspace(1.0, 2.0, 16) * (1 + off) for c in coords}
+              for source, off in (("reference", 0.0), ("book", 1e-15), ("mujoco", 1e-14), ("pinocchio", 2e-14))}
+    result = SimpleNamespace(runs=runs, sample={"values": values, "states": [None] * 16})
+    case = SimpleNamespace(spec={"title": f"A planar chain of {n} point masses"}, coords=coords,
+                           tolerance={"pointwise": {"value": 1e-9}})
+    return result, case
+
+
+def drawn_series(result, case, columns, path, **options):
+    """figure_series drawn and saved: its panels' x labels, and whether any two of their y labels overlap as laid
+    out (style.save refuses a text off the figure, not one over another)."""
+    from dyncheck.pages import figures
+    drawn = {}
+    save = figures.save
+
+    def keep(fig, path):
+        fig.draw_without_rendering()
+        boxes = [ax.yaxis.label.get_window_extent() for ax in fig.axes]
+        drawn.update(labels=[ax.get_xlabel() for ax in fig.axes],
+                     overlap=any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:]))
+        save(fig, path)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(figures, "save", keep)
+        figures.figure_series(result, case, columns, lambda c: f"|{figures.quantity_label(c)} error| [rad/s]",
+                              path.stem, path, words={}, **options)
+    return drawn["labels"], drawn["overlap"]
+
+
+@pytest.mark.parametrize("n", range(1, 10))
+def test_the_coordinate_figure_of_n_coordinates_prints(tmp_path, n):
+    """Issue 37: a coordinate figure of an odd count above 3 (a panel left over in its last row) was refused,
+    "'t [s]' runs off the figure's edge": the switched-off panel kept its label, which the layout placed below the
+    figure.  For 1 to 9 coordinates the figure prints (style.save refuses what would not), a panel each, every
+    column of panels with its time axis labelled."""
+    result, case = chain_like(n)
+    labels, overlap = drawn_series(result, case, case.coords, tmp_path / "coordinates.png")
+    assert len(labels) == n and labels.count("t [s]") == (2 if n > 3 else 1) and not overlap
+    assert (tmp_path / "coordinates.pdf").is_file()
+
+
+@pytest.mark.parametrize("n", [5, 9])
+def test_the_error_and_pointwise_figures_of_many_coordinates_print(tmp_path, n):
+    """The same for the errors (a panel per coordinate and rate: 18 for 9 coordinates, their labels on two lines) and
+    the pointwise figure (four panels across: 5 and 9 leave panels over)."""
+    from dyncheck.pages import figures
+    from dyncheck.run.simulate import state_columns
+    result, case = chain_like(n)
+    labels, overlap = drawn_series(result, case, state_columns(case), tmp_path / "errors.png", log_error=True)
+    assert len(labels) == 2 * n and labels.count("t [s]") == 2 and not overlap
+    figures.figure_pointwise(result, case, tmp_path / "pointwise.png", words={})
+    assert {p.name for p in tmp_path.iterdir()} == {"errors.png", "errors.pdf", "pointwise.png", "pointwise.pdf"}

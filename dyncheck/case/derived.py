@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from dyncheck.case.start import displaced, initial_q
 from dyncheck.common import expressions
 from dyncheck.common.messages import WithBlock, suggest
 
@@ -379,8 +380,10 @@ def case_file(folder, module, scene, given, overrides=None):
     for p in forcing:
         param_units[p] = given["params"][p]["unit"]
     length = max(scene.length, 0.1)
-    initial = {"q": [0.5 if unit == "rad" else 0.1 * length for unit in units], "v": [0.0] * len(coords),
-               **given.get("initial", {})}
+    at_params = {**params, **numbers(overrides or {}, params)}
+    start, equilibrium = (None, None) if "q" in given.get("initial", {}) else \
+        initial_q(Equations(module, at_params, ()), units, length)
+    initial = {"q": None if start is None else start.tolist(), "v": [0.0] * len(coords), **given.get("initial", {})}
     number = lambda x: float(expressions.evaluate(x, expressions.of_parameters(params)) if isinstance(x, str) else x)
     try:
         q0, v0 = (np.array([number(x) for x in initial[key]]) for key in ("q", "v"))
@@ -390,7 +393,7 @@ def case_file(folder, module, scene, given, overrides=None):
         raise ValueError(f"{file}: case.toml's initial q and v must have one value per coordinate ({', '.join(coords)})")
     try:
         with np.errstate(all="ignore"):
-            omega = frequency(module, coords, {**params, **numbers(overrides or {}, params)}, q0, v0)
+            omega = frequency(module, coords, at_params, q0, v0)
             reactions = sorted(module.reactions(0.0, q0, v0, params)) if hasattr(module, "reactions") else []
     except Exception as error:  # the derivation's own error, as the checks would report it: refused here
         raise ValueError(f"{file}: at the initial state q = {q0.tolist()}, v = {v0.tolist()}: "
@@ -439,7 +442,9 @@ def case_file(folder, module, scene, given, overrides=None):
             "trajectory": {"safety": 10.0, "why": "Ten times each run's own error estimate."},
             "energy": {"safety": 10.0, "why": "Ten times each balance's own error estimate."}},
         "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; {where} the derivation"
-                                + ("" if given else "; no case.toml")},
+                                + ("" if given else "; no case.toml")
+                                + ("" if equilibrium is None else f"; the runs start {displaced(units, length)}, from "
+                                   f"the stable equilibrium at rest, q = {(np.round(equilibrium, 6) + 0.0).tolist()}")},
         "scene": {"coords": joints, "driven": {}, "reactions": reaction_sensors(reactions, scene, file),
                   "bindings": bound, **({"dependent": dependent} if dependent else {})},
         "work_precision": work_precision(omega),

@@ -42,7 +42,10 @@ MEANINGS = {
     "constraints[i].expression": "An expression of the parameters and pi that must be >= 0 (> 0 if strict).",
     "constraints[i].strict": "true: the expression must be > 0, not only >= 0.  Absent: false.",
     "constraints[i].why": "What the constraint means and why it holds; the error shows it.",
-    "initial": "The initial conditions of the integrated runs.",
+    "initial": "The initial conditions of the integrated runs.  A case of two files without them starts at rest, a "
+               "tenth of a radian on every angle and a hundredth of the scene's size on every slide from its stable "
+               "equilibrium at rest, where Newton-Raphson finds one from the scene's pose that holds at every time "
+               "(dyncheck/case/start.py); otherwise 0.5 rad and a tenth of that size from the pose.",
     "initial.q": "The coordinates at t = 0, one per coordinate.",
     "initial.v": "Their rates at t = 0, one per coordinate.",
     "initial.t_end": "The end of the runs, which start at t = 0: a whole number of `integration.output_step`s.",
@@ -86,13 +89,18 @@ MEANINGS = {
     "budget": "How long a derivation of the case folder (code dyncheck does not control) may run, and in how much "
               "memory: a call, a run or a memory use past its budget is a failing row that says which function, at "
               "which state, after how long (docs/isolation.md).  The book's derivations in the package's own "
-              "`reference` have none.",
+              "`reference` have none.  `run` bounds each integration, whatever it integrates.",
     "budget.call": "One call of the derivation (an accelerations, an energy, ...).  Absent: 1000 times the slowest of "
                    "its calls at the initial state, at least 5 s; its import has 60 s.",
     "budget.case": "All the checks of the case, in a process of its own.  Absent: a million times that call's cost "
                    "(what the longest runs of a case take), at least 900 s.",
     "budget.memory": "The memory the case's process may map.  Absent: the machine's memory shared by the cases that "
                      "run at once.",
+    "budget.run": "The wall time of each integration of the checks (a source's run and its twin, a convergence run), "
+                  "whoever's code it runs: past it the run stops, and its rows are `budget spent`, saying the budget, "
+                  "what set it and how far the run got.  Absent: 4 times what the steps the run may take (its step "
+                  "budget, from the case's fastest frequency) cost at the cost per step of its first 20, at least 10 s "
+                  "(dyncheck/run/simulate.py).",
     "integration": "How the checks integrate the equations.",
     "integration.output_step": "The interval between a run's output rows; a multiple of mujoco_step.",
     "integration.rtol": "The relative and absolute tolerance of scipy's DOP853 for the runs of reference, book and "
@@ -358,7 +366,7 @@ KEY_UNITS = {
     "runaway[i].escape": "the coordinate's (coord_units)",
     **dict.fromkeys(["initial.v", "sample.v"], "coord_units per s"),
     **dict.fromkeys(["initial.t_end", "sample.t", "integration.output_step", "integration.mujoco_step"], "s"),
-    **dict.fromkeys(["budget.call", "budget.case"], "s"),
+    **dict.fromkeys(["budget.call", "budget.case", "budget.run"], "s"),
     "budget.memory": "GB (10^9 bytes)",
     "tolerance.pointwise.force_scale": "N",
     "tolerance.pointwise.moment_scale": "N m",

@@ -66,7 +66,7 @@ SCHEMA = ("table", {
     }),
     "work_precision?": FREE,  # validated by dyncheck/studies/work_precision.py
     # how long the case's own code may run, and in how much memory (dyncheck/case/isolation.py)
-    "budget?": ("table", {"call?": "number > 0", "case?": "number > 0", "memory?": "number > 0"}),
+    "budget?": ("table", {"call?": "number > 0", "case?": "number > 0", "memory?": "number > 0", "run?": "number > 0"}),
     "integration": ("table", {"output_step": "expr > 0", "rtol": "expr > 0", "tight_rtol": "expr > 0",
                               "mujoco_step": "expr > 0"}),
     "tolerance": ("table", {"pointwise": ("table", {"value": "number > 0", "force_scale": "expr >= 0",

@@ -9,11 +9,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy  # scipy.integrate on first use (as in dyncheck.run.simulate)
 
-from dyncheck.checks.linear import (ENGINES, EPS, MUJOCO_TWIN, MUJOCO_TWIN_FACTOR, NEWTON_ITERATIONS,
-                                    NEWTON_TOLERANCE, SAFETY, Motion, along, derivation_linear, eigensystem,
-                                    engine_linear, first_order_change, match, scales_of, settled_amplitude,
+from dyncheck.checks.linear import (ENGINES, MUJOCO_TWIN, MUJOCO_TWIN_FACTOR, SAFETY, Motion, along, derivation_linear,
+                                    eigensystem, engine_linear, first_order_change, match, settled_amplitude,
                                     state_names, state_words, unmeasured, verdict_row)
 from dyncheck.common import ceilings
+from dyncheck.common.derivatives import EPS, NEWTON_ITERATIONS, NEWTON_TOLERANCE, scales_of
 from dyncheck.results import store
 from dyncheck.results.values import Status, no_number, row
 from dyncheck.run.simulate import Unstable, fastest_frequency, scipy_budget, simulate

@@ -17,7 +17,7 @@ from dyncheck.common.ceilings import ROUNDING_FLOOR
 from dyncheck.results.values import OWN_WORDS, CaseResult, Outcome, Status, no_number, row
 from dyncheck.run import cache
 from dyncheck.run.simulate import (ERROR_EXPONENT, Escape, Unstable, energy_residual, fastest_frequency,
-                                   richardson_factor, simulate, state_columns)
+                                   richardson_factor, run_wall, simulate, state_columns)
 
 
 # -- trajectories -----------------------------------------------------------------
@@ -35,7 +35,8 @@ def run_sources(case, bound=None):
     out_step = setting["output_step"]
     runs = {}
     for source in INTEGRATED:
-        options = dict(output_step=out_step, work=case.driven, omega=fastest_frequency(case), bound=bound)
+        options = dict(output_step=out_step, work=case.driven, omega=fastest_frequency(case), bound=bound,
+                       wall=run_wall(case))
         try:
             runs[source] = Outcome(simulate(case.model(source), (q0, v0), t_end, "DOP853", rtol=setting["rtol"],
                                             **options),
@@ -109,7 +110,7 @@ def approximations_effect(outcome):
 def trajectory(case, runs):
     """Each source's trajectory against the tight reference solution, up to the agreement horizon
     (where the motion's sensitivity would make a comparison test chaos rather than the equations)."""
-    def every_comparison(failure, status=Status.UNSTABLE):
+    def every_comparison(failure, status=None):  # None: the failure's (unstable, or budget spent)
         return [no_number("trajectory", c, (source, "tight reference"), failure, status)
                 for source in ("book", "pinocchio", "mujoco") for c in state_columns(case)]
 

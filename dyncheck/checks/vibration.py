@@ -32,12 +32,13 @@ import numpy as np
 import scipy.linalg
 
 from dyncheck.checks.floquet import Floquet, floquet, floquet_settings, no_orbit
-from dyncheck.checks.linear import (ENGINES, MUJOCO_TWIN, MUJOCO_TWIN_FACTOR, NEWTON_TOLERANCE, SAFETY, Equilibrium,
-                                    NoEquilibrium, derivation_linear, dop853_exponent_error, engine_linear,
+from dyncheck.checks.linear import (ENGINES, MUJOCO_TWIN, MUJOCO_TWIN_FACTOR, SAFETY, Equilibrium, NoEquilibrium,
+                                    derivation_linear, dop853_exponent_error, engine_linear,
                                     equilibrium, first_order_change, full, linearised, match, modal, mode_run,
                                     rounding, settings, settled_amplitude, state_names, state_words, steady, step_cap,
                                     term_errors, unmeasured, verdict_row)
 from dyncheck.common import ceilings
+from dyncheck.common.derivatives import NEWTON_TOLERANCE
 from dyncheck.results import store
 from dyncheck.results.values import Status, no_number, row
 

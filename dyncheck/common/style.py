@@ -145,6 +145,19 @@ def panels(rows=1, cols=1, height=3.6, **options):
     return pyplot().subplots(rows, cols, figsize=(TEXT_WIDTH, height), squeeze=False, **options)
 
 
+def leave_out(axes, used, xlabel=None):
+    """`axes` (a 2-D array from `panels`) with its panels after the first `used`, row by row, removed: a panel
+    switched off kept its labels, which the layout placed off the figure.  With `xlabel`, the lowest panel left
+    in each column gets it and its tick labels (a shared x axis shows them on the last row only)."""
+    for ax in axes.flat[used:]:
+        ax.remove()
+    if xlabel is not None:
+        rows, cols = axes.shape
+        for lowest in (axes.flat[i] for i in range(min(used, rows * cols) - 1, -1, -1)[:cols]):
+            lowest.xaxis.set_tick_params(labelbottom=True)
+            lowest.set_xlabel(xlabel)
+
+
 def legend_below(fig, handles=None, labels=None, ncol=3, **options):
     """The figure's legend under its axes, where it covers no curve."""
     if handles is None:
@@ -213,5 +226,5 @@ def method_style(label):
     return {} if method is None else dict(color=METHOD_COLOUR[method], marker=METHOD_MARKER[method])
 
 
-__all__ = ["pyplot", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check_size", "check_text", "embed", "title", "wrapped", "panels", "legend_below",
-           "unique_handles", "thin", "log_range", "SOURCE_STYLE", "along", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]
+__all__ = ["pyplot", "TEXT_WIDTH", "TEXT_HEIGHT", "MIN_FONT", "DPI", "save", "check_size", "check_text", "embed", "title", "wrapped", "panels",
+           "leave_out", "legend_below", "unique_handles", "thin", "log_range", "SOURCE_STYLE", "along", "SWEEP_STYLE", "METHOD_COLOUR", "METHOD_MARKER", "method_style"]

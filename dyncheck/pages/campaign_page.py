@@ -9,10 +9,10 @@ import pandas as pd
 
 from dyncheck.checks.pointwise import ENGINES
 from dyncheck.common.style import embed, panels, save, title
-from dyncheck.results.values import heading
+from dyncheck.results.values import Status, heading
 
 AGREEING = {f"{a} vs {b}" for i, a in enumerate(ENGINES) for b in ENGINES[i + 1:]}  # must agree everywhere
-FAILED = ("fail", "inconclusive", "unstable")
+FAILED = tuple(str(status) for status in Status if not status.ok)
 
 
 def named(table, row):

@@ -9,8 +9,8 @@ import numpy as np
 
 from dyncheck.common.expressions import evaluate, namespace
 from dyncheck.common.messages import ENGINE_NAMES
-from dyncheck.common.style import (TEXT_HEIGHT, TEXT_WIDTH, along, legend_below, log_range, panels, pyplot, save,
-                                   thin, title)
+from dyncheck.common.style import (TEXT_HEIGHT, TEXT_WIDTH, along, leave_out, legend_below, log_range, panels,
+                                   pyplot, save, thin, title)
 from dyncheck.common.style import SOURCE_STYLE as STYLE
 from dyncheck.pages import typeset
 from dyncheck.results.values import heading
@@ -96,6 +96,9 @@ def figure_scene(result, case, path, *, words):
                if moving else "; axes in metres."))
 
 
+FULL_LABEL_ROWS = 5  # rows of panels whose y labels fit on one line beside them: "|theta_1' error| [rad/s]"
+
+
 def figure_series(result, case, columns, ylabel, what, path, *, words, log_error=False):
     """Columns over time from every source, overlaid, a panel each (two columns of panels beyond three);
     with log_error, |source - tight reference| on log axes whose range follows the data.  `words`: the
@@ -122,11 +125,9 @@ def figure_series(result, case, columns, ylabel, what, path, *, words, log_error
             for label, run in runs.items():
                 run = thin(run[column])
                 ax.plot(run.index, run, label=named(words, label), **along(label, len(run)))
-        ax.set_ylabel(ylabel(column))
-    for ax in axes.flat[len(columns):]:
-        ax.set_axis_off()
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]")
+        # a label longer than a panel of many rows is tall: its unit under it
+        ax.set_ylabel(ylabel(column).replace(" [", "\n[", 1) if rows > FULL_LABEL_ROWS else ylabel(column))
+    leave_out(axes, len(columns), "t [s]")
     fig.suptitle(titled(case, what))
     legend_below(fig, ncol=5)
     save(fig, path)
@@ -221,8 +222,7 @@ def figure_pointwise(result, case, path, *, words):
         ax.set_xlim(-0.6, len(drawn) - 0.4)
         ax.set_ylim(low, high)
         ax.set_title(quantity_label(quantity), fontsize=8)
-    for ax in axes.flat[len(quantities):]:
-        ax.set_axis_off()
+    leave_out(axes, len(quantities))
     reference = named(words, "reference")
     fig.supylabel(f"relative deviation from the {reference} [1]" if rows > 1 else "relative deviation [1]", fontsize=9)
     fig.suptitle(titled(case, f"pointwise, {len(result.sample['states'])} random states"))

@@ -12,7 +12,8 @@ from dyncheck.common.messages import ENGINE_NAMES
 from dyncheck.results.values import OWN_WORDS, heading
 from dyncheck.checks.vibration import MATRIX_NAMES
 from dyncheck.checks.linear import SAFETY, match
-from dyncheck.common.style import SOURCE_STYLE, embed, legend_below, panels, save, title
+from dyncheck.common.style import SOURCE_STYLE, embed, leave_out, legend_below, panels, save, title
+from dyncheck.pages.figures import quantity_label
 
 NAMES = {"reference": "reference", **ENGINE_NAMES}
 HATCH = {"reference": "", "mujoco": "//", "pinocchio": ".."}  # grey-safe: a source is a hatch as well as a colour
@@ -202,12 +203,11 @@ def figure_modes(vib, case, path):
             for c, value in enumerate(shapes["reference"]):
                 ax.text(c, abs(value) + 0.03, f"{_degrees(value)}°", ha="center", fontsize=8)
         ax.axhline(0.0, color="black", lw=0.6)
-        ax.set_xticks(range(n), case.coords)
+        ax.set_xticks(range(n), [quantity_label(c) for c in case.coords])  # typeset: short enough for 9 to a panel
         ax.set_ylim((0.0, 1.2) if complex_ else (-1.15, 1.15))
         ax.set_title(f"mode {k + 1}: {lam.imag:.4g} rad/s")
         ax.grid(False, axis="x")
-    for ax in axes.flat[len(modes):]:
-        ax.set_axis_off()
+    leave_out(axes, len(modes))
     fig.supylabel("|displacement| [1] (largest = 1), phase" if complex_ else "displacement [1] (largest = 1)", fontsize=9)
     fig.suptitle(title(heading(case.spec), "mode shapes about the equilibrium"))
     legend_below(fig)

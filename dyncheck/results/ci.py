@@ -115,14 +115,16 @@ def escape(text, property=False):
 
 def junit_xml(results):
     """The results as JUnit XML: a <testsuite> per case, a <testcase> per row.  A failing row has a
-    <failure> (its reason as message, its status as type), a row not applicable is <skipped>, a finding
-    names its id in a property; every testcase carries the row's status in a property (a finding or a
-    runaway passes) and its detail in <system-out>."""
+    <failure> (its reason as message, its status as type), a row whose run spent its budget an <error> (the
+    test could not be made, which is no failure of the derivation), a row not applicable is <skipped>, a
+    finding names its id in a property; every testcase carries the row's status in a property (a finding or
+    a runaway passes) and its detail in <system-out>."""
     suites = ET.Element("testsuites", name="dyncheck")
     for result in results:
         counts = status_counts(result.rows)
         suite = ET.SubElement(suites, "testsuite", name=result.name, tests=str(len(result.rows)),
-                              failures=str(sum(not r.status.ok for r in result.rows)), errors="0",
+                              failures=str(sum(not r.status.ok for r in result.rows) - counts[str(Status.SPENT)]),
+                              errors=str(counts[str(Status.SPENT)]),
                               skipped=str(counts[str(Status.NOT_APPLICABLE)]), time=f"{result.wall:.3f}")
         for r in result.rows:
             case = ET.SubElement(suite, "testcase", classname=result.name,
@@ -132,11 +134,12 @@ def junit_xml(results):
             if r.finding:
                 ET.SubElement(properties, "property", name="finding", value=r.finding)
             if not r.status.ok:
-                ET.SubElement(case, "failure", message=reason(r), type=str(r.status)).text = describe(r)
+                verdict = "error" if r.status == Status.SPENT else "failure"
+                ET.SubElement(case, verdict, message=reason(r), type=str(r.status)).text = describe(r)
             elif r.status == Status.NOT_APPLICABLE:
                 ET.SubElement(case, "skipped", message=r.detail)
             ET.SubElement(case, "system-out").text = r.detail
-    for key in ("tests", "failures", "skipped"):
+    for key in ("tests", "failures", "errors", "skipped"):
         suites.set(key, str(sum(int(suite.get(key)) for suite in suites)))
     ET.indent(suites)
     return ET.tostring(suites, encoding="unicode", xml_declaration=True) + "\n"

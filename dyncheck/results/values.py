@@ -19,10 +19,11 @@ if TYPE_CHECKING:  # imported where a table is made (format_rows): `run --quick`
 
 from dyncheck.results import measured, store
 
-RESULTS_VERSION = 6  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
+RESULTS_VERSION = 7  # 1: rows with "sources" as "a vs b"; 2: "sources" a list, "version" at the top;
 # 3: "status" and "counts" at the top and in each case, "reason" in each row, "tool" in run --json;
 # 4: "localisations" in each case, check "equation", sources "derivation" and "tight solution"; 5: check "vibration";
-# 6: "measured" in each finding, the listing's run against the exact motion measured under --set
+# 6: "measured" in each finding, the listing's run against the exact motion measured under --set; 7: status
+# "budget spent"
 
 
 @store.register
@@ -33,6 +34,7 @@ class Status(enum.StrEnum):
     FAIL = "fail"
     INCONCLUSIVE = "inconclusive"  # the tolerance is above the ceiling: the comparison proves nothing
     UNSTABLE = "unstable"  # an integration blew up: no number to compare
+    SPENT = "budget spent"  # an integration spent its time before its end: no number, and no fault shown
     # the book's printed run under other parameters; a derivation's missing energy; a study with nothing to measure
     NOT_APPLICABLE = "not applicable"
     RUNAWAY = "runaway"  # every source's run left the case's physical limits, as the case says it must
@@ -85,11 +87,13 @@ def row(check, quantity, sources, error, tolerance, detail="", *, ceiling):
     return Row(check, quantity, sources, float(error), float(tolerance), float(ceiling), status, None, detail)
 
 
-def no_number(check, quantity, sources, why, status=Status.UNSTABLE):
-    """A check that has no error to show: an integration blew up (`why` says when, which method, which
-    step), or (status FAIL) the check could not be made, and `why` says why."""
+def no_number(check, quantity, sources, why, status=None):
+    """A check that has no error to show: an integration blew up or spent its budget (`why`, the Failure or the
+    dyncheck.run.simulate.Unstable, says when, which method, which step; the row takes its status), or (status
+    FAIL) the check could not be made, and `why` says why."""
     if not isinstance(sources, tuple):
         raise TypeError(f"sources must be a tuple of source names, not {sources!r}")
+    status = getattr(why, "status", Status.UNSTABLE) if status is None else status
     return Row(check, quantity, sources, None, None, None, Status(status), None, str(why))
 
 
@@ -101,6 +105,7 @@ class Failure:
     t: float | None
     step: int | None
     why: str
+    status = Status.UNSTABLE  # a row's without the run
 
     def __str__(self):
         when = f" at t = {self.t:.6g} s" if self.t is not None else ""

@@ -10,14 +10,14 @@ import scipy  # scipy.integrate and .optimize as attributes, which scipy imports
 
 from dyncheck.common.ceilings import MAX_STEPS
 from dyncheck.results import store
-from dyncheck.results.values import Failure
+from dyncheck.results.values import Failure, Status
 
 
 def failure(error):
-    """An integration that blew up, as data: {status, t, step, why}."""
+    """An integration that blew up (or spent its budget), as data: {status, t, step, why}."""
     if isinstance(error, Unstable):
         step = None if error.step is None else int(error.step)  # None: in a run's outputs
-        return {"status": "unstable", "t": float(error.t), "step": step, "why": str(error.why)}
+        return {"status": str(error.status), "t": float(error.t), "step": step, "why": str(error.why)}
     return {"status": "unstable", "t": None, "step": None, "why": f"{type(error).__name__}: {error}"}
 
 
@@ -68,9 +68,8 @@ class Unstable(Exception):
 
     def __init__(self, method, t, step, why):
         # step None: the failure is in the outputs of a run, between steps
-        super().__init__(f"{method} unstable at t = {t:.6g} s" + (f" (step {step})" if step is not None else "")
-                         + f": {why}")
         self.method, self.t, self.step, self.why = method, t, step, why
+        super().__init__(str(self.failure))
 
     kind = Failure  # what `failure` makes of it
 
@@ -79,6 +78,11 @@ class Unstable(Exception):
         """The blow-up as a value, for the results."""
         return self.kind(self.method, None if self.t is None else float(self.t),
                          None if self.step is None else int(self.step), str(self.why))
+
+    @property
+    def status(self):
+        """The status of the rows the run would have given."""
+        return self.kind.status
 
 
 @store.register
@@ -93,6 +97,21 @@ class Escape(Failure):
 class Escaped(Unstable):
     """A run whose coordinate left its bound (simulate's `bound`)."""
     kind = Escape
+
+
+@store.register
+class Spent(Failure):
+    """A run stopped where it spent its wall-time budget (Budget): it went as far as the time allowed, its state
+    finite; not a failure of the equations (a loaded machine, an evaluation costlier than it was measured)."""
+    status = Status.SPENT
+
+    def __str__(self):
+        return f"{self.method} stopped at t = {self.t:.6g} s (step {self.step}): {self.why}"
+
+
+class OverBudget(Unstable):
+    """A run past its wall-time budget (Budget)."""
+    kind = Spent
 
 
 def check_bound(bound, method, t, step, q):
@@ -148,38 +167,54 @@ def energy_residual(run):
 ERROR_EXPONENT = {"RK45": 5, "DOP853": 8, "Radau": 4, "LSODA": 5}
 START_STEPS = 50  # the controller's first steps, which search for the step size
 BUDGET_FACTOR = 10  # allowed steps over the expected ones; the 412 adaptive runs of a report take 0.04 to 1.6 of them
-WALL_BUDGET = 120.0  # s of wall time for any one run; the longest of a report takes 9 s
+# A run's wall time is bounded by what its steps may take at the cost per step of its first MEASURED_STEPS, LOAD times
+# over (a loaded machine; a derivation whose calls cost more in some states), and WALL_FLOOR at least: the steps bound
+# the work, the wall time what each step of it costs.  A fixed 120 s stopped a 7-dof arm's derivation (2-6 ms an
+# evaluation) as if it had blown up.  The book's longest run takes 9 s.
+MEASURED_STEPS = 20
+LOAD = 4.0
+WALL_FLOOR = 10.0  # s
 
 
 class Budget:
-    """How far one integration may go: `steps` steps (`why` says where that number comes from) and
-    WALL_BUDGET seconds; `check` raises Unstable past either."""
+    """How far one integration may go: `steps` steps (`why` says where that number comes from), and `wall` seconds of
+    wall time (None: what those steps take at the cost of its first ones, see LOAD); `check` raises Unstable past the
+    steps, OverBudget past the time."""
 
-    def __init__(self, method, t_end, steps, why):
+    def __init__(self, method, t_end, steps, why, wall=None):
         self.method, self.t_end, self.steps, self.why = method, t_end, steps, why
         if steps > MAX_STEPS:
             raise Unstable(method, 0.0, 0, f"not started: it needs {why}, beyond the cap of {MAX_STEPS:.0e} steps "
                                            f"for one run")
-        self.deadline = time.perf_counter() + WALL_BUDGET
+        self.started = time.perf_counter()
+        self.wall, self.spent_on = wall, "case.toml's [budget] run"
+        self.deadline = math.inf if wall is None else self.started + wall
 
     def check(self, t, step):
         if step > self.steps:
             raise Unstable(self.method, t, step, f"gave up after {step} steps at t = {t:.4g} s of {self.t_end:g} s "
                                                  f"(budget: {self.why})")
-        if time.perf_counter() > self.deadline:
-            raise Unstable(self.method, t, step, f"gave up after {WALL_BUDGET:g} s of wall time at step {step}, "
-                                                 f"t = {t:.4g} s of {self.t_end:g} s")
+        now = time.perf_counter()
+        if self.wall is None and step >= MEASURED_STEPS:
+            cost = (now - self.started) / step
+            self.wall = max(WALL_FLOOR, LOAD * self.steps * cost)
+            self.spent_on = (f"{LOAD:g} x its {self.steps} steps at {cost * 1e3:.3g} ms each, the cost of its first "
+                             f"{step}, at least {WALL_FLOOR:g} s; case.toml's [budget] run sets another")
+            self.deadline = self.started + self.wall
+        if now > self.deadline:
+            raise OverBudget(self.method, t, step, f"spent its budget of {self.wall:.3g} s of wall time "
+                                                   f"({self.spent_on}) at step {step}, t = {t:.4g} s of {self.t_end:g} s")
 
 
-def scipy_budget(method, t_end, rtol, max_step, omega):
+def scipy_budget(method, t_end, rtol, max_step, omega, wall=None):
     """The Budget of an adaptive run: BUDGET_FACTOR times its expected steps (see ERROR_EXPONENT), or
-    MAX_STEPS for a scene without a frequency (`omega` None: nothing free moves)."""
+    MAX_STEPS for a scene without a frequency (`omega` None: nothing free moves); `wall` as Budget's."""
     if omega is None:
-        return Budget(method, t_end, MAX_STEPS, f"{MAX_STEPS:.0e} steps, the cap for one run")
+        return Budget(method, t_end, MAX_STEPS, f"{MAX_STEPS:.0e} steps, the cap for one run", wall)
     expected = START_STEPS + max(omega * t_end / rtol ** (1 / ERROR_EXPONENT[method]), t_end / max_step)
     return Budget(method, t_end, math.ceil(BUDGET_FACTOR * expected),
                   f"{BUDGET_FACTOR} x the {expected:.3g} steps expected from omega = {omega:.4g} rad/s over "
-                  f"{t_end:g} s at rtol = {rtol:g}")
+                  f"{t_end:g} s at rtol = {rtol:g}", wall)
 
 
 QUANTITIES = ("reactions", "energy")  # what a run's frame holds at its outputs beside the state and the work
@@ -192,8 +227,14 @@ def fastest_frequency(case):
     return None if omega is None else abs(case.value(omega, "work_precision.convergence.omega"))
 
 
+def run_wall(case):
+    """The wall time in s that each of the case's runs may take (case.toml's [budget] run), or None: each run's
+    own, from its steps and its cost per step (Budget)."""
+    return case.spec.get("budget", {}).get("run")
+
+
 def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=True, max_step=np.inf, omega=None,
-             bound=None, land_on_outputs=False, quantities=QUANTITIES):
+             bound=None, land_on_outputs=False, quantities=QUANTITIES, wall=None):
     """Integrate `model` from ic = (q0, v0) over [0, t_end].
 
     method: one of SCIPY_METHODS (driven by model.accelerations, with tolerance `rtol` and steps of at
@@ -209,9 +250,9 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
     with the cost in `.attrs`.  `quantities`: which of QUANTITIES the frame holds, fewer for a run of which
     nothing reads them (a twin's reactions, a mode's run): each costs a model call per output.
     Raises Unstable (when, which method, which step) for a run that blows up, whose model's arithmetic
-    fails, or that goes past its Budget; a fixed-step run longer than MAX_STEPS is not started.  With
-    `bound` = (coordinate name, its index, limit), raises Escaped at the first step that ends with the
-    coordinate beyond +-limit.
+    fails, or that goes past its Budget's steps, OverBudget past its wall time (`wall` s, or None: Budget's
+    own); a fixed-step run longer than MAX_STEPS is not started.  With `bound` = (coordinate name, its index,
+    limit), raises Escaped at the first step that ends with the coordinate beyond +-limit.
     """
     q0, v0 = (np.asarray(x, dtype=float) for x in ic)
     # A derivation may define no drive power (docs/model-interface.md): its run then has no work column,
@@ -226,13 +267,14 @@ def simulate(model, ic, t_end, method, *, rtol=None, dt=None, output_step, work=
         if land_on_outputs and method not in LANDING:
             raise ValueError(f"{method} cannot land its steps on the outputs; {', '.join(LANDING)} can")
         # landing, a run takes at least a step per output
-        budget = scipy_budget(method, t_end, rtol, min(max_step, output_step) if land_on_outputs else max_step, omega)
+        budget = scipy_budget(method, t_end, rtol, min(max_step, output_step) if land_on_outputs else max_step, omega,
+                              wall)
         t, q, v, w, cost = _scipy(model, q0, v0, grid, method, rtol, work, max_step, budget, bound, land_on_outputs)
     elif method in FIXED_METHODS + MUJOCO_METHODS:
         every = round(output_step / dt)  # steps per output
         if every < 1:
             raise ValueError(f"output_step = {output_step!r} s is shorter than the step dt = {dt!r} s")
-        budget = Budget(method, t_end, every * n_out, f"{every * n_out} steps of {dt:g} s")
+        budget = Budget(method, t_end, every * n_out, f"{every * n_out} steps of {dt:g} s", wall)
         run = _fixed if method in FIXED_METHODS else _mujoco
         t, q, v, w, cost = run(model, q0, v0, grid, method, dt, every, work, budget, bound)
     else:
