@@ -53,3 +53,42 @@ def test_a_forced_example_keeps_its_start():
     report does, 0.5 rad and a tenth of the scene's size from the pose (examples/ sets no [initial])."""
     q0, v0, _ = Case(EXAMPLES / "forced_cart_pendulum").initial
     assert q0.tolist() == [0.05, 0.5] and not v0.any()
+
+
+# The error planted in the single-equation test of tests/test_bounded_localisation.py: half the third mass's weight
+# moment about its own joint, in that joint's equation only.
+THIRD = '0.5 * p["m3"] * p["g"] * np.sin(q[2]) * (np.arange(len(q)) == 2)'
+
+
+@pytest.mark.slow
+def test_seven_links_run_green_within_five_minutes_and_a_planted_error_is_named(tmp_path, capsys):
+    """Issue 37's 7-dof target: `dyncheck run` of the 7-link chain green within 5 minutes (measured by /usr/bin/time
+    -v on 2 idle cores: 50 s wall, 228 MB peak), and wrong, the wrong equation named: one error planted in the third
+    joint's equation (theta3 alone is named), one by tests/planting.py (the forces' gravity dropped, in every
+    equation: each is named)."""
+    import random
+    import time
+
+    import planting
+    from dyncheck.cli import main
+    started = time.perf_counter()
+    assert main(["run", "--cases", str(chain.write(tmp_path / "right" / "chain7", 7).parent), "--no-cache"]) == 0
+    assert time.perf_counter() - started < 300
+    assert "chain7: PASS" in capsys.readouterr().out
+    third = chain.write(tmp_path / "third" / "chain7", 7, THIRD)
+    assert main(["run", "--cases", str(third.parent), "--no-cache"]) == 1
+    named = wrong_equations(capsys.readouterr().out)
+    assert named == ["theta3"], named
+    gravity = chain.write(tmp_path / "gravity" / "chain7", 7)
+    mutant = planting.plant((gravity / "equations.py").read_text(), ["forces"], ("forces", 64, "drop"), random.Random(1))
+    assert (mutant.kind, mutant.term, mutant.change) == ("drop", "gravity", "bias[:, k]")
+    (gravity / "equations.py").write_text(mutant.source)
+    assert main(["run", "--cases", str(gravity.parent), "--no-cache"]) == 1
+    assert wrong_equations(capsys.readouterr().out) == [f"theta{k + 1}" for k in range(7)]
+
+
+def wrong_equations(out):
+    """The equations a run's output names under "where the derivation is wrong" (its case's lines, and again in the
+    recap), each once."""
+    start = "  the derivation's equation "
+    return list(dict.fromkeys(line[len(start):].split(":")[0] for line in out.splitlines() if line.startswith(start)))
