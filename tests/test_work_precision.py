@@ -69,6 +69,7 @@ def test_a_motion_outrunning_omega_at_once_leaves_the_order_unmeasured():
     assert rows["RK4"].status == "inconclusive" and "not measured: within 20 steps" in rows["RK4"].detail
 
 
+@pytest.mark.full  # seconds of a chain's convergence runs
 def test_the_orders_of_a_chain_far_from_equilibrium_pass(tmp_path):
     """Issue 37: explicit Euler failed on a correct derivation of 7 joints.  A case's omega is a linearisation at
     its start; folded up, a chain's motion is faster (3 links from 2 rad on each joint: 9 times omega within the
