@@ -1,6 +1,7 @@
 """The command line and the files it writes, under bad paths, Ctrl-C, failures and concurrent writers."""
 
 import json
+import math
 from dataclasses import replace
 import multiprocessing
 import os
@@ -318,3 +319,14 @@ def test_the_index_counts_no_state_of_a_case_whose_checks_did_not_finish(results
     index = (tmp_path / "out" / "index.md").read_text()
     assert "Not compared: spinning_top, whose checks did not finish." in index
     assert "disagreed" not in index and "(1 case;" in index
+
+
+def test_a_result_that_cannot_leave_its_process_is_lost_saying_so():
+    """A study's result holding a read-only mapping (the spinning top's case.params) could not be pickled back from
+    its forked process: the item is lost with the reason, not a traceback and a bare exit code."""
+    from types import MappingProxyType
+    from dyncheck.case import isolation
+    budget = isolation.Budget(math.inf, 60.0, isolation.machine_memory() // 2)
+    ((index, (kind, why)),) = list(isolation.run_each([1], lambda item: MappingProxyType({"m": item}), 1,
+                                                      lambda item: budget))
+    assert (index, kind) == (0, "lost") and "could not be sent back" in why and "mappingproxy" in why, why

@@ -372,7 +372,7 @@ def sleeping_top(case, settings, progress=None):
         f"{'stays up' if either[+1] else 'falls'} above, {'stays up' if either[-1] else 'falls'} below"
         + (", as the eigenvalues say." if either[+1] and not either[-1] else ": AGAINST the eigenvalues.")]
     series = {"trail": data, "growth": upright["growth"], "criterion": criterion, "finite": finite, "lo": lo, "hi": hi, "n0": n0, "bound": bound,
-              "horizon": T, "params": p, "method": method, "dt": dt}
+              "horizon": T, "params": dict(p), "method": method, "dt": dt}
     return study_result(case, "sleeping_top", "The sleeping top: least spin of a stable upright top", settings,
                    data, summary, findings, series, start)
 

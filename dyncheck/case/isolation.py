@@ -366,6 +366,8 @@ def _child(work, item, send, record, memory, parent):
         send.send(outcome)
     except MemoryError:
         send.send(("lost", "its results did not fit in the case's memory cap (case.toml's [budget] memory sets it)"))
+    except (TypeError, AttributeError, pickle.PicklingError) as error:  # a value that cannot travel between processes
+        send.send(("lost", f"its results could not be sent back from its process: {type(error).__name__}: {error}"))
     send.close()
     os._exit(0)
 
