@@ -231,14 +231,17 @@ def test_a_derivation_wrong_only_in_a_region_of_5_percent_fails(count, tmp_path)
 def test_the_regions_test_can_fail(tmp_path):
     """A region between two neighbouring states' theta holds no state: there the same wrong derivation passes, so
     the failures above mean the states reached the regions."""
-    right = dyncheck.load_case("cart_pendulum", make_case(tmp_path / "right", FILES["equations.py"]))
+    # budget 0: the case file's count of states, the same in all three (a measured cost picks the count otherwise)
+    fixed = "[sample]\nbudget = 0\n"
+    right = dyncheck.load_case("cart_pendulum", make_case(tmp_path / "right", FILES["equations.py"], fixed))
     theta = np.sort([q[1] for _, q, _ in right.sample_states()])
     gap = np.argmax(np.diff(theta))
     where = f"{theta[gap]!r} < q[1] < {theta[gap + 1]!r}"
-    folder = make_case(tmp_path / "gap", region_variant(where, WRONG[0]))
+    folder = make_case(tmp_path / "gap", region_variant(where, WRONG[0]), fixed)
     rows, _ = pointwise(dyncheck.load_case("cart_pendulum", folder))
     assert all(r.status.ok for r in rows)
-    folder = make_case(tmp_path / "state", region_variant(f"{theta[gap]!r} <= q[1] < {theta[gap + 1]!r}", WRONG[0]))
+    folder = make_case(tmp_path / "state", region_variant(f"{theta[gap]!r} <= q[1] < {theta[gap + 1]!r}", WRONG[0]),
+                       fixed)
     rows, _ = pointwise(dyncheck.load_case("cart_pendulum", folder))
     assert not all(r.status.ok for r in rows)  # the same region with one state in it
 
