@@ -49,11 +49,14 @@ def equations(case):
 
 @pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
 @pytest.mark.parametrize("n, searched", [(5, "candidates of one position factor each"), (7, "not searched")])
-def test_a_chain_s_wrong_equation_is_named_within_the_budget(tmp_path, n, searched):
+def test_a_chain_s_wrong_equation_is_named_within_the_budget(tmp_path, monkeypatch, n, searched):
     """An n-link pendulum: its derivation passes; with one planted error in the third joint's equation the rows
     fail, and that equation, no other, is named, by its term where the narrowed library fits (5 links: 1,071
     candidates) and as where the search would not fit (7: even the narrowed 3,564 candidates are 1.5 GB over 9
-    sets).  Measured: 91 MB at 5 links, under 1 MB at 7; before, MemoryError (232 GiB) at 5 and every row lost."""
+    sets).  Measured: 91 MB at 5 links, under 1 MB at 7; before, MemoryError (232 GiB) at 5 and every row lost.
+    Every angle a candidate, as where the residual depends on them all (this one depends on theta3 alone, and
+    left as it is the search leaves the others out: test_a_residual_in_one_angle_is_named_in_a_long_chain)."""
+    monkeypatch.setattr(residuals, "cyclic_angles", lambda case, source, r: ())
     right, _, _ = equations(Case(chain.write(tmp_path / "right" / f"chain{n}", n)))
     assert right and all(r.status == Status.PASS for r in right), [str(r) for r in right if r.status != Status.PASS]
     rows, localisations, peak = equations(Case(chain.write(tmp_path / "planted" / f"chain{n}", n, PLANTED)))
@@ -64,6 +67,15 @@ def test_a_chain_s_wrong_equation_is_named_within_the_budget(tmp_path, n, search
     if n == 5:
         assert localisations[0].exact and "- m3 g / 2 sin(theta3)" in localisations[0].text, localisations[0].text
     assert peak < terms.MEMORY / 4, f"{peak / 1e6:.0f} MB"
+
+
+@pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
+def test_a_residual_in_one_angle_is_named_in_a_long_chain(tmp_path):
+    """The planted term depends on theta3 alone: the six other angles are left out of the candidates
+    (residuals.cyclic_angles), the library is small enough to search whole, and the term is named exactly."""
+    _, localisations, _ = equations(Case(chain.write(tmp_path / "planted" / "chain7", 7, PLANTED)))
+    assert [(loc.equation, loc.exact, loc.identified) for loc in localisations] == [("theta3", True, True)]
+    assert "- m3 g / 2 sin(theta3)" in localisations[0].text, localisations[0].text
 
 
 @pytest.mark.full  # seconds of whole runs: `pytest -m full` (docs/speed.md)
