@@ -216,7 +216,7 @@ def _localised(case, failing, found, drawn):
             except Exception:  # a set where a source fails: the random-parameters rows say so
                 continue
         named = {name: place for name, place, _ in places(case, samples[0][2])}
-        cyclic = cyclic_angles(case, source, samples[0][2])
+        shifted = shifted_residuals(case, source, samples[0][2])
         wrong = [(name, named[name]) for s, name in sorted(failing) if s == source and name in named]
         # the coordinates whose given M or f is wrong: their residual is explained there, not refitted
         explained = {i for _, place in wrong if place[0] != "residual" for i in place[1:]}
@@ -228,7 +228,8 @@ def _localised(case, failing, found, drawn):
             fits = []
             try:
                 for form, where in forms:
-                    fit = fit_at(case, samples, (form, *place[1:]), units, driven, cyclic)
+                    fit = fit_at(case, samples, (form, *place[1:]), units, driven,
+                                 cyclic_angles(case, samples[0][2], shifted, (form, *place[1:])))
                     if fit is not None:
                         fits.append((fit, where.format(c=case.coords[i])))
                         if fit.identified or fit.unsearched:  # the other forms' libraries are as large
@@ -262,15 +263,15 @@ def fit_at(case, samples, place, units, driven, cyclic=()):
     None where no set gives finite residuals.  A derivation that gives its accelerations only may have its
     mass matrix wrong: in its force side's residual, dM q''_d, the terms in its accelerations are candidates."""
     in_accelerations = place[0] == "residual" and samples[0][2].given_mass is None
-    fitted = [(params, with_driven(other, r.t, r.q, r.v), r.v, *r.of(place), r.derived_acc)
+    fitted = [(params, with_driven(other, r.t, r.q, r.v), r.v, *r.of(place), r.derived_acc, r)
               for params, other, r in samples]
-    usable = [(params, q, v, residual, a if in_accelerations else None)
-              for params, q, v, residual, _, a in fitted if np.all(np.isfinite(residual))]
+    finite = [f for f in fitted if np.all(np.isfinite(f[3]))]
+    usable = [(params, q, v, residual, a if in_accelerations else None) for params, q, v, residual, _, a, _ in finite]
     if not usable:
         return None
     floor = case.tolerance["pointwise"]["value"] * fitted[0][4]
     fit = terms.fit(case.coords, units, list(case.params), usable, floor, driven, cyclic)
-    if in_accelerations and fit.exact and whole_equation(case, fit, usable[0], samples[0][2], place[1], driven):
+    if in_accelerations and fit.exact and whole_equation(case, fit, usable[0], finite[0][6], place[1], driven):
         fit = terms.fit(case.coords, units, list(case.params), [u[:4] for u in usable], floor, driven, cyclic)
     return fit
 
@@ -289,7 +290,7 @@ def whole_equation(case, fit, sample, r, i, driven):
     in_accelerations = [term for term in fit.terms if any(f.function == "acceleration" for f in term.state)]
     if not in_accelerations:
         return False
-    inertia = np.einsum("nj,nj->n", r.mass[:len(q), i, :], a)
+    inertia = np.einsum("nj,nj->n", r.mass[:, i, :], a)
     missed = inertia + sum(term.value(params, q, v, a, index) for term in in_accelerations)
     return bool(np.max(np.abs(missed)) <= WHOLE * np.max(np.abs(inertia)))
 
@@ -298,27 +299,31 @@ SHIFT = 1.0  # rad: not a divisor of 2 pi, so that no term of the library (perio
 SHIFTED_STATES = 32  # random states: a residual that depends on the angle changes at nearly all of them
 
 
-def cyclic_angles(case, source, r):
-    """The angles that no equation's residual depends on (a Furuta pendulum's arm, a free chain's first
-    link): each shifted by SHIFT at SHIFTED_STATES of the states of `r`, every residual stays within the
-    pointwise tolerance of its size; terms in them are not candidates (they could only fit rounding)."""
-    units = case.spec["coord_units"]
+def shifted_residuals(case, source, r):
+    """{angle: the residuals at SHIFTED_STATES of the states of `r`, that angle shifted by SHIFT}, for
+    cyclic_angles; an angle where the derivation fails is left out (its rows say so; it stays a candidate)."""
     first = r.first(SHIFTED_STATES)
-    tolerance = case.tolerance["pointwise"]["value"]
-    out = []
-    for i, (name, unit) in enumerate(zip(case.coords, units)):
+    out = {}
+    for i, (name, unit) in enumerate(zip(case.coords, case.spec["coord_units"])):
         if unit != "rad":
             continue
-        shifted = first.q.copy()
-        shifted[:, i] += SHIFT
+        q = first.q.copy()
+        q[:, i] += SHIFT
         try:
-            moved = residuals(case, source, "mujoco", list(zip(first.t, shifted, first.v)))
-        except Exception:  # the derivation fails there: its rows say so; the angle stays a candidate
+            out[name] = residuals(case, source, "mujoco", list(zip(first.t, q, first.v)))
+        except Exception:
             continue
-        if all(np.max(np.abs(moved.of(("residual", k))[0] - first.of(("residual", k))[0]))
-               <= tolerance * first.of(("residual", k))[1] for k in range(len(case.coords))):
-            out.append(name)
-    return tuple(out)
+    return out
+
+
+def cyclic_angles(case, r, shifted, place):
+    """The angles that the residual at `place` does not depend on (a Furuta pendulum's arm, a free chain's first
+    link): shifted (shifted_residuals), it stays within the pointwise tolerance of its size; terms in them are not
+    candidates (they could only fit rounding)."""
+    first = r.first(SHIFTED_STATES)
+    residual, size = first.of(place)
+    tolerance = case.tolerance["pointwise"]["value"] * size
+    return tuple(name for name, moved in shifted.items() if np.max(np.abs(moved.of(place)[0] - residual)) <= tolerance)
 
 
 def parameter_cases(case, drawn):

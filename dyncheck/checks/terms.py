@@ -172,7 +172,7 @@ class TermFit:
         notes = [f"the coefficient of {_state_text(term)} is no product of parameters' powers: its value at "
                  "the first set" for term in self.terms if not term.identified]
         notes += [f"a term in {term.state[-1].text} is M's: this equation's entry in its column {term.state[-1].of[0]} lacks "
-                  f"{'-' if term.number > 0 else '+'} {' '.join([replace(term, state=term.state[:-1]).magnitude_text])}"
+                  f"{'-' if term.number > 0 else '+'} {replace(term, state=term.state[:-1]).magnitude_text}"
                   for term in self.terms if term.state and term.state[-1].function == "acceleration"]
         if self.unvaried and any(term.identified for term in self.terms):
             notes.append(f"{', '.join(self.unvaried)} the same in every set: inside the numbers")
