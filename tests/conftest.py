@@ -16,6 +16,7 @@ settings.load_profile("dyncheck")
 WHOLE_RUNS = {"results", "example_results", "rendered"}  # the session fixtures that run every case
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's, which reads the group into the test's id
 def pytest_collection_modifyitems(items):
     """A test that takes a whole run of every case is `full`: the default run leaves it to `pytest -m full`.
     Under pytest-xdist (`-n`: pyproject.toml) such tests share one worker (`--dist loadgroup`), where the session

@@ -13,7 +13,7 @@ import scipy.linalg
 
 import dyncheck
 from dyncheck.checks import floquet, linear, vibration
-from dyncheck.common import ceilings
+from dyncheck.common import ceilings, derivatives
 from dyncheck.pages import vibration_page
 from dyncheck.results.values import Status
 from dyncheck.studies import campbell
@@ -107,7 +107,7 @@ def test_a_soft_spring_finds_only_the_unstable_equilibrium_through_the_hinge():
 
 
 def test_no_equilibrium_in_either_is_not_applicable(monkeypatch):
-    monkeypatch.setattr(linear, "NEWTON_ITERATIONS", 0)  # Newton-Raphson gives up at once, in every source
+    monkeypatch.setattr(derivatives, "NEWTON_ITERATIONS", 0)  # Newton-Raphson gives up at once, in every source
     vib = vibration.analyse(dyncheck.load_case("double_pendulum"))
     assert [r.status for r in vib.rows] == [Status.NOT_APPLICABLE] and "finds none from the guess in either" in vib.rows[0].detail
 

@@ -10,7 +10,7 @@ import numpy as np
 import scipy.linalg  # and scipy.integrate on first use (as in dyncheck.run.simulate)
 
 from dyncheck.common import ceilings, expressions
-from dyncheck.common.derivatives import EPS, NEWTON_ITERATIONS, jacobian, newton, scales_of
+from dyncheck.common.derivatives import EPS, jacobian, newton, scales_of
 from dyncheck.results import store
 from dyncheck.results.values import row
 from dyncheck.run.simulate import Unstable, richardson_factor, simulate
@@ -155,7 +155,7 @@ def equilibrium(model, t, q, v, solve, coords, mass_matrix=None):
     x = state(found.u)
     if not found.converged:
         raise NoEquilibrium(f"Newton-Raphson for {', '.join(solve)} from {state_words(names, start)} did not converge "
-                            f"in {NEWTON_ITERATIONS} iterations: the largest |q''| left is "
+                            f"in {found.iterations} iterations: the largest |q''| left is "
                             f"{np.max(np.abs(accelerations(found.u))):.3g} at {state_words(names, x)}")
     return Equilibrium(t, x[:n], x[n:], found.residual, found.scale, found.iterations)
 

@@ -77,7 +77,8 @@ def newton(equations, accelerations, u):
     Jacobian, which no tolerance relative to it would pass)."""
     residual = equations(u)
     scale = EPS
-    for iteration in range(NEWTON_ITERATIONS):
+    iteration = 0
+    while iteration < NEWTON_ITERATIONS:
         scales = scales_of(u)
         acc = residual if equations is accelerations else accelerations(u)
         acc_jac, _ = jacobian(accelerations, u, scales)
@@ -98,4 +99,5 @@ def newton(equations, accelerations, u):
                 break
             step = step / 2
         u, residual = u + step, trial
-    return Newton(u, False)
+        iteration += 1
+    return Newton(u, False, iteration)
