@@ -94,18 +94,23 @@ def _measure(source, entries, repeat):
 
 def bench_table(cases, run_all=None):
     """`dyncheck bench`'s table of `cases`: their throughput rows (bench_case) and, with `run_all` (the command line's
-    run_cases), their whole runs (bench_runs).  A case whose applied forces vary has no throughput rows (no bare loop
-    evaluates a law of the state: engines.bench), which a line under the table says; its whole runs are timed."""
-    frames, without = [], []
+    run_cases), their whole runs (bench_runs).  A case whose applied forces vary, or whose coordinates are a map of
+    the joints, has no throughput rows (no bare loop evaluates a law of the state or maps the coordinates:
+    engines.bench), which a line under the table says; its whole runs are timed."""
+    frames, varying, mapped = [], [], []
     for case in cases:
         if case.model("mujoco").varying:
-            without.append(case.name)
+            varying.append(case.name)
+        elif case.scene.coordinate_map:
+            mapped.append(case.name)
         else:
             frames.append(bench_case(case))
     if run_all is not None:
         frames.append(bench_runs(cases, run_all))
-    untimed = (f"no throughput rows of {', '.join(without)}: its applied forces vary, which no bare engine loop "
-               "evaluates (--runs times its whole runs)") if without else ""
+    untimed = "; ".join(f"no throughput rows of {', '.join(names)}: {why}, which no bare engine loop {does} (--runs "
+                        "times its whole runs)" for names, why, does in (
+                            (varying, "its applied forces vary", "evaluates"),
+                            (mapped, "its coordinates are a map of the joints (scene.joints)", "maps")) if names)
     if not frames:
         return untimed
     table = pd.concat(frames, ignore_index=True)

@@ -377,7 +377,8 @@ def list_cases(names, cases_dir):
 def new_case(name, scene, cases_dir):
     """`dyncheck new`: the folder cases_dir/name with the scene copied and equations.py and case.toml to fill in."""
     from engines.mjcf import describe
-    from dyncheck.case.derived import EQUATIONS, SCENE, scaffold
+    from dyncheck.case.derived import EQUATIONS, SCENE
+    from dyncheck.case.scaffold import scaffold
     if not name.isidentifier():
         raise ValueError(f"new {name}: a case's name is an identifier (letters, digits and _, not starting with a digit)")
     folder = cases_dir / name

@@ -16,17 +16,17 @@ EQUATIONS = '''"""A planar chain of {n} point masses on massless links, by Newto
 import numpy as np
 
 COORDS = {coords!r}
-PARAMS = {params!r}
+PARAMS = {params!r}{joints}
 LENGTHS = np.array({lengths!r})
 
 
 def _chain(q, v, p):
-    phi, rate = np.cumsum(q), np.cumsum(v)
+    phi, rate = {angles}
     columns = LENGTHS * np.array([np.cos(phi), np.sin(phi)])  # (2, n): c_j
     bias = np.cumsum(LENGTHS * rate**2 * np.array([-np.sin(phi), np.cos(phi)]), axis=1)  # (2, n): b_k
     masses = np.array([p[f"m{{k + 1}}"] for k in range(len(q))])
-    n = len(q)  # J_k: column i is sum_{{i <= j <= k}} c_j, zero beyond k
-    jacobians = [np.pad(columns[:, k::-1].cumsum(axis=1)[:, ::-1], ((0, 0), (0, n - k - 1))) for k in range(n)]
+    n = len(q)
+    jacobians = {jacobians}
     return masses, jacobians, bias
 
 
@@ -59,13 +59,25 @@ def scene(n):
     return f'<mujoco model="chain{n}">\n<option gravity="0 0 -{G}"/>\n<worldbody>\n{inner}</worldbody>\n</mujoco>\n'
 
 
-def write(folder, n, planted=""):
+# The derivation in the joints' relative angles theta_k, or in absolute angles phi_k (each link's from the downward
+# vertical, as a symbolic package writes a chain) over the same hinges, with the map theta_k = phi_k - phi_{k-1}
+# (JOINTS, dyncheck.case.coordinate_map): then dr_k/dphi_j = c_j itself for j <= k.
+RELATIVE = {"angles": "np.cumsum(q), np.cumsum(v)",  # J_k: column i is sum_{i <= j <= k} c_j, zero beyond k
+            "jacobians": "[np.pad(columns[:, k::-1].cumsum(axis=1)[:, ::-1], ((0, 0), (0, n - k - 1))) for k in range(n)]"}
+ABSOLUTE = {"angles": "q, v", "jacobians": "[columns * (np.arange(n) <= k) for k in range(n)]"}
+
+
+def write(folder, n, planted="", absolute=False, joints=None):
     """The case folder of an n-link chain; `planted`: an expression added to the force side f (a numpy array),
-    an error planted in the derivation."""
+    an error planted in the derivation; `absolute`: the derivation in absolute angles phi_k, with the map JOINTS
+    (`joints`, or theta_k = phi_k - phi_{k-1})."""
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "scene.xml").write_text(scene(n))
     params = {f"m{k + 1}": MASSES[k] for k in range(n)} | {"g": G}
+    if absolute:
+        joints = joints or {f"theta{k + 1}": f"phi{k + 1} - phi{k}" if k else "phi1" for k in range(n)}
     (folder / "equations.py").write_text(EQUATIONS.format(
-        n=n, coords=[f"theta{k + 1}" for k in range(n)], params=params, lengths=list(LENGTHS[:n]),
-        planted=f" + {planted}" if planted else ""))
+        n=n, coords=[f"{'phi' if absolute else 'theta'}{k + 1}" for k in range(n)], params=params,
+        lengths=list(LENGTHS[:n]), planted=f" + {planted}" if planted else "",
+        joints=f"\nJOINTS = {joints!r}" if absolute else "", **(ABSOLUTE if absolute else RELATIVE)))
     return folder

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from dyncheck.case.coordinate_map import parse
 from dyncheck.case.start import displaced, initial_q
 from dyncheck.common import expressions
 from dyncheck.common.messages import WithBlock, suggest
@@ -241,6 +242,43 @@ def coordinate_joints(coords, scene, file):
                      "its joint, or give as many coordinates as hinges and slides, in the file's order")
 
 
+def mapped_joints(module, coords, params, scene, file):
+    """The module's JOINTS, {joint: expression of COORDS}, in the scene's order: optional, each hinge and slide of the
+    scene as an affine function of the coordinates (dyncheck.case.coordinate_map), where the derivation's coordinates
+    are not the joints' (absolute angles over a chain's relative hinges); None without it.  ValueError naming the
+    file and the entry."""
+    declared = getattr(module, "JOINTS", None)
+    if declared is None:
+        return None
+    names = [j.name for j in scene.joints if j.kind in ("hinge", "slide")]
+    if not (isinstance(declared, dict) and all(isinstance(x, (str, int, float)) for x in declared.values())):
+        raise ValueError(f"{file}: JOINTS = {declared!r:.80} is not a dict of the scene's joints to expressions of "
+                         "COORDS (\"phi2 - phi1\")")
+    for joint in declared:
+        if joint not in names:
+            raise ValueError(f"{file}: JOINTS[{joint!r}] is no hinge or slide of {scene.path} ({', '.join(names)})"
+                             + suggest(str(joint), names))
+    if [n for n in names if n not in declared] or len(scene.joints) > len(names):
+        others = [j.name for j in scene.joints if j.name not in declared]
+        raise ValueError(f"{file}: JOINTS leaves joints of {scene.path} without a position ({', '.join(others)}): "
+                         "a map of the coordinates gives every joint, and takes hinges and slides only")
+    mapped = {joint: str(declared[joint]) for joint in names}
+    parse(mapped, coords, params, f"{file}: JOINTS")  # refused here, in the file's words, not at the case's load
+    return mapped
+
+
+def mapped_units(mapped, coords, kinds, file):
+    """Each coordinate's unit under the map `mapped`: rad where it moves hinges, m where it moves slides."""
+    units = []
+    for c in coords:
+        moved = {kinds[joint] for joint, x in mapped.items() if c in expressions.names(x)}
+        if len(moved) > 1:
+            raise ValueError(f"{file}: JOINTS moves both hinges and slides by coordinate '{c}': an angle and a "
+                             "length are not one coordinate")
+        units.append("rad" if moved == {"hinge"} else "m")
+    return units
+
+
 def applied_parameters(params, given, file):
     """The parameters that case.toml's [scene.applied] forces use: they reach the engines through those
     forces, not the scene, so they bind to no scene number; each needs its unit in case.toml's [params]."""
@@ -298,7 +336,7 @@ def binding_refusal(file, scene, params, unbound, ambiguous, unit, declared):
     line a parameter (the first of several candidates, the others in its comment; where there is none, a commented
     template)."""
     where = lambda location, scale: f"{location.text()}{' x -1' if scale < 0 else ''} ({unit(location)})"
-    as_toml = lambda match: "{ " + ", ".join(f"{k} = {_toml(x)}" for k, x in binding_table(*match).items()) + " }"
+    as_toml = lambda match: "{ " + ", ".join(f"{k} = {toml_value(x)}" for k, x in binding_table(*match).items()) + " }"
     unit_of = lambda name: f" in {declared[name]}" if name in declared else ""
     problems = [f"PARAMS['{name}'] = {params[name]!r} matches {len(found)} numbers{unit_of(name)}: "
                 + ", ".join(where(*match) for match in found) for name, found in ambiguous.items()]
@@ -369,10 +407,12 @@ def case_file(folder, module, scene, given, overrides=None):
     where = given.get("derivation", EQUATIONS)  # a case.toml may name another .py file of the folder
     file = folder / where
     coords, params = module_values(module, file)
-    joints = coordinate_joints(coords, scene, file)
-    dependent = [j.name for j in scene.joints if j.name not in joints.values()]  # closed by the loops
+    mapped = mapped_joints(module, coords, params, scene, file)
+    joints = {} if mapped else coordinate_joints(coords, scene, file)
+    dependent = [] if mapped else [j.name for j in scene.joints if j.name not in joints.values()]  # closed by loops
     kinds = {j.name: j.kind for j in scene.joints}
-    units = ["rad" if kinds[joints[c]] == "hinge" else "m" for c in coords]
+    units = mapped_units(mapped, coords, kinds, file) if mapped else \
+        ["rad" if kinds[joints[c]] == "hinge" else "m" for c in coords]
     given_bindings = given.get("scene", {}).get("bindings", {})
     forcing = applied_parameters(params, given, file) - set(given_bindings)
     bound, param_units, places = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds,
@@ -409,7 +449,7 @@ def case_file(folder, module, scene, given, overrides=None):
     # slide along a rod of that length (a spring's extension) a quarter of it from the hinge, where M(q)
     # vanishes; rates of four times the fastest frequency (a whole turn's rate, over the top, is about twice
     # it); times over four horizons (a law of time beyond the runs' is checked too).
-    span = lambda c, unit: list(ranges[joints[c]]) if ranges[joints[c]] else (
+    span = lambda c, unit: list(ranges[joints[c]]) if c in joints and ranges[joints[c]] else (
         [-math.pi, math.pi] if unit == "rad" else [-0.75 * length, 0.75 * length])
     rate = lambda unit: 4 * omega * (1.0 if unit == "rad" else length)
     gravity = next((p for p, location in places.items() if location.element == "option"), None)
@@ -443,9 +483,11 @@ def case_file(folder, module, scene, given, overrides=None):
             "energy": {"safety": 10.0, "why": "Ten times each balance's own error estimate."}},
         "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; {where} the derivation"
                                 + ("" if given else "; no case.toml")
+                                + ("" if not mapped else f"; the derivation in coordinates of its own, the joints at "
+                                   + ", ".join(f"{j} = {x}" for j, x in mapped.items()) + " (JOINTS)")
                                 + ("" if equilibrium is None else f"; the runs start {displaced(units, length)}, from "
                                    f"the stable equilibrium at rest, q = {(np.round(equilibrium, 6) + 0.0).tolist()}")},
-        "scene": {"coords": joints, "driven": {}, "reactions": reaction_sensors(reactions, scene, file),
+        "scene": {"coords": joints, **({"joints": mapped} if mapped else {}), "driven": {}, "reactions": reaction_sensors(reactions, scene, file),
                   "bindings": bound, **({"dependent": dependent} if dependent else {})},
         "work_precision": work_precision(omega),
     }
@@ -497,83 +539,6 @@ def merged(derived, given):
     return out
 
 
-def scaffold(name, scene):
-    """The files of a new case on `scene` (engines.mjcf.SceneFile), as `dyncheck new` writes them: an
-    equations.py with the coordinates, parameters and signatures filled in, and a case.toml that binds
-    each parameter to its scene number (so that equal numbers are no ambiguity)."""
-    scalar = [j for j in scene.joints if j.kind in ("hinge", "slide")]
-    params = {}  # name -> (value, binding table, about)
-    for v in scene.values:
-        location, attribute = v.location, v.location.attribute
-        if attribute == "mass" and v.value <= 1e-12:  # a placeholder: no parameter
-            continue
-        name = location.name
-        label = {"mass": f"m_{name}", "stiffness": f"k_{name}", "damping": f"c_{name}", "springref": f"{name}_rest",
-                 None: "g", "pos": f"{name}_pos_{AXES[location.index]}", "ipos": f"{name}_com_{AXES[location.index]}",
-                 "inertia": f"I{AXES[location.index] * 2}_{name}"}[attribute]
-        scale = -1.0 if v.value < 0 and attribute in SIGNED else 1.0
-        params[label] = (scale * v.value, binding_table(location, scale),
-                         ABOUT[attribute].format(name=name, index=component(location)))
-    coords = [j.name for j in scalar]
-    unpack = lambda names: ", ".join(names) + ("," if len(names) == 1 else "")
-    rates = [f"{c}_rate" for c in coords]
-    joints = "; ".join(f"{j.name} ({j.kind}, {'rad' if j.kind == 'hinge' else 'm'})" for j in scalar)
-    entries = {p: f'"{p}": {value!r},' for p, (value, _, _) in params.items()}
-    width = max(map(len, entries.values()), default=0)
-    param_lines = "\n".join(f"    {entries[p]:<{width}}  # {about}" for p, (_, _, about) in params.items())
-    equations = f'''"""{name}: <what the mechanism is, in one line>.
-
-<The mechanism and its coordinates in a paragraph: this opens the case's report.>
-"""
-import numpy as np
-
-# The generalized coordinates, one per joint of scene.xml: {joints}.
-COORDS = {coords!r}
-
-# The parameters, SI units.  Each is bound to the scene number written next to it in case.toml, so that
-# --set and the random parameter sets change scene.xml and these equations alike.  Rename them as your
-# derivation does (in case.toml too); delete those it does not use.
-PARAMS = {{
-{param_lines}
-}}
-
-
-def mass_matrix(q, p):
-    """M(q) of the equations of motion M(q) q'' = f(t, q, q')."""
-    {unpack(coords)} = q
-    raise NotImplementedError("mass_matrix: write M(q)")
-
-
-def forces(t, q, v, p):
-    """f(t, q, q'): everything but M(q) q'' (gravity, springs, centripetal and Coriolis terms), on the right."""
-    {unpack(coords)} = q
-    {unpack(rates)} = v
-    raise NotImplementedError("forces: write f(t, q, q')")
-
-
-def accelerations(t, q, v, p):
-    """q'' = M^-1 f: what the engines are compared with."""
-    return np.linalg.solve(mass_matrix(q, p), forces(t, q, v, p))
-
-
-def energy(t, q, v, p):
-    """Kinetic plus potential energy (gravity's zero at the world origin, springs' at coordinate 0), J.
-    Optional: without it the derivation's energy rows are not applicable (the engines' stay)."""
-    {unpack(coords)} = q
-    {unpack(rates)} = v
-    raise NotImplementedError("energy: write T + V")
-'''
-    bindings = "\n".join(f"{p} = [{{ {', '.join(f'{k} = {_toml(x)}' for k, x in table.items())} }}]"
-                         for p, (_, table, _) in params.items())
-    case_toml = f'''# What dyncheck cannot read from scene.xml and equations.py alone (docs/own-case.md).  Everything
-# else (units, horizon, steps, tolerances, random states) is derived; any table of docs/case-file.md
-# written here replaces the derived one.
-
-[scene.bindings]
-{bindings}
-'''
-    return equations, case_toml
-
-
-def _toml(x):
+def toml_value(x):
+    """A number or a string as TOML writes it."""
     return f'"{x}"' if isinstance(x, str) else repr(x)

@@ -17,6 +17,7 @@ import numpy as np
 from dyncheck.case import derived, files, isolation, scene, schema
 from dyncheck.case.halton import halton
 from dyncheck.case.isolation import guarded, load_file
+from dyncheck.case.coordinate_map import Mapped
 from dyncheck.case.scene import PLACEHOLDER_INERTIA, PLACEHOLDER_MASS, compare_scenes
 from dyncheck.common import expressions, words
 from dyncheck.common.messages import suggest
@@ -460,6 +461,8 @@ class Case:
             raise ValueError(f"{path}: no such scene file (case '{self.name}' needs it for {source})")
         model = Model(path, self.scene, self.writes(Model, path))
         self._verify(model, path)
+        if self.scene.coordinate_map:  # the adapter runs in the joints; the checks see the case's coordinates
+            model = Mapped(model, self.scene.coordinate_map)
         other = {"mujoco": "pinocchio", "pinocchio": "mujoco"}[source]
         if other in self._models:  # both engines loaded: their files must model the same scene
             engines = {source: model, other: self._models[other]}

@@ -21,6 +21,7 @@ import struct
 import sys
 import threading
 import time
+import traceback
 from dataclasses import dataclass
 from multiprocessing import connection, get_all_start_methods, get_context
 from pathlib import Path
@@ -433,6 +434,10 @@ def _main_child(main, record, token, parent):
     except KeyboardInterrupt:  # wherever Ctrl-C lands that main does not expect it
         print("dyncheck: interrupted", file=sys.stderr)
         code = 130
+    except Exception:  # dyncheck's own error (a case's is caught where it runs): said so, not blamed on the case
+        traceback.print_exc()
+        print("dyncheck: internal error: the traceback above is dyncheck's own, not the case's", file=sys.stderr)
+        code = 1
     sys.stdout.flush()
     sys.stderr.flush()
     record.done(code, token)

@@ -163,6 +163,10 @@ MEANINGS = {
                          "says what the runs show (see Measured numbers in prose).",
     "scene": "How the scene files (scene.xml for MuJoCo, scene.urdf for Pinocchio) map to the case.",
     "scene.coords": "Each coordinate of a hinge or slide joint, by name: that joint's name in the scene files.",
+    "scene.joints": "Instead of `scene.coords`, where the coordinates are not the joints' own (absolute angles over "
+                    "a chain's relative hinges, another zero or sign): each hinge and slide of the scene as an affine "
+                    "function of the coordinates and parameters, `{elbow = \"phi2 - phi1\"}`. The engines run in the "
+                    "joints; every comparison and every named term is in the coordinates (docs/own-case.md).",
     "scene.euler": "A ball joint whose orientation the book writes in Euler angles.",
     "scene.euler.joint": "The ball joint's name in the scene files.",
     "scene.euler.coords": "The three coordinates that are its Euler angles, in the order of the book's rotations.",

@@ -10,6 +10,7 @@ from typing import Callable, Mapping
 
 import numpy as np
 
+from dyncheck.case.coordinate_map import CoordinateMap, parse
 from dyncheck.common import expressions
 
 
@@ -83,7 +84,9 @@ def bindings(spec):
 class Scene:
     """What the adapters take of a case: its coordinates and the joints they move (`layout`), the prescribed
     motions and applied forces by joint, the reactions and points by name, the bodies whose paths are traced,
-    the URDF's root joint and the joints that closed loops move (`dependent`, engines.loops)."""
+    the URDF's root joint and the joints that closed loops move (`dependent`, engines.loops).  Where the case's
+    coordinates are a map of the joints (`coordinate_map`, dyncheck.case.coordinate_map), `coords` are the joints:
+    the adapters run in them, and the case's models are Mapped."""
     coords: tuple[str, ...]
     layout: tuple[Coordinates, ...]
     driven: Mapping[str, Driven]
@@ -93,6 +96,7 @@ class Scene:
     paths: tuple[str, ...] = ()
     urdf_root_joint: RootJoint | None = None
     dependent: tuple[str, ...] = ()
+    coordinate_map: CoordinateMap | None = None
 
 
 # The two scene files' bodies and gravity (engines.scene.Body) must agree to within SCENE_RTOL of the
@@ -119,8 +123,9 @@ class AppliedForce:
         self.components = tuple(components)
         self._coords, self._rates = tuple(coords), tuple(f"{c}_rate" for c in coords)
         self._names = expressions.of_parameters(params)
-        state = {"t", *self._coords, *self._rates}
-        self.constant = not any(expressions.names(x) & state for x in self.components if isinstance(x, str))
+        named = set().union(*(expressions.names(x) for x in self.components if isinstance(x, str)))
+        self.of_state = bool(named & {*self._coords, *self._rates})
+        self.constant = not (self.of_state or "t" in named)
 
     def __call__(self, t, q, v):
         names = {**self._names, "t": t, **dict(zip(self._coords, q)), **dict(zip(self._rates, v))}
@@ -131,8 +136,15 @@ class AppliedForce:
 def describe(case):
     """The scene of `case` (its [scene] table, every number at its parameters) as the adapters take it."""
     s = case.spec["scene"]
-    index = {c: i for i, c in enumerate(case.coords)}
-    layout = [Coordinates("scalar", joint, (index[c],)) for c, joint in s["coords"].items()]
+    mapped = parse(s["joints"], case.coords, case.params, f"{case.origin}: scene.joints") if "joints" in s else None
+    if mapped and ("euler" in s or s.get("dependent")):
+        raise ValueError(f"{case.origin}: scene.joints = {dict(s['joints'])}: a map of the coordinates takes hinges "
+                         "and slides of an open chain; this scene has " + (
+                             "a ball joint (scene.euler)" if "euler" in s else "closed loops (scene.dependent)"))
+    coords = mapped.joints if mapped else tuple(case.coords)  # the adapters' coordinates
+    index = {c: i for i, c in enumerate(coords)}
+    layout = [Coordinates("scalar", joint, (i,)) for i, joint in enumerate(mapped.joints)] if mapped else \
+        [Coordinates("scalar", joint, (index[c],)) for c, joint in s["coords"].items()]
     if "euler" in s:
         layout.append(Coordinates("euler", s["euler"]["joint"], tuple(index[c] for c in s["euler"]["coords"])))
     driven = {joint: Driven(*(case.value(m.get(key, 0.0)) for key in ("angle", "rate", "acc")))
@@ -141,14 +153,17 @@ def describe(case):
     for joint, force in s.get("applied", {}).items():
         try:
             applied[joint] = AppliedForce(force, case.coords, case.params)
+            if mapped and applied[joint].of_state:  # the adapters would evaluate it at the joints' state
+                raise ValueError("with scene.joints (a map of the coordinates), an applied force may be a law of t "
+                                 "and the parameters only, not of the coordinates or their rates")
         except ValueError as error:  # an expression that does not parse, or names what it may not
             raise ValueError(f"{case.origin}: scene.applied.{joint} = {force!r}: {error}") from None
     reactions = {name: Reaction(r["body"], r["sensor"], r["axis"], r["frame"], r.get("quantity", "force"))
                  for name, r in s["reactions"].items()}
     points = {name: Point(p["body"], p["frame"], p.get("kind", "acceleration")) for name, p in s.get("points", {}).items()}
     root = s.get("urdf_root_joint")
-    return Scene(tuple(case.coords), tuple(layout), driven, applied, reactions, points, tuple(s.get("paths", [])),
-                 RootJoint(root["name"], root["type"]) if root else None, tuple(s.get("dependent", [])))
+    return Scene(coords, tuple(layout), driven, applied, reactions, points, tuple(s.get("paths", [])),
+                 RootJoint(root["name"], root["type"]) if root else None, tuple(s.get("dependent", [])), mapped)
 
 
 def compare_scenes(mujoco_model, pinocchio_model, case_name):

@@ -86,6 +86,7 @@ SCHEMA = ("table", {
                              "caption?": "str"}),
     "scene": ("table", {
         "coords": ("map", "str"),  # book coordinate -> hinge or slide joint
+        "joints?": ("map", "str"),  # or: hinge or slide joint -> affine expression of the coordinates
         "euler?": ("table", {"joint": "str", "coords": ("list", "str")}),  # ball joint in Euler angles
         "driven": ("map", ("table", {"angle?": "expr", "rate?": "expr", "acc?": "expr"})),
         "dependent?": ("list", "str"),  # joints that closed loops move (engines.loops), no coordinate's
@@ -404,7 +405,10 @@ def _cross_references(spec, file):
     euler = scene.get("euler", {}).get("coords", [])
     if "euler" in scene and len(euler) != 3:
         raise field_error(file, "scene.euler.coords", euler, "does not name 3 coordinates (a ball joint's Euler angles)")
-    if sorted([*scene["coords"], *euler]) != sorted(coords):
+    if "joints" in scene and scene["coords"]:
+        raise field_error(file, "scene.coords", scene["coords"], "is given with scene.joints, which gives every "
+                          "joint as a function of the coordinates: give one of the two")
+    if "joints" not in scene and sorted([*scene["coords"], *euler]) != sorted(coords):
         raise field_error(file, "scene.coords", scene["coords"],
                      f"(with scene.euler) does not give each of the coordinates ({', '.join(coords) or 'none'}) "
                      "exactly one joint")

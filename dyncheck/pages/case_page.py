@@ -59,7 +59,7 @@ def size(error, spec=".3g"):
 
 def worst_engine_error(rows):
     """Largest pointwise error among the reference (or derivation), MuJoCo and Pinocchio."""
-    errors = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= AGREEING]
+    errors = [r.error for r in rows if r.check == "pointwise" and set(r.sources) <= AGREEING and r.error is not None]
     return max(errors, default=float("nan"))
 
 
@@ -168,7 +168,9 @@ def scene_table(case):
     scene = case.scene
     rows = [{"joint": joint, "role": f"prescribed: {law_of_time(law)}"} for joint, law in scene.driven.items()]
     whose = "the coordinate " if case.one_derivation else "the book's "
-    rows += [{"joint": joint, "role": "free: " + whose + ", ".join(case.coords[i] for i in idx)
+    mapped = case.spec["scene"].get("joints", {})  # the joints as functions of the coordinates
+    rows += [{"joint": joint, "role": f"free: at {mapped[joint]} (the map of the coordinates)" if mapped else
+              "free: " + whose + ", ".join(case.coords[i] for i in idx)
               + (" (ball joint, in Euler angles)" if kind == "euler" else "")}
              for kind, joint, idx in ((c.kind, c.joint, c.indices) for c in scene.layout)]
     rows += [{"joint": joint, "role": "dependent: each engine solves it from the coordinates, closing the loop"}
