@@ -46,6 +46,31 @@ def accelerations(t, q, v, p):
     return np.linalg.solve(mass_matrix(q, p), forces(t, q, v, p))
 '''
 
+# The same chain as generated inverse dynamics come (docs/own-case.md: tau(t, q, q', q'') = M q'' - f), a recursive
+# Newton-Euler pass: the masses' accelerations outwards, r_k'' = sum_{j <= k} L_j (phi_j'' (cos, sin) + phi_j'^2
+# (-sin, cos)), then each joint's moment inwards, tau_i = sum_{k >= i} (r_k - o_i) x m_k (r_k'' + g e_z) about -y.
+INVERSE = '''"""A planar chain of {n} point masses on massless links, as generated inverse dynamics (a recursive
+Newton-Euler pass: the masses' accelerations outwards, the joints' moments inwards)."""
+import numpy as np
+
+COORDS = {coords!r}
+PARAMS = {params!r}
+LENGTHS = np.array({lengths!r})
+
+
+def inverse_dynamics(t, q, v, a, p):
+    phi, rate, acc = np.cumsum(q), np.cumsum(v), np.cumsum(a)
+    links = LENGTHS * np.array([np.sin(phi), -np.cos(phi)])  # each link, from its joint to its mass
+    ends = np.cumsum(links, axis=1)  # the masses' positions r_k
+    starts = ends - links  # the joints' positions o_k
+    along = LENGTHS * (acc * np.array([np.cos(phi), np.sin(phi)]) + rate**2 * np.array([-np.sin(phi), np.cos(phi)]))
+    masses = np.array([p[f"m{{k + 1}}"] for k in range(len(q))])
+    pull = masses * (np.cumsum(along, axis=1) + np.array([[0.0], [p["g"]]]))  # m_k (r_k'' + g e_z)
+    tau = np.array([np.sum((ends[0, i:] - starts[0, i]) * pull[1, i:] - (ends[1, i:] - starts[1, i]) * pull[0, i:])
+                    for i in range(len(q))])
+    return tau{planted}
+'''
+
 
 def scene(n):
     """The MJCF of the chain: link k hangs from link k-1's end by hinge theta_k about -y (a positive angle swings
@@ -67,13 +92,18 @@ RELATIVE = {"angles": "np.cumsum(q), np.cumsum(v)",  # J_k: column i is sum_{i <
 ABSOLUTE = {"angles": "q, v", "jacobians": "[columns * (np.arange(n) <= k) for k in range(n)]"}
 
 
-def write(folder, n, planted="", absolute=False, joints=None):
+def write(folder, n, planted="", absolute=False, joints=None, inverse=False):
     """The case folder of an n-link chain; `planted`: an expression added to the force side f (a numpy array),
     an error planted in the derivation; `absolute`: the derivation in absolute angles phi_k, with the map JOINTS
-    (`joints`, or theta_k = phi_k - phi_{k-1})."""
+    (`joints`, or theta_k = phi_k - phi_{k-1}); `inverse`: as inverse dynamics (INVERSE)."""
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "scene.xml").write_text(scene(n))
     params = {f"m{k + 1}": MASSES[k] for k in range(n)} | {"g": G}
+    if inverse:  # tau = M q'' - f: an error added to f is taken from tau
+        (folder / "equations.py").write_text(INVERSE.format(
+            n=n, coords=[f"theta{k + 1}" for k in range(n)], params=params, lengths=list(LENGTHS[:n]),
+            planted=f" - ({planted})" if planted else ""))
+        return folder
     if absolute:
         joints = joints or {f"theta{k + 1}": f"phi{k + 1} - phi{k}" if k else "phi1" for k in range(n)}
     (folder / "equations.py").write_text(EQUATIONS.format(

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dyncheck.case import derived
 from dyncheck.case.folder import Case
 from dyncheck.cli import main
 from test_architecture import doc_example
@@ -391,3 +392,21 @@ def test_one_scene_number_bound_by_two_parameters_is_refused(tutorial):
                                         'l = [{ element = "body", name = "bob", attribute = "mass" }]\n')
     with pytest.raises(ValueError, match=r"scene.bindings.l\[0\] = .* is also bound by m"):
         Case(tutorial)
+
+
+@pytest.mark.parametrize("docstring, title, opening", [
+    ("A chain, as generated inverse dynamics (a recursive\nNewton-Euler pass).\n\nIts links are rods.",
+     "A chain, as generated inverse dynamics (a recursive Newton-Euler pass).", "Its links are rods."),
+    ("Cart and pendulum.\nThe cart slides on a spring.", "Cart and pendulum.", "The cart slides on a spring."),
+    ("Cart and pendulum\n\nThe cart slides.", "Cart and pendulum", "The cart slides."),
+    ("Cart and pendulum", "Cart and pendulum", "Cart and pendulum")])
+def test_a_docstring_s_first_sentence_is_the_page_s_title_wrapped_or_not(docstring, title, opening):
+    assert derived.docstring_parts(docstring) == (title, opening)
+
+
+def test_a_figure_title_keeps_a_long_case_title_to_one_line():
+    from dyncheck.common.style import title
+    long = "A planar chain of seven point masses on massless links, as generated inverse dynamics come"
+    assert title(long, "coordinates over time").split("\n")[0].endswith("...:")
+    assert title("1.9 Planar double pendulum", "coordinates over time") == \
+        "1.9 Planar double pendulum: coordinates over time"

@@ -458,8 +458,8 @@ def case_file(folder, module, scene, given, overrides=None):
         (f" * abs({gravity})" if gravity else " * 9.81")
     derived = {
         "name": folder.name,
-        "title": (module.__doc__ or folder.name).strip().splitlines()[0].rstrip("."),
-        "summary": summary(module.__doc__),
+        "title": docstring_parts(module.__doc__ or folder.name)[0].rstrip("."),
+        "summary": docstring_parts(module.__doc__)[1],
         "derivation": where,
         "coords": list(coords),
         "reactions": reactions,
@@ -505,10 +505,15 @@ def numbers(overrides, params):
     return {name: x for name, x in out.items() if name in params and math.isfinite(x)}
 
 
-def summary(docstring):
-    """The page's opening paragraph: the module's docstring after its first line (the title), or that line."""
-    lines = (docstring or "").strip().splitlines()
-    return "\n".join(lines[1:]).strip() or (lines[0] if lines else "")
+def docstring_parts(docstring):
+    """The page's title and opening text from the module's docstring: its first sentence (a summary line, or a
+    sentence wrapped over the lines up to one that ends it, within the first paragraph), joined; then the rest as
+    written (or the title again, where there is none)."""
+    lines = (docstring or "").strip().splitlines() or [""]
+    ends = next((i for i, line in enumerate(lines) if not line.strip() or line.rstrip().endswith(".")), len(lines))
+    end = ends + 1 if ends < len(lines) and lines[ends].strip() else max(ends, 1)
+    title = " ".join(line.strip() for line in lines[:end])
+    return title, "\n".join(lines[end:]).strip() or title
 
 
 def work_precision(omega):

@@ -27,17 +27,13 @@ def with_paths(case, run):
 
 
 def drawings(case, runs):
-    """The scene at t = 0 for the report's scene figure: the world positions of the body origins, the
-    index of each body's parent (0: the world), and of each traced body's origin; None when the
-    tight reference blew up (nothing is drawn along it)."""
+    """The scene at t = 0 for the report's scene figure, beside the animation's first frame: the world positions of
+    the body origins; None when the tight reference blew up (nothing is drawn along it)."""
     if not runs["reference"].ok:
         return {"scene": None}
-    model = case.model("mujoco")
     tight = runs["reference"].twin
-    _, origins, parents = model.points(0.0, tight[list(case.coords)].to_numpy()[0])
-    return {"scene": {"origins": origins, "parents": parents,
-                      "path_origins": np.array([model.body_id(name) - 1 for name in case.scene.paths],
-                                               dtype=int)}}
+    _, origins, _ = case.model("mujoco").points(0.0, tight[list(case.coords)].to_numpy()[0])
+    return {"scene": {"origins": origins}}
 
 
 # When frames are taken: often enough for the fastest motion shown, no oftener than a slow motion needs.

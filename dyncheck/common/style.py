@@ -120,7 +120,9 @@ def check_text(fig, path):
 
 def title(name, what):
     """A figure's title: the example it belongs to (its heading, "1.8.3 Spring-mass pendulum ..."), then
-    what the figure shows, on further lines when both would not fit the page's width."""
+    what the figure shows, on further lines when both would not fit the page's width.  A name longer than a line (a
+    researcher's docstring's first sentence) is shortened to one, at a word: the page above gives it whole."""
+    name = textwrap.shorten(name, 79, placeholder=" ...")  # and its colon: one line
     return f"{name}: {what}" if len(name) + len(what) < 80 else textwrap.fill(f"{name}:", 80) + "\n" + textwrap.fill(what, 80)
 
 

@@ -58,41 +58,48 @@ def quantity_label(name):
 
 
 def figure_scene(result, case, path, *, words):
-    """The scene at t = 0 and the path of each point mass along the tight run; returns the caption."""
+    """The scene at t = 0, every body as the animation draws it (its first frame: engines.render.skeleton), and the
+    path of each traced point mass along the tight run; returns the caption."""
     tight = trajectories(result)["tight reference"]
-    scene = result.drawings["scene"]
-    origins, parents = scene["origins"], scene["parents"]
+    origins = result.drawings["scene"]["origins"]
+    skeleton = result.drawings["animation"]["exact"]  # its first frame is t = 0
     paths = np.array([tight[[f"{body}_{axis}" for axis in "xyz"]].to_numpy() for body in case.scene.paths])
     paths = paths.reshape(len(case.scene.paths), len(tight), 3).transpose(1, 0, 2)  # (time, body, xyz)
     paths = thin(paths)
-    planar = np.ptp(np.concatenate([paths[..., 2].ravel(), origins[:, 2]])) < 1e-12
+    drawn = np.concatenate([paths.reshape(-1, 3), origins, skeleton.dots[0], skeleton.segments[0].reshape(-1, 3),
+                            skeleton.rims[0].reshape(-1, 3)])
+    flat = [i for i in range(3) if np.ptp(drawn[:, i]) < 1e-12]  # a planar scene: drawn in its plane
+    used = [i for i in range(3) if i != flat[-1]] if flat else [0, 1, 2]
     fig = pyplot().figure(figsize=(TEXT_WIDTH, 4.6))
-    ax = fig.add_subplot(projection=None if planar else "3d")
-    dims = 2 if planar else 3
-    chain = np.vstack([np.zeros(3), origins])  # body 0 is the world origin
-    for i, parent in enumerate(parents):
-        seg = chain[[parent, i + 1], :dims].T
-        ax.plot(*seg, color="0.3", lw=2)
-    ax.scatter(*chain[:, :dims].T, color="0.3", s=12)
+    ax = fig.add_subplot(projection=None if flat else "3d")
+    pick = lambda xyz: np.asarray(xyz)[..., used].T
+    for segment in skeleton.segments[0]:
+        ax.plot(*pick(segment), color="0.3", lw=2)
+    for ring in skeleton.rims[0]:
+        ax.plot(*pick(ring), color="tab:green", lw=1.2)
+    ax.scatter(*pick(np.vstack([np.zeros(3), origins])), color="0.3", s=12)  # the world's origin, the bodies'
+    sizes = 40 * (skeleton.masses / skeleton.masses.max()) ** (2 / 3) + 10 if len(skeleton.masses) else []
+    ax.scatter(*pick(skeleton.dots[0]), color="0.1", s=sizes, zorder=4)
     lines = ("-", "--", ":", "-.")  # one per body's path: told apart in grey
     for b, name in enumerate(case.scene.paths):
-        arm = np.vstack([origins[scene["path_origins"][b]], paths[0, b]])  # body origin to its point mass
-        ax.plot(*arm[:, :dims].T, color="0.3", lw=2)
-        ax.plot(*paths[:, b, :dims].T, lw=0.8, ls=lines[b % len(lines)], label=f"path of {name}")
-        ax.scatter(*paths[0, b, :dims], s=40, marker="o", zorder=5)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    if planar:
+        ax.plot(*pick(paths[:, b]), lw=0.8, ls=lines[b % len(lines)], label=f"path of {name}")
+        ax.scatter(*pick(paths[0, b]), s=40, marker="o", zorder=5)
+    labels = [f"{axis} [m]" for axis in "xyz"]
+    ax.set_xlabel(labels[used[0]])
+    ax.set_ylabel(labels[used[1]])
+    if flat:
         ax.set_aspect("equal")
     else:
         ax.set_zlabel("z [m]")
-    ax.set_title(titled(case, "the scene at t = 0 and the path in space"))
+    ax.set_title(titled(case, "the scene at t = 0" + (" and the path in space" if case.scene.paths else "")))
     legend_below(fig)
     save(fig, path)
     moving = ", ".join(case.scene.paths)
-    return ("The bodies and joints at t = 0 (grey lines, the dots their origins)"
-            + (f" and the path of {moving} over 0-{tight.index[-1]:g} s"
-               f" ({named(words, 'tight reference')}); axes in metres, {'the plane of motion' if planar else 'in space'}."
+    rings = "; a green ring, the disk of a rigid body's largest principal moment" if skeleton.rims.shape[1] else ""
+    return ("The bodies at t = 0: grey lines from each body's origin (small dots) to what hangs on it and to its "
+            f"centre of mass (large dots, by mass){rings}"
+            + (f"; the path of {moving} over 0-{tight.index[-1]:g} s"
+               f" ({named(words, 'tight reference')}); axes in metres, {'the plane of motion' if flat else 'in space'}."
                if moving else "; axes in metres."))
 
 
