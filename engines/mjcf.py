@@ -11,6 +11,7 @@ import numpy as np
 from engines.bindings import SceneLocation
 
 PLACEHOLDER_INERTIA = 1e-14  # kg m^2: the placeholder of docs/own-case.md (dyncheck.case.scene holds cases to it)
+PLACEHOLDER_MASS = 1e-12  # kg: a body that only carries a joint (its mass means none)
 
 
 @dataclass(frozen=True)
@@ -39,6 +40,7 @@ class SceneFile:
     masses: dict  # body name -> mass, kg
     length: float  # the largest distance between two bodies' origins or a body and its centre of mass, m
     loops: dict  # <equality> name -> its body1 (engines.loops: each a <connect> closing a loop)
+    point_masses: tuple  # the bodies with mass whose inertia is a placeholder's (each moment at most PLACEHOLDER_INERTIA)
 
 
 def describe(path):
@@ -82,7 +84,9 @@ def describe(path):
     return SceneFile(str(path), joints, sensors[mujoco.mjtSensor.mjSENS_FORCE], sensors[mujoco.mjtSensor.mjSENS_TORQUE],
                      tuple(values),
                      {body_name(b): float(m.body_mass[b]) for b in range(1, m.nbody)}, float(max(lengths, default=0.0)),
-                     {name(mujoco.mjtObj.mjOBJ_EQUALITY, e) or str(e): body_name(_body1(m, e)) for e in range(m.neq)})
+                     {name(mujoco.mjtObj.mjOBJ_EQUALITY, e) or str(e): body_name(_body1(m, e)) for e in range(m.neq)},
+                     tuple(body_name(b) for b in range(1, m.nbody)
+                           if m.body_mass[b] > PLACEHOLDER_MASS and np.all(m.body_inertia[b] <= PLACEHOLDER_INERTIA)))
 
 
 def _body1(m, e):

@@ -477,8 +477,10 @@ def case_file(folder, module, scene, given, overrides=None):
                         "mujoco_step": output_step / substeps},
         "tolerance": {
             "pointwise": {"value": 1e-9, "force_scale": weight, "moment_scale": f"{weight} * {length:.6g}",
-                          "why": "The derivation's and the engines' rounding (1e-13 or so of each quantity's size), "
-                                 "and MuJoCo's placeholder inertias (1e-14 kg m^2): far below 1e-9."},
+                          "why": "The derivation's and the engines' rounding (1e-13 or so of each quantity's size)"
+                                 + (f", and the placeholder inertias (at most 1e-14 kg m^2) of the point masses "
+                                    f"{', '.join(scene.point_masses)}, which their derivation leaves out"
+                                    if scene.point_masses else "") + ": far below 1e-9."},
             "trajectory": {"safety": 10.0, "why": "Ten times each run's own error estimate."},
             "energy": {"safety": 10.0, "why": "Ten times each balance's own error estimate."}},
         "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; {where} the derivation"
