@@ -478,8 +478,9 @@ def case_file(folder, module, scene, given, overrides=None):
         "tolerance": {
             "pointwise": {"value": 1e-9, "force_scale": weight, "moment_scale": f"{weight} * {length:.6g}",
                           "why": "The derivation's and the engines' rounding (1e-13 or so of each quantity's size)"
-                                 + (f", and the placeholder inertias (at most 1e-14 kg m^2) of the point masses "
-                                    f"{', '.join(scene.point_masses)}, which their derivation leaves out"
+                                 + (f", and the placeholder inertias (at most 1e-14 kg m^2) of the point mass"
+                                    f"{'es' * (len(scene.point_masses) > 1)} {', '.join(scene.point_masses)}, which "
+                                    "the derivation leaves out"
                                     if scene.point_masses else "") + ": far below 1e-9."},
             "trajectory": {"safety": 10.0, "why": "Ten times each run's own error estimate."},
             "energy": {"safety": 10.0, "why": "Ten times each balance's own error estimate."}},
