@@ -4,6 +4,7 @@ and `dyncheck new`, whose scaffold runs once its equations are written."""
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from dyncheck.cli import main
@@ -115,3 +116,16 @@ def test_a_wrong_reaction_is_named_while_the_equations_hold(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "the derivation's reaction rod_z: add + m g cos(theta) to it to agree with the engines" in out
     assert "consequences" not in out
+
+
+def test_new_writes_the_dampers_drive_power_in_the_scaffold_s_names():
+    """A scene with dampers: the scaffold's drive_power is written out (each damper takes c q'^2), in the names of
+    its PARAMS, and its docstring opens with the case's name (not a body's)."""
+    from dyncheck.case.scaffold import scaffold
+    from engines.mjcf import describe
+    equations, _ = scaffold("cartnew", describe(Path(__file__).parent.parent / "examples" / "forced_cart_pendulum" / "scene.xml"))
+    assert equations.startswith('"""cartnew: ')
+    namespace = {}
+    exec(compile(equations, "equations.py", "exec"), namespace)
+    p, v = namespace["PARAMS"], np.array([0.7, -2.0])
+    assert namespace["drive_power"](0.0, np.zeros(2), v, p) == -(p["c_x"] * 0.7**2 + p["c_theta"] * 2.0**2)

@@ -218,3 +218,21 @@ def test_the_overview_quotes_the_sentence_of_the_committed_sweeps():
               for path in sorted(data.glob("*_work_precision.csv"))}
     overview = " ".join((Path(__file__).parents[1] / "docs" / "overview.md").read_text().split())
     assert f"Speed against accuracy, in short: {work_precision.in_short(sweeps)}." in overview
+
+
+def test_a_point_that_spends_its_wall_time_is_budget_spent_not_unstable(monkeypatch):
+    """A run stopped by its wall-time budget (simulate's OverBudget) is its own status in the sweep, as in the
+    checks' rows: the machine's load or a costly evaluation, not an instability of the method."""
+    from dyncheck.run.simulate import OverBudget
+    case = tiny(dyncheck.load_case("spring_pendulum"), {"reference": {"DOP853": [1e-6], "RK45": [1e-6]}})
+
+    def slow(model, start, t_end, method, **kwargs):
+        if method == "RK45":
+            raise OverBudget(method, 0.25, 40, "gave up after 120 s of wall time")
+        return real_simulate(model, start, t_end, method, **kwargs)
+
+    monkeypatch.setattr(work_precision, "simulate", slow)
+    frame = work_precision.sweep(case)
+    spent = frame[frame["method"] == "RK45"]
+    assert list(spent["status"]) == ["budget spent"] and "budget spent at t = 0.25 s, step 40" in spent["detail"].iloc[0]
+    assert list(frame[frame["method"] == "DOP853"]["status"]) == ["ok"]

@@ -15,13 +15,14 @@ def scaffold(name, scene):
         location, attribute = v.location, v.location.attribute
         if attribute == "mass" and v.value <= 1e-12:  # a placeholder: no parameter
             continue
-        name = location.name
-        label = {"mass": f"m_{name}", "stiffness": f"k_{name}", "damping": f"c_{name}", "springref": f"{name}_rest",
-                 None: "g", "pos": f"{name}_pos_{AXES[location.index]}", "ipos": f"{name}_com_{AXES[location.index]}",
-                 "inertia": f"I{AXES[location.index] * 2}_{name}"}[attribute]
+        owner = location.name  # the body's or joint's (not the case's `name`)
+        label = {"mass": f"m_{owner}", "stiffness": f"k_{owner}", "damping": f"c_{owner}", "springref": f"{owner}_rest",
+                 None: "g", "pos": f"{owner}_pos_{AXES[location.index]}", "ipos": f"{owner}_com_{AXES[location.index]}",
+                 "inertia": f"I{AXES[location.index] * 2}_{owner}"}[attribute]
         scale = -1.0 if v.value < 0 and attribute in SIGNED else 1.0
         params[label] = (scale * v.value, binding_table(location, scale),
-                         ABOUT[attribute].format(name=name, index=component(location)))
+                         ABOUT[attribute].format(name=owner, index=component(location)))
+    dampers = [j.name for j in scalar if f"c_{j.name}" in params]
     coords = [j.name for j in scalar]
     unpack = lambda names: ", ".join(names) + ("," if len(names) == 1 else "")
     rates = [f"{c}_rate" for c in coords]
@@ -70,7 +71,14 @@ def energy(t, q, v, p):
     {unpack(coords)} = q
     {unpack(rates)} = v
     raise NotImplementedError("energy: write T + V")
-'''
+''' + ('' if not dampers else f'''
+
+def drive_power(t, q, v, p):
+    """The power put in and taken out, W: each damper takes c q'^2 (the work-energy balance of a damped scene
+    needs it, docs/model-interface.md).  Add what any applied force puts in."""
+    {unpack(rates)} = v
+    return -({' + '.join(f'p["c_{j}"] * {j}_rate**2' for j in dampers)})
+''')
     bindings = "\n".join(f"{p} = [{{ {', '.join(f'{k} = {toml_value(x)}' for k, x in table.items())} }}]"
                          for p, (_, table, _) in params.items())
     case_toml = f'''# What dyncheck cannot read from scene.xml and equations.py alone (docs/own-case.md).  Everything

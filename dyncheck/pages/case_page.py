@@ -462,7 +462,7 @@ def study_sections(result, case, tmp):
         caption = work_precision.figure(frame, case, tmp / chart)
         files += [csv, chart]
         reference = frame.attrs["reference"]
-        unstable = frame[frame["status"] == "unstable"]
+        unfinished = frame[frame["status"].isin(work_precision.UNFINISHED)]
         best = work_precision.cheapest(frame).drop(columns=["points", "methods"])
         best["level"] = best["level"].map(lambda x: f"{x:.0e}")
         for column in ("evaluations", "runner_up_evaluations"):
@@ -479,9 +479,12 @@ def study_sections(result, case, tmp):
                   f" error); in CPU time on the [timing page]({timing_page_name(case)}):", "",
                   markdown_table(best.rename(columns={"runner_up": "runner-up",
                                                       "runner_up_evaluations": "runner-up evaluations"})), ""]
-        if len(unstable):
-            lines += ["Unstable (blew up; not drawn): " + "; ".join(
-                f"{work_precision.point_label(r)}: {r['detail']}" for _, r in unstable.iterrows()) + ".", ""]
+        for status, words in zip(work_precision.UNFINISHED, ("Unstable (blew up; not drawn)",
+                                                             "Budget spent (stopped at its wall time; not drawn)")):
+            points = unfinished[unfinished["status"] == status]
+            if len(points):
+                lines += [f"{words}: " + "; ".join(f"{work_precision.point_label(r)}: {r['detail']}"
+                                                    for _, r in points.iterrows()) + ".", ""]
     if convergence:
         lines += ["## Convergence", "",
                   "Observed order of each fixed-step method, from runs at h, h/2, h/4 (checks; tolerance from"

@@ -16,7 +16,7 @@ from dyncheck.checks.convergence import settings
 from dyncheck.common.ceilings import ROUNDING_FLOOR
 from dyncheck.common.messages import plural
 from dyncheck.common.style import METHOD_COLOUR, SWEEP_STYLE, legend_below, log_range, panels, save, title
-from dyncheck.results.values import heading
+from dyncheck.results.values import Status, heading
 from dyncheck.run import cache
 from dyncheck.run.simulate import SCIPY_METHODS, Unstable, energy_residual, fastest_frequency, simulate, state_columns
 
@@ -28,6 +28,7 @@ COLUMNS = ["case", "source", "method", "setting", "value", "error", "energy_erro
 # leave them out (a report made twice is the same), and the timing files (write_csv(..., timing=True),
 # figure(..., cost="cpu")) carry them.
 TIMING_COLUMNS = ["cpu", "cpu_min", "cpu_max", "repeats"]
+UNFINISHED = (str(Status.UNSTABLE), str(Status.SPENT))  # a point's run that blew up or ran out of its wall time
 COSTS = {"evaluations": "right-hand-side evaluations", "cpu": "CPU time [s], median (bars: fastest to slowest)"}
 COST_WORDS = {"evaluations": "right-hand-side evaluations", "cpu": "CPU time (the fastest of repeated runs)"}
 NO_SWEEP = ("Nothing to integrate: every motion of this scene is prescribed (no free coordinate), so it "
@@ -126,7 +127,8 @@ def sweep(case, progress=None):
     of the CPU times of `repeats` timed runs (`repeat` when one run takes under `repeat_under` seconds in all, else one; DECIDING_REPEATS
     for a point that decides the CPU-time table of cheapest()); evaluations: right-hand sides (MuJoCo: 1 or 4 per step);
     steps: fixed steps (NaN for scipy, which does not report them).  A run that blows up is a row
-    with status "unstable", NaN errors and the time and step in `detail`.  resolved: whether the error
+    with status "unstable" (or "budget spent", where it ran out of its wall time), NaN errors and the time and step in
+    `detail`.  resolved: whether the error
     is above RESOLUTION times the reference's verified accuracy.  An empty frame for a case with
     nothing to integrate (NO_SWEEP)."""
     wp = settings(case)
@@ -153,10 +155,10 @@ def sweep(case, progress=None):
             run, took = timed(source, method, setting, value)
         except Unstable as failure:
             rows.append({**point, "error": np.nan, "energy_error": np.nan, "evaluations": np.nan,
-                         "steps": failure.step, "status": "unstable", "resolved": False,
-                         "detail": f"unstable at t = {failure.t:.4g} s"
+                         "steps": failure.step, "status": str(failure.status), "resolved": False,
+                         "detail": f"{failure.status} at t = {failure.t:.4g} s"
                                    + (f", step {failure.step}" if failure.step is not None else "") + f": {failure.why}"})
-            _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: unstable")
+            _progress(progress, f"{case.name} {source} {method} {setting}={value:g}: {failure.status}")
             continue
         error = trajectory_error(run, reference, columns)
         times[len(rows)] = [run.attrs["cpu"]]
@@ -351,7 +353,7 @@ def figure(frame, case, path, cost="evaluations"):
     fig.suptitle(title(heading(case.spec), f"error against {'CPU time' if cost == 'cpu' else 'cost'} over "
                                            f"{ref.get('t_end', 0):g} s"))
     save(fig, path)
-    unstable = frame[frame["status"] == "unstable"]
+    unstable = frame[frame["status"].isin(UNFINISHED)]
     notes = "; ".join(f"{point_label(r)} ({r['detail'].split(':')[0]})" for _, r in unstable.iterrows())
     reached = cheapest(frame, cost)
     reached = reached[reached[cost].notna()]
