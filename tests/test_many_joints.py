@@ -51,8 +51,13 @@ def test_a_chain_of_seven_starts_near_hanging_and_its_runs_agree(tmp_path):
 def test_a_forced_example_keeps_its_start():
     """The forced cart pendulum has no rest that holds at every time (F0 cos(Omega t)): it starts where its committed
     report does, 0.5 rad and a tenth of the scene's size from the pose (examples/ sets no [initial])."""
-    q0, v0, _ = Case(EXAMPLES / "forced_cart_pendulum").initial
+    case = Case(EXAMPLES / "forced_cart_pendulum")
+    q0, v0, _ = case.initial
     assert q0.tolist() == [0.05, 0.5] and not v0.any()
+    # and its page says so, with the [initial] that would set another start
+    assert ("the runs start 0.05 m on every slide (0.1 of the scene's size), 0.5 rad on every angle from the scene's "
+            "pose, q = [0.05, 0.5]: no stable equilibrium at rest") in case.spec["report"]["modelling"]
+    assert "`[initial] q = [...]` in a case.toml" in case.spec["report"]["modelling"]
 
 
 # The error planted in the single-equation test of tests/test_bounded_localisation.py: half the third mass's weight

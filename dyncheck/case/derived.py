@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from dyncheck.case.coordinate_map import parse
-from dyncheck.case.start import displaced, initial_q
+from dyncheck.case.start import displaced, initial_q, unsettled
 from dyncheck.common import expressions
 from dyncheck.common.messages import WithBlock, suggest
 
@@ -488,7 +488,8 @@ def case_file(folder, module, scene, given, overrides=None):
                                 + ("" if given else "; no case.toml")
                                 + ("" if not mapped else f"; the derivation in coordinates of its own, the joints at "
                                    + ", ".join(f"{j} = {x}" for j, x in mapped.items()) + " (JOINTS)")
-                                + ("" if equilibrium is None else f"; the runs start {displaced(units, length)}, from "
+                                + ("" if start is None else f"; {unsettled(units, length, start)}"
+                                   if equilibrium is None else f"; the runs start {displaced(units, length)}, from "
                                    f"the stable equilibrium at rest, q = {(np.round(equilibrium, 6) + 0.0).tolist()}")},
         "scene": {"coords": joints, **({"joints": mapped} if mapped else {}), "driven": {}, "reactions": reaction_sensors(reactions, scene, file),
                   "bindings": bound, **({"dependent": dependent} if dependent else {})},

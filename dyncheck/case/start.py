@@ -23,11 +23,19 @@ SAFETY = 10.0  # on Newton-Raphson's tolerance, for the equilibrium at the other
 NEUTRAL = 1e-8
 
 
-def displaced(units, length):
-    """The displacement from the equilibrium in words: "0.1 rad on every angle, 0.0035 m on every slide"."""
-    words = {"rad": f"{DISPLACEMENT['rad']:g} rad on every angle",
-             "m": f"{DISPLACEMENT['m'] * length:.3g} m on every slide ({DISPLACEMENT['m']:g} of the scene's size)"}
+def displaced(units, length, by=DISPLACEMENT):
+    """The displacement `by` (from the equilibrium, or AWAY from the pose) in words: "0.1 rad on every angle,
+    0.0035 m on every slide"."""
+    words = {"rad": f"{by['rad']:g} rad on every angle",
+             "m": f"{by['m'] * length:.3g} m on every slide ({by['m']:g} of the scene's size)"}
     return ", ".join(words[unit] for unit in dict.fromkeys(units))
+
+
+def unsettled(units, length, q0):
+    """Where a case starts AWAY from its pose, in words for its page, with the `[initial]` that would set another."""
+    return (f"the runs start {displaced(units, length, AWAY)} from the scene's pose, q = {np.round(q0, 6).tolist()}: "
+            "no stable equilibrium at rest was found to start near; where the motion from there is chaotic (the "
+            "trajectory rows inconclusive), `[initial] q = [...]` in a case.toml beside the files sets another start")
 
 
 def initial_q(equations, units, length):
