@@ -114,6 +114,61 @@ def closed_form_subject(where):
     return Subject(f"{TUTORIAL}_closed_form", folder, "equations.py", CLOSED_FORM, ("accelerations",))
 
 
+# A rigid-body subject: two rigid links on hinges (an acrobot hanging), each with its inertia about its centre of mass
+# a parameter bound to the scene's diaginertia, as Spong's benchmark writes them (q2 the elbow's relative angle, both
+# from the downward vertical; a positive angle swings towards +x about the hinges' -y axes, as in tests/chain.py).
+ACROBOT_SCENE = """<mujoco model="acrobot">
+  <option gravity="0 0 -9.81"/>
+  <worldbody>
+    <body name="upper">
+      <joint name="q1" type="hinge" axis="0 -1 0"/>
+      <inertial pos="0 0 -0.22" mass="1.1" diaginertia="0.032 0.031 0.002"/>
+      <body name="lower" pos="0 0 -0.5">
+        <joint name="q2" type="hinge" axis="0 -1 0"/>
+        <inertial pos="0 0 -0.27" mass="0.9" diaginertia="0.025 0.024 0.0015"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+ACROBOT_PARAMS = """COORDS = ["q1", "q2"]
+PARAMS = {"m1": 1.1, "m2": 0.9, "l1": 0.5, "lc1": 0.22, "lc2": 0.27, "I1": 0.031, "I2": 0.024, "g": 9.81}
+"""
+ACROBOT_MASS = '''    m11 = I1 + I2 + m1 * lc1**2 + m2 * (l1**2 + lc2**2 + 2 * l1 * lc2 * np.cos(q2))
+    m12 = I2 + m2 * (lc2**2 + l1 * lc2 * np.cos(q2))
+    m22 = I2 + m2 * lc2**2
+'''
+ACROBOT_FORCES = '''    f1 = (m2 * l1 * lc2 * np.sin(q2) * (2 * q1_rate * q2_rate + q2_rate**2) - (m1 * lc1 + m2 * l1) * g * np.sin(q1)
+          - m2 * lc2 * g * np.sin(q1 + q2))
+    f2 = -m2 * l1 * lc2 * np.sin(q2) * q1_rate**2 - m2 * lc2 * g * np.sin(q1 + q2)
+'''
+UNPACK = '''    q1, q2 = q
+    m1, m2, l1, lc1, lc2, I1, I2, g = (p[name] for name in ("m1", "m2", "l1", "lc1", "lc2", "I1", "I2", "g"))
+'''
+RATES = "    q1_rate, q2_rate = v\n"
+ACROBOT = ('"""An acrobot hanging: two rigid links, inertias about their centres of mass (Spong\'s equations)."""\n'
+           "import numpy as np\n\n" + ACROBOT_PARAMS + "\n\ndef mass_matrix(q, p):\n" + UNPACK
+           + ACROBOT_MASS + "    return np.array([[m11, m12], [m12, m22]])\n\n\ndef forces(t, q, v, p):\n" + UNPACK + RATES
+           + ACROBOT_FORCES + "    return np.array([f1, f2])\n\n\ndef accelerations(t, q, v, p):\n"
+           "    return np.linalg.solve(mass_matrix(q, p), forces(t, q, v, p))\n")
+# The same acrobot with its accelerations only, solved by Cramer's rule from M and f written entry by entry.
+ACROBOT_CLOSED_FORM = ('"""An acrobot hanging, its accelerations in closed form (Cramer\'s rule on Spong\'s M and f)."""\n'
+                       "import numpy as np\n\n" + ACROBOT_PARAMS + "\n\ndef accelerations(t, q, v, p):\n" + UNPACK + RATES
+                       + ACROBOT_MASS + ACROBOT_FORCES + "    det = m11 * m22 - m12 * m12\n"
+                       "    return np.array([(m22 * f1 - m12 * f2) / det, (m11 * f2 - m12 * f1) / det])\n")
+
+
+def acrobot_subject(where, closed_form=False):
+    """The rigid acrobot from two files: errors planted in M and f, or (closed_form) in its accelerations alone."""
+    name = "acrobot_closed_form" if closed_form else "acrobot"
+    folder = where / name
+    folder.mkdir(parents=True)
+    (folder / "scene.xml").write_text(ACROBOT_SCENE)
+    source = ACROBOT_CLOSED_FORM if closed_form else ACROBOT
+    (folder / "equations.py").write_text(source)
+    return Subject(name, folder, "equations.py", source, ("accelerations",) if closed_form else TUTORIAL_FUNCTIONS)
+
+
 @dataclass(frozen=True)
 class Verdict:
     case: str
@@ -178,7 +233,8 @@ def judge(subject, mutant, where):
 
 def test_the_subjects_pass_unmutated(tmp_path):
     """Every planted error is measured against a derivation whose equations agree with the engines."""
-    for subject in [book_subject(name) for name in BOOK] + [tutorial_subject(tmp_path)]:
+    for subject in [book_subject(name) for name in BOOK] + [tutorial_subject(tmp_path), acrobot_subject(tmp_path),
+                                                            acrobot_subject(tmp_path, closed_form=True)]:
         _, rows, localisations = equations(Case(subject.folder))
         assert [r for r in rows if r.status != Status.PASS] == [] and localisations == (), subject.name
 
@@ -225,12 +281,15 @@ def test_a_wrong_determinant_is_not_explained_by_the_engines_whole_equation(tmp_
 @pytest.mark.slow
 def test_campaign(tmp_path):
     """>= 100 seeded planted errors over the four book cases with coordinates, the tutorial and its closed form
-    (accelerations only, CLOSED_FORM): a table
+    (accelerations only, CLOSED_FORM), and a rigid acrobot (inertias about the centres of mass as parameters) in
+    both forms: a table
     per case and kind (printed, and saved to /tmp/dyncheck_planted/).  Every error that changes an
     equation is detected; the hit rate named / detected is measured, not asserted."""
     start = time.perf_counter()
     subjects = [book_subject(name) for name in BOOK] + [tutorial_subject(tmp_path / "original"),
-                                                        closed_form_subject(tmp_path / "closed form")]
+                                                        closed_form_subject(tmp_path / "closed form"),
+                                                        acrobot_subject(tmp_path / "rigid"),
+                                                        acrobot_subject(tmp_path / "rigid", closed_form=True)]
     verdicts = []
     for subject in subjects:
         mutants = planting.mutants(subject.source, subject.functions, per_kind=8, seed=2024)
