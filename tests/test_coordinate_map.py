@@ -91,3 +91,22 @@ def test_an_error_in_absolute_angles_is_named_in_them(tmp_path):
     localisations = residuals.localise(case, rows, found, pointwise.parameter_sets(case)[0])
     assert [(loc.equation, loc.exact) for loc in localisations] == [("phi1", True)], localisations
     assert "sin(phi2)" in localisations[0].text and "theta" not in localisations[0].text, localisations[0].text
+
+
+def test_the_mapped_linearisation_is_the_derivation_s_in_its_coordinates(tmp_path):
+    """Both engines' linearisations, mapped (A^T K A, A^T C A), against the derivation's own equations differenced in
+    its absolute angles at a state off equilibrium, at fixed accelerations a (the linearisation's: d(f - M a)/dq and
+    df/dq'): central differences at h = 1e-6 are off by h^2 f''' ~ 1e-12 and by rounding eps |f| / h ~ 1e-9 of f's
+    size, so 1e-7 of the largest entry tells a wrong map (an entry off by O(1))."""
+    case = Case(absolute_chain(tmp_path / "absolute3", 3))
+    reference = case.model("reference")
+    q, v, h = np.array([0.3, -0.2, 0.5]), np.array([0.4, 0.1, -0.3]), 1e-6
+    a = np.asarray(reference.accelerations(0.0, q, v))
+    f = lambda q, v: np.asarray(reference.mass_matrix(0.0, q, v) @ (reference.accelerations(0.0, q, v) - a))
+    columns = lambda x, g: np.column_stack([(g(x + h * e) - g(x - h * e)) / (2 * h) for e in np.eye(3)])
+    force_q, force_v = columns(q, lambda x: f(x, v)), columns(v, lambda x: f(q, x))
+    for source in ("mujoco", "pinocchio"):
+        lin = case.model(source).linearisation(0.0, q, v)
+        for mine, theirs in ((lin.force_q, force_q), (lin.force_v, force_v)):
+            assert np.max(np.abs(mine - theirs)) <= 1e-7 * np.max(np.abs(theirs)), (source, mine, theirs)
+        assert np.allclose(lin.mass, reference.mass_matrix(0.0, q, v), rtol=0, atol=1e-12)

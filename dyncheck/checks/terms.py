@@ -464,15 +464,16 @@ def _term(state, coefficients, params, param_names):
 
 
 MAX_SUM = 3  # products in a coefficient that is a sum: (alpha' + beta')^2 has three
-SUM_DEGREE = 3  # their parameters' powers, in absolute value, add up to at most this (m h^2), two parameters at most
+SUM_DEGREE = 3  # their parameters' powers, in absolute value, add up to at most this (m h^2, m2 l1 g): three at most
 TRIED = 50  # the closest pairs extended to three products (a triple of many parameters may be missed)
 
 
 def _sum_exponents(count):
-    """The powers of `count` parameters in a product of a sum: the constant, and one or two parameters, each
-    to -1, 1 or 2, their absolute powers adding up to at most SUM_DEGREE (some hundreds for ten parameters)."""
+    """The powers of `count` parameters in a product of a sum: the constant, and one to three parameters, each
+    to -1, 1 or 2, their absolute powers adding up to at most SUM_DEGREE (a weight's moment (m1 lc1 + m2 l1) g has
+    three; about 1,300 products for ten parameters)."""
     rows = [(0,) * count]
-    for size in (1, 2):
+    for size in (1, 2, 3):
         for chosen in combinations(range(count), size):
             for powers in product((-1, 1, 2), repeat=size):
                 if sum(map(abs, powers)) <= SUM_DEGREE:
