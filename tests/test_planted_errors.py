@@ -223,6 +223,16 @@ def judge(subject, mutant, where):
         if source in sample["failures"]:  # the mutant cannot be evaluated: every equation changed
             changed += [(source, c) for c in case.coords]
             continue
+        mutated = residuals.residuals(case, source, "mujoco", sample["states"])
+        if before.given_mass is not None and before.given_forces is not None:
+            # M and f given: an equation changes where its row of M or its f does (an error in M[x,x] changes
+            # both accelerations, but only the x equation), each relative to its own row's size as dyncheck judges it
+            mass_change = np.nan_to_num(np.max(np.abs(mutated.given_mass - before.given_mass), axis=2), nan=np.inf)
+            force_change = np.nan_to_num(np.abs(mutated.given_forces - before.given_forces), nan=np.inf)
+            changed += [(source, c) for i, c in enumerate(case.coords)
+                        if np.max(mass_change[:, i]) > tolerance * np.max(np.abs(before.mass))
+                        or np.max(force_change[:, i]) > tolerance * before.of(("residual", i))[1]]
+            continue
         after = before.mass @ residuals.accelerations_of(sample["values"][source], case)[:, :, None]
         change = np.abs(after[:, :, 0] - before.derivation_forces)
         changed += [(source, c) for i, c in enumerate(case.coords)
