@@ -110,3 +110,19 @@ def test_the_mapped_linearisation_is_the_derivation_s_in_its_coordinates(tmp_pat
         for mine, theirs in ((lin.force_q, force_q), (lin.force_v, force_v)):
             assert np.max(np.abs(mine - theirs)) <= 1e-7 * np.max(np.abs(theirs)), (source, mine, theirs)
         assert np.allclose(lin.mass, reference.mass_matrix(0.0, q, v), rtol=0, atol=1e-12)
+
+
+def test_the_map_may_be_a_case_toml_s_scene_joints(tmp_path, capsys):
+    """The map in a case.toml beside the files, `[scene.joints]` instead of JOINTS: the same case, and a wrong entry
+    there named as case.toml's."""
+    folder = absolute_chain(tmp_path / "cases" / "absolute", 2)
+    equations = folder / "equations.py"
+    equations.write_text("\n".join(line for line in equations.read_text().splitlines() if not line.startswith("JOINTS")))
+    (folder / "case.toml").write_text('[scene.joints]\ntheta1 = "phi1"\ntheta2 = "phi2 - phi1"\n')
+    case = Case(folder)
+    assert case.scene.coordinate_map.matrix.tolist() == [[1, 0], [-1, 1]]
+    assert cli.main(["run", "absolute", "--cases", str(folder.parent), "--quick"]) == 0
+    (folder / "case.toml").write_text('[scene.joints]\ntheta1 = "phi1"\ntheta2 = "phi2 * phi1"\n')
+    assert cli.main(["run", "absolute", "--cases", str(folder.parent), "--quick"]) == 2
+    err = capsys.readouterr().err
+    assert "case.toml: scene.joints.theta2 = 'phi2 * phi1': is not affine" in err, err

@@ -242,28 +242,29 @@ def coordinate_joints(coords, scene, file):
                      "its joint, or give as many coordinates as hinges and slides, in the file's order")
 
 
-def mapped_joints(module, coords, params, scene, file):
-    """The module's JOINTS, {joint: expression of COORDS}, in the scene's order: optional, each hinge and slide of the
-    scene as an affine function of the coordinates (dyncheck.case.coordinate_map), where the derivation's coordinates
-    are not the joints' (absolute angles over a chain's relative hinges); None without it.  ValueError naming the
-    file and the entry."""
-    declared = getattr(module, "JOINTS", None)
+def mapped_joints(module, coords, params, scene, file, given):
+    """The module's JOINTS (or a case.toml's `[scene.joints]`, `given`), {joint: expression of COORDS}, in the
+    scene's order: optional, each hinge and slide of the scene as an affine function of the coordinates
+    (dyncheck.case.coordinate_map), where the derivation's coordinates are not the joints' (absolute angles over a
+    chain's relative hinges); None without it.  ValueError naming the file and the entry."""
+    declared = getattr(module, "JOINTS", None) if given is None else given
     if declared is None:
         return None
+    named = f"{file}: JOINTS" if given is None else f"{file.parent / 'case.toml'}: scene.joints"
     names = [j.name for j in scene.joints if j.kind in ("hinge", "slide")]
     if not (isinstance(declared, dict) and all(isinstance(x, (str, int, float)) for x in declared.values())):
-        raise ValueError(f"{file}: JOINTS = {declared!r:.80} is not a dict of the scene's joints to expressions of "
+        raise ValueError(f"{named} = {declared!r:.80} is not a dict of the scene's joints to expressions of "
                          "COORDS (\"phi2 - phi1\")")
     for joint in declared:
         if joint not in names:
-            raise ValueError(f"{file}: JOINTS[{joint!r}] is no hinge or slide of {scene.path} ({', '.join(names)})"
+            raise ValueError(f"{named}[{joint!r}] is no hinge or slide of {scene.path} ({', '.join(names)})"
                              + suggest(str(joint), names))
     if [n for n in names if n not in declared] or len(scene.joints) > len(names):
         others = [j.name for j in scene.joints if j.name not in declared]
-        raise ValueError(f"{file}: JOINTS leaves joints of {scene.path} without a position ({', '.join(others)}): "
+        raise ValueError(f"{named} leaves joints of {scene.path} without a position ({', '.join(others)}): "
                          "a map of the coordinates gives every joint, and takes hinges and slides only")
     mapped = {joint: str(declared[joint]) for joint in names}
-    parse(mapped, coords, params, f"{file}: JOINTS")  # refused here, in the file's words, not at the case's load
+    parse(mapped, coords, params, named)  # refused here, in the file's words, not at the case's load
     return mapped
 
 
@@ -407,7 +408,7 @@ def case_file(folder, module, scene, given, overrides=None):
     where = given.get("derivation", EQUATIONS)  # a case.toml may name another .py file of the folder
     file = folder / where
     coords, params = module_values(module, file)
-    mapped = mapped_joints(module, coords, params, scene, file)
+    mapped = mapped_joints(module, coords, params, scene, file, given.get("scene", {}).get("joints"))
     joints = {} if mapped else coordinate_joints(coords, scene, file)
     dependent = [] if mapped else [j.name for j in scene.joints if j.name not in joints.values()]  # closed by loops
     kinds = {j.name: j.kind for j in scene.joints}
@@ -487,7 +488,7 @@ def case_file(folder, module, scene, given, overrides=None):
         "report": {"modelling": f"{SCENE} as written, read by MuJoCo and by Pinocchio; {where} the derivation"
                                 + ("" if given else "; no case.toml")
                                 + ("" if not mapped else f"; the derivation in coordinates of its own, the joints at "
-                                   + ", ".join(f"{j} = {x}" for j, x in mapped.items()) + " (JOINTS)")
+                                   + ", ".join(f"{j} = {x}" for j, x in mapped.items()))
                                 + ("" if start is None else f"; {unsettled(units, length, start)}"
                                    if equilibrium is None else f"; the runs start {displaced(units, length)}, from "
                                    f"the stable equilibrium at rest, q = {(np.round(equilibrium, 6) + 0.0).tolist()}")},

@@ -144,7 +144,7 @@ def describe(case):
     coords = mapped.joints if mapped else tuple(case.coords)  # the adapters' coordinates
     index = {c: i for i, c in enumerate(coords)}
     layout = [Coordinates("scalar", joint, (i,)) for i, joint in enumerate(mapped.joints)] if mapped else \
-        [Coordinates("scalar", joint, (index[c],)) for c, joint in s["coords"].items()]
+        [Coordinates("scalar", joint, (index[c],)) for c, joint in s.get("coords", {}).items()]
     if "euler" in s:
         layout.append(Coordinates("euler", s["euler"]["joint"], tuple(index[c] for c in s["euler"]["coords"])))
     driven = {joint: Driven(*(case.value(m.get(key, 0.0)) for key in ("angle", "rate", "acc")))

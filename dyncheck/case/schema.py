@@ -85,7 +85,7 @@ SCHEMA = ("table", {
                              "graph?": ("table", {"y": "str", "title": "str", "ylabel": "str", "ylim?": RANGE}),
                              "caption?": "str"}),
     "scene": ("table", {
-        "coords": ("map", "str"),  # book coordinate -> hinge or slide joint
+        "coords?": ("map", "str"),  # book coordinate -> hinge or slide joint
         "joints?": ("map", "str"),  # or: hinge or slide joint -> affine expression of the coordinates
         "euler?": ("table", {"joint": "str", "coords": ("list", "str")}),  # ball joint in Euler angles
         "driven": ("map", ("table", {"angle?": "expr", "rate?": "expr", "acc?": "expr"})),
@@ -405,11 +405,11 @@ def _cross_references(spec, file):
     euler = scene.get("euler", {}).get("coords", [])
     if "euler" in scene and len(euler) != 3:
         raise field_error(file, "scene.euler.coords", euler, "does not name 3 coordinates (a ball joint's Euler angles)")
-    if "joints" in scene and scene["coords"]:
+    if "joints" in scene and scene.get("coords"):
         raise field_error(file, "scene.coords", scene["coords"], "is given with scene.joints, which gives every "
                           "joint as a function of the coordinates: give one of the two")
-    if "joints" not in scene and sorted([*scene["coords"], *euler]) != sorted(coords):
-        raise field_error(file, "scene.coords", scene["coords"],
+    if "joints" not in scene and sorted([*scene.get("coords", {}), *euler]) != sorted(coords):
+        raise field_error(file, "scene.coords", scene.get("coords", {}),
                      f"(with scene.euler) does not give each of the coordinates ({', '.join(coords) or 'none'}) "
                      "exactly one joint")
     moments = [name for name, reaction in scene["reactions"].items() if reaction.get("quantity") == "moment"]
