@@ -36,8 +36,11 @@ class CoordinateMap:
 
     def joint_state(self, q, v):
         """The joints' positions and rates at the case's (q, v): (n,) or (N, n) arrays."""
-        q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
-        return q @ self.matrix.T + self.offset, v @ self.matrix.T
+        return self.joint_positions(q), np.asarray(v, dtype=float) @ self.matrix.T
+
+    def joint_positions(self, q):
+        """The joints' positions at the case's coordinates q: (n,) or (N, n)."""
+        return np.asarray(q, dtype=float) @ self.matrix.T + self.offset
 
     def case_state(self, q, v):
         """The case's coordinates and rates at the joints' (q, v)."""
@@ -144,10 +147,10 @@ class Mapped:
                        force_v=self.map.case_matrix(lin.force_v), error=lin.error * self.map.error_factor)
 
     def points(self, t, q):
-        return self.model.points(t, self.map.joint_state(q, np.zeros_like(np.asarray(q, dtype=float)))[0])
+        return self.model.points(t, self.map.joint_positions(q))
 
     def paths_many(self, t, q):
-        return self.model.paths_many(t, self.map.joint_state(q, np.zeros_like(np.asarray(q, dtype=float)))[0])
+        return self.model.paths_many(t, self.map.joint_positions(q))
 
     def step(self, q0, v0, t_end, dt, integrator):
         run = self.model.step(*self.map.joint_state(q0, v0), t_end, dt, integrator)

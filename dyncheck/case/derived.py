@@ -244,12 +244,12 @@ def coordinate_joints(coords, scene, file):
 
 def mapped_joints(module, coords, params, scene, file, given):
     """The module's JOINTS (or a case.toml's `[scene.joints]`, `given`), {joint: expression of COORDS}, in the
-    scene's order: optional, each hinge and slide of the scene as an affine function of the coordinates
-    (dyncheck.case.coordinate_map), where the derivation's coordinates are not the joints' (absolute angles over a
-    chain's relative hinges); None without it.  ValueError naming the file and the entry."""
+    scene's order, and each coordinate's unit: optional, each hinge and slide of the scene as an affine function of
+    the coordinates (dyncheck.case.coordinate_map), where the derivation's coordinates are not the joints' (absolute
+    angles over a chain's relative hinges); (None, None) without it.  ValueError naming the file and the entry."""
     declared = getattr(module, "JOINTS", None) if given is None else given
     if declared is None:
-        return None
+        return None, None
     named = f"{file}: JOINTS" if given is None else f"{file.parent / 'case.toml'}: scene.joints"
     names = [j.name for j in scene.joints if j.kind in ("hinge", "slide")]
     if not (isinstance(declared, dict) and all(isinstance(x, (str, int, float)) for x in declared.values())):
@@ -265,19 +265,15 @@ def mapped_joints(module, coords, params, scene, file, given):
                          "a map of the coordinates gives every joint, and takes hinges and slides only")
     mapped = {joint: str(declared[joint]) for joint in names}
     parse(mapped, coords, params, named)  # refused here, in the file's words, not at the case's load
-    return mapped
-
-
-def mapped_units(mapped, coords, kinds, file):
-    """Each coordinate's unit under the map `mapped`: rad where it moves hinges, m where it moves slides."""
-    units = []
+    kinds = {j.name: j.kind for j in scene.joints}
+    units = []  # each coordinate's: rad where it moves hinges, m where it moves slides
     for c in coords:
         moved = {kinds[joint] for joint, x in mapped.items() if c in expressions.names(x)}
         if len(moved) > 1:
-            raise ValueError(f"{file}: JOINTS moves both hinges and slides by coordinate '{c}': an angle and a "
-                             "length are not one coordinate")
+            raise ValueError(f"{named} moves both hinges and slides by coordinate '{c}': an angle and a length are "
+                             "not one coordinate")
         units.append("rad" if moved == {"hinge"} else "m")
-    return units
+    return mapped, units
 
 
 def applied_parameters(params, given, file):
@@ -408,12 +404,11 @@ def case_file(folder, module, scene, given, overrides=None):
     where = given.get("derivation", EQUATIONS)  # a case.toml may name another .py file of the folder
     file = folder / where
     coords, params = module_values(module, file)
-    mapped = mapped_joints(module, coords, params, scene, file, given.get("scene", {}).get("joints"))
+    mapped, units = mapped_joints(module, coords, params, scene, file, given.get("scene", {}).get("joints"))
     joints = {} if mapped else coordinate_joints(coords, scene, file)
     dependent = [] if mapped else [j.name for j in scene.joints if j.name not in joints.values()]  # closed by loops
     kinds = {j.name: j.kind for j in scene.joints}
-    units = mapped_units(mapped, coords, kinds, file) if mapped else \
-        ["rad" if kinds[joints[c]] == "hinge" else "m" for c in coords]
+    units = units or ["rad" if kinds[joints[c]] == "hinge" else "m" for c in coords]
     given_bindings = given.get("scene", {}).get("bindings", {})
     forcing = applied_parameters(params, given, file) - set(given_bindings)
     bound, param_units, places = bindings({p: x for p, x in params.items() if p not in forcing}, scene, kinds,
